@@ -1,0 +1,190 @@
+//! Command-line arguments and their validation.
+
+use std::path::PathBuf;
+
+use clap::{Args, Parser, Subcommand};
+use glam::Vec3A;
+use raylab::Integrator;
+
+/// Largest accepted image side, in pixels.
+pub const MAX_SIDE: u32 = 16_384;
+/// Largest accepted samples per pixel.
+pub const MAX_SPP: u32 = 1 << 20;
+
+#[derive(Debug, Parser)]
+#[command(
+    name = "raylab",
+    version,
+    about = "A fast, physically based CPU ray tracer, grown from the Cornell-box lab",
+    long_about = "A fast, physically based CPU ray tracer, grown from the Cornell-box lab.\n\n\
+                  Without a subcommand raylab opens the viewer when a display is available, \
+                  and otherwise renders cornell.png."
+)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Option<Command>,
+}
+
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Render a scene to an image file (PNG or EXR).
+    Render(RenderArgs),
+    /// Open an interactive window that re-renders as you move the camera and light.
+    View(ViewArgs),
+}
+
+/// Scene, image size, camera and light: shared by `render` and `view`.
+#[derive(Debug, Clone, Args)]
+pub struct SceneArgs {
+    /// Scene to load: `cornell` (the lab's box, built in).
+    #[arg(default_value = "cornell")]
+    pub scene: String,
+    /// Image width in pixels.
+    #[arg(long, default_value_t = 500, value_name = "W", value_parser = parse_side)]
+    pub width: u32,
+    /// Image height in pixels (also the focal length in pixels).
+    #[arg(long, default_value_t = 500, value_name = "H", value_parser = parse_side)]
+    pub height: u32,
+    /// How to light the image: `flat` (surface colour) or `direct` (the lab's model).
+    #[arg(long, default_value = "direct", value_parser = parse_integrator)]
+    pub integrator: Integrator,
+    /// Camera position [default: 0,0,-3].
+    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true, value_parser = parse_vec3)]
+    pub camera_pos: Option<Vec3A>,
+    /// Camera yaw in degrees (positive turns towards +x).
+    #[arg(long, default_value_t = 0.0, value_name = "DEG", allow_hyphen_values = true, value_parser = parse_angle)]
+    pub yaw: f32,
+    /// Camera pitch in degrees (positive looks up), within ±89.
+    #[arg(long, default_value_t = 0.0, value_name = "DEG", allow_hyphen_values = true, value_parser = parse_pitch)]
+    pub pitch: f32,
+    /// Point light position [default: 0,-0.5,-0.7].
+    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true, value_parser = parse_vec3)]
+    pub light_pos: Option<Vec3A>,
+    /// Point light power P per colour channel.
+    #[arg(long, default_value_t = raylab::cornell::LIGHT_POWER, value_name = "P", value_parser = parse_non_negative)]
+    pub light_power: f32,
+    /// Ambient term N added to the direct light (the lab's stand-in for indirect light).
+    #[arg(long, default_value_t = raylab::cornell::AMBIENT, value_name = "N", value_parser = parse_non_negative)]
+    pub ambient: f32,
+}
+
+#[derive(Debug, Args)]
+pub struct RenderArgs {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// Output file; `.png` (8-bit sRGB) or `.exr` (linear float32) [default: SCENE.png].
+    #[arg(short, long, value_name = "FILE")]
+    pub output: Option<PathBuf>,
+    /// Samples per pixel: sample 0 goes through the pixel centre, others are jittered.
+    #[arg(long, default_value_t = 1, value_name = "N", value_parser = parse_spp)]
+    pub spp: u32,
+    /// Seed of the sample positions; the same seed gives the same image on any
+    /// number of threads.
+    #[arg(long, default_value_t = 0, value_name = "S")]
+    pub seed: u64,
+    /// Worker threads [default: one per core].
+    #[arg(long, value_name = "N", value_parser = parse_threads)]
+    pub threads: Option<usize>,
+    /// No progress bar and no summary line.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+#[derive(Debug, Args)]
+pub struct ViewArgs {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+}
+
+fn parse_side(s: &str) -> Result<u32, String> {
+    match s.parse::<u32>() {
+        Ok(v) if (1..=MAX_SIDE).contains(&v) => Ok(v),
+        _ => Err(format!("expected a whole number of pixels from 1 to {MAX_SIDE}")),
+    }
+}
+
+fn parse_spp(s: &str) -> Result<u32, String> {
+    match s.parse::<u32>() {
+        Ok(v) if (1..=MAX_SPP).contains(&v) => Ok(v),
+        _ => Err(format!("expected a whole number of samples from 1 to {MAX_SPP}")),
+    }
+}
+
+fn parse_threads(s: &str) -> Result<usize, String> {
+    match s.parse::<usize>() {
+        Ok(v) if (1..=1024).contains(&v) => Ok(v),
+        _ => Err("expected a whole number of threads from 1 to 1024".into()),
+    }
+}
+
+fn parse_integrator(s: &str) -> Result<Integrator, String> {
+    s.parse()
+}
+
+fn parse_finite(s: &str) -> Result<f32, String> {
+    match s.trim().parse::<f32>() {
+        Ok(v) if v.is_finite() => Ok(v),
+        _ => Err("expected a finite number".into()),
+    }
+}
+
+fn parse_angle(s: &str) -> Result<f32, String> {
+    parse_finite(s).map_err(|_| "expected a finite angle in degrees".into())
+}
+
+fn parse_pitch(s: &str) -> Result<f32, String> {
+    let limit = raylab::controls::MAX_PITCH_DEG;
+    match parse_angle(s)? {
+        v if v.abs() <= limit => Ok(v),
+        _ => Err(format!("expected an angle from -{limit} to {limit} degrees")),
+    }
+}
+
+fn parse_non_negative(s: &str) -> Result<f32, String> {
+    match parse_finite(s) {
+        Ok(v) if v >= 0.0 => Ok(v),
+        _ => Err("expected a finite number >= 0".into()),
+    }
+}
+
+fn parse_vec3(s: &str) -> Result<Vec3A, String> {
+    let parts: Vec<&str> = s.split(',').collect();
+    let err = || "expected three finite numbers X,Y,Z".to_string();
+    if parts.len() != 3 {
+        return Err(err());
+    }
+    let v: Vec<f32> = parts
+        .iter()
+        .map(|p| parse_finite(p))
+        .collect::<Result<_, _>>()
+        .map_err(|_| err())?;
+    Ok(Vec3A::new(v[0], v[1], v[2]))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn vectors_need_three_finite_numbers() {
+        assert_eq!(parse_vec3("-0.3,0.2,-2"), Ok(Vec3A::new(-0.3, 0.2, -2.0)));
+        assert_eq!(parse_vec3(" 1, 2 ,3"), Ok(Vec3A::new(1.0, 2.0, 3.0)));
+        for bad in ["1,2", "1,2,3,4", "1,,3", "a,b,c", "NaN,0,0", "0,inf,0", ""] {
+            assert!(parse_vec3(bad).is_err(), "{bad}");
+        }
+    }
+
+    #[test]
+    fn sizes_and_counts_are_bounded() {
+        assert_eq!(parse_side("500"), Ok(500));
+        for bad in ["0", "-1", "16385", "1e3", "x"] {
+            assert!(parse_side(bad).is_err(), "{bad}");
+        }
+        assert!(parse_spp("0").is_err());
+        assert!(parse_threads("0").is_err());
+        assert!(parse_pitch("90").is_err());
+        assert_eq!(parse_pitch("-89"), Ok(-89.0));
+        assert!(parse_non_negative("-1").is_err());
+        assert!(parse_angle("nan").is_err());
+    }
+}

@@ -1,0 +1,330 @@
+//! `raylab view`: a window that renders on all cores and refines while still.
+
+use std::num::NonZeroU32;
+use std::path::{Path, PathBuf};
+use std::rc::Rc;
+use std::time::{Duration, Instant};
+
+use anyhow::{Context, anyhow};
+use rayon::prelude::*;
+use raylab::Scene;
+use raylab::controls::{Action, ViewState};
+use raylab::film::{Film, srgb8, write_image};
+use raylab::render::accumulate;
+use winit::application::ApplicationHandler;
+use winit::dpi::PhysicalSize;
+use winit::event::{ElementState, MouseButton, WindowEvent};
+use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
+use winit::keyboard::PhysicalKey;
+use winit::window::{Window, WindowId};
+
+use crate::args::SceneArgs;
+use crate::keys::action_for_key;
+
+/// Samples per pixel after which a still view stops refining and the viewer idles.
+const MAX_SAMPLES: u32 = 64;
+/// How often the title's timing figures are refreshed.
+const TITLE_INTERVAL: Duration = Duration::from_millis(250);
+
+/// Whether an X display is configured (the viewer is built for X11).
+pub fn display_available() -> bool {
+    std::env::var_os("DISPLAY").is_some_and(|d| !d.is_empty())
+}
+
+pub fn run(args: &SceneArgs) -> anyhow::Result<()> {
+    let (scene, initial) = crate::load(args)?;
+    if !display_available() {
+        return Err(anyhow!(
+            "cannot open a window: no X display (DISPLAY is not set); use `raylab render` instead"
+        ));
+    }
+    let event_loop = EventLoop::new().map_err(|e| anyhow!("cannot open a window: {e}"))?;
+    let mut app = Viewer {
+        scene,
+        initial,
+        state: initial,
+        size: (args.width, args.height),
+        sums: Film::new(args.width, args.height),
+        samples: 0,
+        gfx: None,
+        drag: None,
+        cursor: (0.0, 0.0),
+        timing: Timing::new(),
+        error: None,
+    };
+    event_loop
+        .run_app(&mut app)
+        .map_err(|e| anyhow!("viewer: {e}"))?;
+    match app.error {
+        Some(e) => Err(e),
+        None => Ok(()),
+    }
+}
+
+/// The window and its pixel surface, created once the event loop is running.
+struct Graphics {
+    window: Rc<Window>,
+    surface: softbuffer::Surface<Rc<Window>, Rc<Window>>,
+}
+
+struct Viewer {
+    scene: Scene,
+    initial: ViewState,
+    state: ViewState,
+    size: (u32, u32),
+    /// Sums of `samples` samples per pixel.
+    sums: Film,
+    samples: u32,
+    gfx: Option<Graphics>,
+    /// Cursor position where a left-button drag last moved the view.
+    drag: Option<(f64, f64)>,
+    cursor: (f64, f64),
+    timing: Timing,
+    error: Option<anyhow::Error>,
+}
+
+/// Frame time and rate for the title bar.
+struct Timing {
+    last_frame_ms: f64,
+    frames: u32,
+    since: Instant,
+    fps: f64,
+}
+
+impl Timing {
+    fn new() -> Self {
+        Self {
+            last_frame_ms: 0.0,
+            frames: 0,
+            since: Instant::now(),
+            fps: 0.0,
+        }
+    }
+
+    /// Records a frame; returns true when the title is due for a refresh.
+    fn frame(&mut self, ms: f64) -> bool {
+        self.last_frame_ms = ms;
+        self.frames += 1;
+        let elapsed = self.since.elapsed();
+        if elapsed >= TITLE_INTERVAL {
+            self.fps = self.frames as f64 / elapsed.as_secs_f64();
+            self.frames = 0;
+            self.since = Instant::now();
+            return true;
+        }
+        false
+    }
+}
+
+impl Viewer {
+    fn fail(&mut self, event_loop: &ActiveEventLoop, e: anyhow::Error) {
+        self.error = Some(e);
+        event_loop.exit();
+    }
+
+    fn restart(&mut self) {
+        self.samples = 0;
+        if let Some(g) = &self.gfx {
+            g.window.request_redraw();
+        }
+    }
+
+    fn set_title(&self) {
+        if let Some(g) = &self.gfx {
+            g.window.set_title(&format!(
+                "raylab · {} · {}×{} · {:.1} ms ({:.0} fps) · {} spp",
+                self.state.integrator,
+                self.size.0,
+                self.size.1,
+                self.timing.last_frame_ms,
+                self.timing.fps,
+                self.samples
+            ));
+        }
+    }
+
+    fn handle(&mut self, action: Action, event_loop: &ActiveEventLoop) -> anyhow::Result<()> {
+        match action {
+            Action::Quit => event_loop.exit(),
+            Action::Screenshot => {
+                let path = self.save_screenshot()?;
+                eprintln!("saved {}", path.display());
+            }
+            _ => {
+                if self.state.apply(action, &self.initial) {
+                    self.restart();
+                    self.set_title();
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Saves the frame on screen as the first free `raylab-NNNN.png`.
+    fn save_screenshot(&self) -> anyhow::Result<PathBuf> {
+        let path = (1..)
+            .map(|i| PathBuf::from(format!("raylab-{i:04}.png")))
+            .find(|p| !p.exists())
+            .expect("a free name");
+        let mut frame = self.sums.clone();
+        frame.scale(1.0 / self.samples.max(1) as f32);
+        write_image(&frame, Path::new(&path))?;
+        Ok(path)
+    }
+
+    /// Adds one sample per pixel and shows the average.
+    fn draw(&mut self) -> anyhow::Result<()> {
+        if self.gfx.is_none() {
+            return Ok(());
+        }
+        let start = Instant::now();
+        let (w, h) = self.size;
+        if self.samples == 0 {
+            self.sums.pixels.fill(glam::Vec3A::ZERO);
+        }
+        if self.samples < MAX_SAMPLES {
+            self.scene.light.position = self.state.light_pos;
+            let camera = self.state.camera(w, h);
+            let k = self.samples;
+            accumulate(
+                &self.scene,
+                &camera,
+                self.state.integrator,
+                0,
+                k..k + 1,
+                &mut self.sums,
+                &|_| {},
+            );
+            self.samples += 1;
+        }
+        self.present()?;
+        let refining = self.samples < MAX_SAMPLES;
+        if self.timing.frame(start.elapsed().as_secs_f64() * 1e3) || !refining {
+            self.set_title();
+        }
+        if let (true, Some(gfx)) = (refining, &self.gfx) {
+            gfx.window.request_redraw();
+        }
+        Ok(())
+    }
+
+    /// Shows the average of the samples so far, sRGB-encoded.
+    fn present(&mut self) -> anyhow::Result<()> {
+        let Some(gfx) = self.gfx.as_mut() else {
+            return Ok(());
+        };
+        let mut buffer = gfx
+            .surface
+            .buffer_mut()
+            .map_err(|e| anyhow!("cannot draw: {e}"))?;
+        let scale = 1.0 / self.samples.max(1) as f32;
+        buffer
+            .par_chunks_mut(4096)
+            .zip(self.sums.pixels.par_chunks(4096))
+            .for_each(|(out, sums)| {
+                for (o, s) in out.iter_mut().zip(sums) {
+                    let p = *s * scale;
+                    *o = (srgb8(p.x) as u32) << 16 | (srgb8(p.y) as u32) << 8 | srgb8(p.z) as u32;
+                }
+            });
+        buffer.present().map_err(|e| anyhow!("cannot draw: {e}"))
+    }
+
+    fn resize(&mut self, size: PhysicalSize<u32>) -> anyhow::Result<()> {
+        let (Some(w), Some(h)) = (NonZeroU32::new(size.width), NonZeroU32::new(size.height))
+        else {
+            return Ok(()); // minimised
+        };
+        if let Some(gfx) = self.gfx.as_mut() {
+            gfx.surface
+                .resize(w, h)
+                .map_err(|e| anyhow!("cannot resize: {e}"))?;
+        }
+        if self.size != (w.get(), h.get()) || self.sums.pixels.is_empty() {
+            self.size = (w.get(), h.get());
+            self.sums = Film::new(w.get(), h.get());
+        }
+        self.restart();
+        Ok(())
+    }
+}
+
+impl ApplicationHandler for Viewer {
+    fn resumed(&mut self, event_loop: &ActiveEventLoop) {
+        if self.gfx.is_some() {
+            return;
+        }
+        let attrs = Window::default_attributes()
+            .with_title("raylab")
+            .with_inner_size(PhysicalSize::new(self.size.0, self.size.1));
+        let result = (|| -> anyhow::Result<Graphics> {
+            let window = Rc::new(
+                event_loop
+                    .create_window(attrs)
+                    .context("cannot open a window")?,
+            );
+            let context = softbuffer::Context::new(window.clone())
+                .map_err(|e| anyhow!("cannot draw to the window: {e}"))?;
+            let surface = softbuffer::Surface::new(&context, window.clone())
+                .map_err(|e| anyhow!("cannot draw to the window: {e}"))?;
+            Ok(Graphics { window, surface })
+        })();
+        match result {
+            Ok(gfx) => {
+                let size = gfx.window.inner_size();
+                self.gfx = Some(gfx);
+                if let Err(e) = self.resize(size) {
+                    self.fail(event_loop, e);
+                }
+                self.set_title();
+            }
+            Err(e) => self.fail(event_loop, e),
+        }
+    }
+
+    fn window_event(&mut self, event_loop: &ActiveEventLoop, _: WindowId, event: WindowEvent) {
+        let result = match event {
+            WindowEvent::CloseRequested => {
+                event_loop.exit();
+                Ok(())
+            }
+            WindowEvent::Resized(size) => self.resize(size),
+            WindowEvent::RedrawRequested => self.draw(),
+            WindowEvent::KeyboardInput { event, .. } if event.state == ElementState::Pressed => {
+                match event.physical_key {
+                    PhysicalKey::Code(code) => match action_for_key(code) {
+                        Some(action) => self.handle(action, event_loop),
+                        None => Ok(()),
+                    },
+                    PhysicalKey::Unidentified(_) => Ok(()),
+                }
+            }
+            WindowEvent::MouseInput {
+                state,
+                button: MouseButton::Left,
+                ..
+            } => {
+                self.drag = (state == ElementState::Pressed).then_some(self.cursor);
+                Ok(())
+            }
+            WindowEvent::CursorMoved { position, .. } => {
+                self.cursor = (position.x, position.y);
+                if let Some((x0, y0)) = self.drag {
+                    self.drag = Some(self.cursor);
+                    if self.state.drag((position.x - x0) as f32, (position.y - y0) as f32) {
+                        self.restart();
+                    }
+                }
+                Ok(())
+            }
+            _ => Ok(()),
+        };
+        if let Err(e) = result {
+            self.fail(event_loop, e);
+        }
+    }
+
+    fn about_to_wait(&mut self, event_loop: &ActiveEventLoop) {
+        event_loop.set_control_flow(ControlFlow::Wait);
+    }
+}

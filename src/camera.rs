@@ -1,0 +1,125 @@
+//! The lab's pinhole camera: a position, a rotation `R = Ry(yaw)·Rx(pitch)` and a
+//! focal length in pixels.
+//!
+//! Camera space has x to the right, y down and z forward, like the lab's image:
+//! the ray through image point `(px, py)` (pixel units, `(0, 0)` the top-left
+//! corner) has direction `R·(px − W/2, py − H/2, f)`.
+
+use glam::{Mat3A, Vec3A};
+
+use crate::ray::Ray;
+
+/// A pinhole camera producing rays for an image of `width × height` pixels.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Camera {
+    /// Centre of projection.
+    pub position: Vec3A,
+    /// Camera-to-world rotation; its columns are the right, down and forward axes.
+    pub rotation: Mat3A,
+    /// Focal length in pixels.
+    pub focal_px: f32,
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+}
+
+impl Camera {
+    /// The lab's camera: yaw and pitch in degrees, focal length equal to the image
+    /// height (vertical field of view `2·atan(0.5)` ≈ 53.13°).
+    ///
+    /// Positive yaw turns towards +x; positive pitch looks up (towards −y).
+    pub fn lab(position: Vec3A, yaw_deg: f32, pitch_deg: f32, width: u32, height: u32) -> Self {
+        Self {
+            position,
+            rotation: lab_rotation(yaw_deg, pitch_deg),
+            focal_px: height as f32,
+            width,
+            height,
+        }
+    }
+
+    /// The ray through image point `(px, py)` in pixel units, with a unit direction.
+    #[inline]
+    pub fn ray(&self, px: f32, py: f32) -> Ray {
+        let d = Vec3A::new(
+            px - 0.5 * self.width as f32,
+            py - 0.5 * self.height as f32,
+            self.focal_px,
+        );
+        Ray::new(self.position, (self.rotation * d).normalize())
+    }
+
+    /// The unit viewing direction (camera +z in world space).
+    pub fn forward(&self) -> Vec3A {
+        self.rotation.z_axis
+    }
+
+    /// The unit right direction (camera +x in world space).
+    pub fn right(&self) -> Vec3A {
+        self.rotation.x_axis
+    }
+
+    /// The unit down direction of the image (camera +y in world space).
+    pub fn down(&self) -> Vec3A {
+        self.rotation.y_axis
+    }
+}
+
+/// The lab's `Ry(yaw)·Rx(pitch)`, angles in degrees.
+pub fn lab_rotation(yaw_deg: f32, pitch_deg: f32) -> Mat3A {
+    let (sy, cy) = yaw_deg.to_radians().sin_cos();
+    let (sp, cp) = pitch_deg.to_radians().sin_cos();
+    // Written by rows as in the lab report; glam takes columns.
+    let ry = Mat3A::from_cols(
+        Vec3A::new(cy, 0.0, -sy),
+        Vec3A::new(0.0, 1.0, 0.0),
+        Vec3A::new(sy, 0.0, cy),
+    );
+    let rx = Mat3A::from_cols(
+        Vec3A::new(1.0, 0.0, 0.0),
+        Vec3A::new(0.0, cp, sp),
+        Vec3A::new(0.0, -sp, cp),
+    );
+    ry * rx
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pixel_rays_follow_the_lab_formula() {
+        let (w, h) = (500u32, 400u32);
+        for (yaw, pitch) in [(0.0f32, 0.0f32), (30.0, 0.0), (0.0, -20.0), (-45.0, 10.0)] {
+            let cam = Camera::lab(Vec3A::new(0.1, 0.2, -3.0), yaw, pitch, w, h);
+            let (a, b) = (yaw.to_radians(), pitch.to_radians());
+            for (x, y) in [(0u32, 0u32), (249, 199), (499, 399), (17, 311)] {
+                // R·(x + 0.5 − W/2, y + 0.5 − H/2, f), the formula written out.
+                let d = [x as f32 + 0.5 - 250.0, y as f32 + 0.5 - 200.0, h as f32];
+                let rx = [d[0], b.cos() * d[1] - b.sin() * d[2], b.sin() * d[1] + b.cos() * d[2]];
+                let want = Vec3A::new(
+                    a.cos() * rx[0] + a.sin() * rx[2],
+                    rx[1],
+                    -a.sin() * rx[0] + a.cos() * rx[2],
+                )
+                .normalize();
+                let ray = cam.ray(x as f32 + 0.5, y as f32 + 0.5);
+                assert_eq!(ray.origin, cam.position);
+                assert!((ray.dir - want).length() < 1e-6, "{yaw} {pitch} {x} {y}");
+            }
+        }
+    }
+
+    #[test]
+    fn yaw_turns_right_and_pitch_looks_up() {
+        let cam = Camera::lab(Vec3A::ZERO, 90.0, 0.0, 10, 10);
+        assert!((cam.forward() - Vec3A::X).length() < 1e-6);
+        let cam = Camera::lab(Vec3A::ZERO, 0.0, 90.0, 10, 10);
+        assert!((cam.forward() - Vec3A::NEG_Y).length() < 1e-6);
+        // Vertical field of view is 2·atan(0.5): the top edge ray is 26.57° up.
+        let cam = Camera::lab(Vec3A::ZERO, 0.0, 0.0, 500, 500);
+        let top = cam.ray(250.0, 0.0).dir;
+        assert!((top.y.atan2(top.z).to_degrees() + 26.565).abs() < 1e-3);
+    }
+}

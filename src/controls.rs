@@ -1,0 +1,210 @@
+//! The viewer's state (camera, light, integrator) and how user input changes it,
+//! kept free of any windowing code so that it can be tested on its own.
+
+use glam::Vec3A;
+
+use crate::camera::{Camera, lab_rotation};
+use crate::integrator::Integrator;
+
+/// Camera travel per key press, in scene units (the lab box is 2 units wide).
+pub const MOVE_STEP: f32 = 0.1;
+/// Camera turn per key press, in degrees.
+pub const TURN_STEP_DEG: f32 = 5.0;
+/// Light travel per key press, in scene units.
+pub const LIGHT_STEP: f32 = 0.1;
+/// Degrees of yaw or pitch per pixel of mouse drag.
+pub const DRAG_DEG_PER_PIXEL: f32 = 0.25;
+/// Pitch stays within ±this, so the view never flips over.
+pub const MAX_PITCH_DEG: f32 = 89.0;
+
+/// Something the user asked for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Action {
+    /// Move the camera along its view direction.
+    CameraForward,
+    /// Move the camera against its view direction.
+    CameraBack,
+    /// Turn the camera left (yaw down).
+    TurnLeft,
+    /// Turn the camera right (yaw up).
+    TurnRight,
+    /// Move the light away from the viewer (camera forward, kept level).
+    LightForward,
+    /// Move the light towards the viewer.
+    LightBack,
+    /// Move the light to the viewer's left.
+    LightLeft,
+    /// Move the light to the viewer's right.
+    LightRight,
+    /// Move the light up (the image's up direction).
+    LightUp,
+    /// Move the light down.
+    LightDown,
+    /// Return camera, light and integrator to where they started.
+    Reset,
+    /// Switch to an integrator.
+    Use(Integrator),
+    /// Save the current frame as a PNG.
+    Screenshot,
+    /// Close the viewer.
+    Quit,
+}
+
+/// What the viewer shows: a lab camera (position, yaw, pitch), the light position
+/// and the integrator.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ViewState {
+    /// Camera position.
+    pub camera_pos: Vec3A,
+    /// Camera yaw in degrees.
+    pub yaw_deg: f32,
+    /// Camera pitch in degrees.
+    pub pitch_deg: f32,
+    /// Light position.
+    pub light_pos: Vec3A,
+    /// Integrator in use.
+    pub integrator: Integrator,
+}
+
+impl ViewState {
+    /// The camera for an image of `width × height`.
+    pub fn camera(&self, width: u32, height: u32) -> Camera {
+        Camera::lab(self.camera_pos, self.yaw_deg, self.pitch_deg, width, height)
+    }
+
+    /// Applies a state-changing action; returns whether anything changed.
+    /// `initial` is the state that [`Action::Reset`] returns to.
+    pub fn apply(&mut self, action: Action, initial: &ViewState) -> bool {
+        let before = *self;
+        let rot = lab_rotation(self.yaw_deg, self.pitch_deg);
+        // The light moves in the camera's level frame: forward without pitch, so
+        // W/S keep the light's height; "up" is the image's up.
+        let level = lab_rotation(self.yaw_deg, 0.0);
+        match action {
+            Action::CameraForward => self.camera_pos += MOVE_STEP * rot.z_axis,
+            Action::CameraBack => self.camera_pos -= MOVE_STEP * rot.z_axis,
+            Action::TurnLeft => self.yaw_deg -= TURN_STEP_DEG,
+            Action::TurnRight => self.yaw_deg += TURN_STEP_DEG,
+            Action::LightForward => self.light_pos += LIGHT_STEP * level.z_axis,
+            Action::LightBack => self.light_pos -= LIGHT_STEP * level.z_axis,
+            Action::LightLeft => self.light_pos -= LIGHT_STEP * level.x_axis,
+            Action::LightRight => self.light_pos += LIGHT_STEP * level.x_axis,
+            Action::LightUp => self.light_pos -= LIGHT_STEP * level.y_axis,
+            Action::LightDown => self.light_pos += LIGHT_STEP * level.y_axis,
+            Action::Reset => *self = *initial,
+            Action::Use(integrator) => self.integrator = integrator,
+            Action::Screenshot | Action::Quit => {}
+        }
+        self.yaw_deg = wrap_degrees(self.yaw_deg);
+        *self != before
+    }
+
+    /// Mouse-look: dragging right turns right, dragging up looks up.
+    pub fn drag(&mut self, dx_px: f32, dy_px: f32) -> bool {
+        let before = *self;
+        self.yaw_deg = wrap_degrees(self.yaw_deg + DRAG_DEG_PER_PIXEL * dx_px);
+        self.pitch_deg =
+            (self.pitch_deg - DRAG_DEG_PER_PIXEL * dy_px).clamp(-MAX_PITCH_DEG, MAX_PITCH_DEG);
+        *self != before
+    }
+}
+
+/// `deg` wrapped into `(-180, 180]`.
+fn wrap_degrees(deg: f32) -> f32 {
+    let w = deg.rem_euclid(360.0);
+    if w > 180.0 { w - 360.0 } else { w }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn start() -> ViewState {
+        ViewState {
+            camera_pos: Vec3A::new(0.0, 0.0, -3.0),
+            yaw_deg: 0.0,
+            pitch_deg: 0.0,
+            light_pos: Vec3A::new(0.0, -0.5, -0.7),
+            integrator: Integrator::Direct,
+        }
+    }
+
+    fn close(a: Vec3A, b: Vec3A) -> bool {
+        (a - b).length() < 1e-5
+    }
+
+    #[test]
+    fn camera_moves_along_its_view_direction_and_turns() {
+        let init = start();
+        let mut s = init;
+        assert!(s.apply(Action::CameraForward, &init));
+        assert!(close(s.camera_pos, Vec3A::new(0.0, 0.0, -2.9)));
+        assert!(s.apply(Action::TurnRight, &init));
+        assert_eq!(s.yaw_deg, 5.0);
+        // After turning 90° right, forward is +x.
+        for _ in 0..17 {
+            s.apply(Action::TurnRight, &init);
+        }
+        assert!((s.yaw_deg - 90.0).abs() < 1e-4);
+        s.apply(Action::CameraForward, &init);
+        assert!(close(s.camera_pos, Vec3A::new(0.1, 0.0, -2.9)));
+        s.apply(Action::CameraBack, &init);
+        s.apply(Action::CameraBack, &init);
+        assert!(close(s.camera_pos, Vec3A::new(-0.1, 0.0, -2.9)));
+        s.apply(Action::TurnLeft, &init);
+        assert!((s.yaw_deg - 85.0).abs() < 1e-4);
+    }
+
+    #[test]
+    fn light_moves_in_the_viewers_frame() {
+        let init = start();
+        let mut s = init;
+        let l = init.light_pos;
+        let moved = |a: Action| {
+            let mut t = init;
+            t.apply(a, &init);
+            t.light_pos - l
+        };
+        assert!(close(moved(Action::LightForward), Vec3A::new(0.0, 0.0, 0.1)));
+        assert!(close(moved(Action::LightBack), Vec3A::new(0.0, 0.0, -0.1)));
+        assert!(close(moved(Action::LightLeft), Vec3A::new(-0.1, 0.0, 0.0)));
+        assert!(close(moved(Action::LightRight), Vec3A::new(0.1, 0.0, 0.0)));
+        // y points down in the lab box: up is -y.
+        assert!(close(moved(Action::LightUp), Vec3A::new(0.0, -0.1, 0.0)));
+        assert!(close(moved(Action::LightDown), Vec3A::new(0.0, 0.1, 0.0)));
+        // Turned 90° right, "left" is -z; pitch does not tilt the light's moves.
+        s.yaw_deg = 90.0;
+        s.pitch_deg = 30.0;
+        s.apply(Action::LightLeft, &init);
+        assert!(close(s.light_pos - l, Vec3A::new(0.0, 0.0, 0.1)));
+    }
+
+    #[test]
+    fn reset_integrator_switch_and_no_ops() {
+        let init = start();
+        let mut s = init;
+        s.apply(Action::LightLeft, &init);
+        s.drag(40.0, -20.0);
+        assert!(s.apply(Action::Use(Integrator::Flat), &init));
+        assert!(!s.apply(Action::Use(Integrator::Flat), &init));
+        assert!(s.apply(Action::Reset, &init));
+        assert_eq!(s, init);
+        assert!(!s.apply(Action::Screenshot, &init));
+        assert!(!s.apply(Action::Quit, &init));
+    }
+
+    #[test]
+    fn drag_looks_around_and_clamps_pitch() {
+        let init = start();
+        let mut s = init;
+        assert!(s.drag(40.0, 0.0));
+        assert_eq!(s.yaw_deg, 10.0);
+        s.drag(0.0, -40.0);
+        assert_eq!(s.pitch_deg, 10.0, "dragging up looks up");
+        assert!(s.camera(10, 10).forward().y < 0.0, "up is -y");
+        s.drag(0.0, -10_000.0);
+        assert_eq!(s.pitch_deg, MAX_PITCH_DEG);
+        s.drag(-1000.0, 0.0);
+        assert!(s.yaw_deg > -180.0 && s.yaw_deg <= 180.0);
+    }
+}

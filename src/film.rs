@@ -1,0 +1,282 @@
+//! The image buffer, its 8-bit sRGB encoding and atomic PNG/EXR output.
+
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+
+use glam::Vec3A;
+use image::ImageEncoder;
+use rayon::prelude::*;
+use thiserror::Error;
+
+/// A `width × height` image of linear RGB values, row-major from the top-left.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Film {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Pixel values, `width * height` of them.
+    pub pixels: Vec<Vec3A>,
+}
+
+impl Film {
+    /// A black image.
+    pub fn new(width: u32, height: u32) -> Self {
+        Self {
+            width,
+            height,
+            pixels: vec![Vec3A::ZERO; width as usize * height as usize],
+        }
+    }
+
+    /// The pixel at column `x`, row `y`.
+    pub fn get(&self, x: u32, y: u32) -> Vec3A {
+        self.pixels[(y * self.width + x) as usize]
+    }
+
+    /// Multiplies every pixel by `s`.
+    pub fn scale(&mut self, s: f32) {
+        if s != 1.0 {
+            self.pixels.par_iter_mut().for_each(|p| *p *= s);
+        }
+    }
+
+    /// 8-bit sRGB of every pixel times `scale`, clamped to `[0, 1]`, as RGB bytes.
+    pub fn to_srgb8(&self, scale: f32) -> Vec<u8> {
+        let mut out = vec![0u8; self.pixels.len() * 3];
+        out.par_chunks_mut(3 * 4096)
+            .zip(self.pixels.par_chunks(4096))
+            .for_each(|(bytes, pixels)| {
+                for (b, p) in bytes.chunks_exact_mut(3).zip(pixels) {
+                    let p = *p * scale;
+                    b.copy_from_slice(&[srgb8(p.x), srgb8(p.y), srgb8(p.z)]);
+                }
+            });
+        out
+    }
+}
+
+/// The sRGB transfer function of a linear value in `[0, 1]`.
+pub fn srgb_encode(x: f32) -> f32 {
+    if x <= 0.003_130_8 {
+        12.92 * x
+    } else {
+        1.055 * x.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+/// Linear value of an sRGB-encoded value in `[0, 1]`.
+fn srgb_decode(y: f64) -> f64 {
+    if y <= 0.040_45 {
+        y / 12.92
+    } else {
+        ((y + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// `round(255 · srgb_encode(clamp(x, 0, 1)))`, by binary search over the linear
+/// values where the code changes (exact, and much cheaper than `powf`). NaN maps to 0.
+#[inline]
+pub fn srgb8(x: f32) -> u8 {
+    static THRESHOLDS: OnceLock<[f32; 255]> = OnceLock::new();
+    let t = THRESHOLDS.get_or_init(|| {
+        std::array::from_fn(|i| srgb_decode((i as f64 + 0.5) / 255.0) as f32)
+    });
+    t.partition_point(|&edge| edge <= x) as u8
+}
+
+/// Why an image could not be written.
+#[derive(Debug, Error)]
+pub enum OutputError {
+    /// The file name does not end in `.png` or `.exr`.
+    #[error("{path}: unsupported output format (use .png or .exr)")]
+    UnsupportedFormat {
+        /// The requested path.
+        path: PathBuf,
+    },
+    /// Creating, writing or renaming failed.
+    #[error("cannot write {path}")]
+    Io {
+        /// The requested path.
+        path: PathBuf,
+        /// The underlying error.
+        source: std::io::Error,
+    },
+    /// The encoder failed.
+    #[error("cannot encode {path}: {message}")]
+    Encode {
+        /// The requested path.
+        path: PathBuf,
+        /// The encoder's message.
+        message: String,
+    },
+}
+
+/// Output formats, chosen by file extension.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Format {
+    /// 8-bit sRGB PNG of the values clamped to `[0, 1]`.
+    Png,
+    /// Linear float32 RGB OpenEXR, values unchanged.
+    Exr,
+}
+
+impl Format {
+    /// The format for `path`'s extension (case-insensitive).
+    pub fn from_path(path: &Path) -> Result<Self, OutputError> {
+        let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+        match ext.as_deref() {
+            Some("png") => Ok(Format::Png),
+            Some("exr") => Ok(Format::Exr),
+            _ => Err(OutputError::UnsupportedFormat {
+                path: path.to_owned(),
+            }),
+        }
+    }
+}
+
+/// Writes `film` to `path` atomically: to a temporary file in the same folder,
+/// flushed to disk, then renamed over `path`. On failure `path` is untouched and
+/// the temporary file removed.
+pub fn write_image(film: &Film, path: &Path) -> Result<(), OutputError> {
+    let format = Format::from_path(path)?;
+    let io_err = |source| OutputError::Io {
+        path: path.to_owned(),
+        source,
+    };
+    let tmp = temp_path(path);
+    let result = write_format(film, format, path, &tmp).and_then(|()| {
+        File::open(&tmp)
+            .and_then(|f| f.sync_all())
+            .and_then(|()| std::fs::rename(&tmp, path))
+            .map_err(io_err)
+    });
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result
+}
+
+fn write_format(film: &Film, format: Format, path: &Path, tmp: &Path) -> Result<(), OutputError> {
+    let io_err = |source| OutputError::Io {
+        path: path.to_owned(),
+        source,
+    };
+    let encode_err = |message: String| OutputError::Encode {
+        path: path.to_owned(),
+        message,
+    };
+    match format {
+        Format::Png => {
+            let mut out = BufWriter::new(File::create(tmp).map_err(io_err)?);
+            image::codecs::png::PngEncoder::new(&mut out)
+                .write_image(
+                    &film.to_srgb8(1.0),
+                    film.width,
+                    film.height,
+                    image::ExtendedColorType::Rgb8,
+                )
+                .map_err(|e| match e {
+                    image::ImageError::IoError(e) => io_err(e),
+                    e => encode_err(e.to_string()),
+                })?;
+            out.flush().map_err(io_err)
+        }
+        Format::Exr => {
+            let w = film.width as usize;
+            exr::prelude::write_rgb_file(tmp, w, film.height as usize, |x, y| {
+                let p = film.pixels[y * w + x];
+                (p.x, p.y, p.z)
+            })
+            .map_err(|e| match e {
+                exr::error::Error::Io(e) => io_err(e),
+                e => encode_err(e.to_string()),
+            })
+        }
+    }
+}
+
+/// A hidden sibling of `path`, unique to this process.
+fn temp_path(path: &Path) -> PathBuf {
+    let name = path.file_name().map_or_else(
+        || "image".into(),
+        |n| n.to_string_lossy().into_owned(),
+    );
+    path.with_file_name(format!(".{name}.{}.tmp", std::process::id()))
+}
+
+/// Reads a linear RGB(A) OpenEXR file (the first layer) into a film.
+pub fn read_exr(path: &Path) -> Result<Film, OutputError> {
+    use exr::prelude::*;
+    let image = read_first_rgba_layer_from_file(
+        path,
+        |res, _| Film::new(res.width() as u32, res.height() as u32),
+        |film: &mut Film, pos, (r, g, b, _a): (f32, f32, f32, f32)| {
+            let w = film.width as usize;
+            film.pixels[pos.y() * w + pos.x()] = Vec3A::new(r, g, b);
+        },
+    )
+    .map_err(|e| OutputError::Encode {
+        path: path.to_owned(),
+        message: e.to_string(),
+    })?;
+    Ok(image.layer_data.channel_data.pixels)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn srgb8_matches_the_transfer_function() {
+        for i in 0..=10_000 {
+            let x = i as f32 / 10_000.0;
+            let want = (srgb_encode(x) * 255.0).round() as i32;
+            let got = srgb8(x) as i32;
+            // Exact except where f32 powf rounds across a code boundary.
+            assert!((want - got).abs() <= 1, "{x}: {want} vs {got}");
+        }
+        assert_eq!(srgb8(-1.0), 0);
+        assert_eq!(srgb8(f32::NAN), 0);
+        assert_eq!(srgb8(0.0), 0);
+        assert_eq!(srgb8(1.0), 255);
+        assert_eq!(srgb8(7.0), 255);
+        assert_eq!(srgb8(0.5), 188);
+        assert_eq!(srgb8(0.75), 225);
+    }
+
+    #[test]
+    fn png_and_exr_round_trip() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut film = Film::new(3, 2);
+        film.pixels[0] = Vec3A::new(0.25, 2.5, -1.0);
+        film.pixels[5] = Vec3A::new(1.0, 0.5, 0.0);
+        let exr = dir.path().join("a.EXR");
+        write_image(&film, &exr).unwrap();
+        assert_eq!(read_exr(&exr).unwrap(), film);
+        let png = dir.path().join("a.png");
+        write_image(&film, &png).unwrap();
+        let img = image::open(&png).unwrap().to_rgb8();
+        assert_eq!(img.dimensions(), (3, 2));
+        assert_eq!(img.get_pixel(0, 0).0, [137, 255, 0]);
+        assert_eq!(img.get_pixel(2, 1).0, [255, 188, 0]);
+        // Nothing but the two outputs is left behind.
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2);
+    }
+
+    #[test]
+    fn failed_write_keeps_the_old_file_and_leaves_no_temporary() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("keep.png");
+        std::fs::write(&path, b"old").unwrap();
+        // A directory squatting on the temporary name makes the write fail midway.
+        std::fs::create_dir(temp_path(&path)).unwrap();
+        let err = write_image(&Film::new(2, 2), &path).unwrap_err();
+        assert!(err.to_string().contains("keep.png"), "{err}");
+        assert_eq!(std::fs::read(&path).unwrap(), b"old");
+        let bad = write_image(&Film::new(2, 2), &dir.path().join("x.jpg")).unwrap_err();
+        assert!(matches!(bad, OutputError::UnsupportedFormat { .. }));
+    }
+}

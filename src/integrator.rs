@@ -1,0 +1,173 @@
+//! Integrators: what colour a camera ray brings back.
+
+use std::f32::consts::PI;
+use std::fmt;
+use std::str::FromStr;
+
+use glam::Vec3A;
+
+use crate::ray::Ray;
+use crate::scene::Scene;
+
+/// The light transport algorithm used for each camera ray.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Integrator {
+    /// The reflectance ρ of the closest triangle; black on a miss (lab task 1).
+    Flat,
+    /// The lab's model (lab task 3): `ρ ∘ (D + N)` with the point light's
+    /// `D = P·max(r̂·n̂, 0) / (4πr²)`, zero in shadow, and the ambient term `N`.
+    #[default]
+    Direct,
+}
+
+impl Integrator {
+    /// All integrators, in the viewer's key order.
+    pub const ALL: [Integrator; 2] = [Integrator::Flat, Integrator::Direct];
+
+    /// The name used on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Integrator::Flat => "flat",
+            Integrator::Direct => "direct",
+        }
+    }
+
+    /// The value carried back by `ray`; adds the number of rays cast to `rays`.
+    #[inline]
+    pub fn radiance(self, scene: &Scene, ray: &Ray, rays: &mut u64) -> Vec3A {
+        *rays += 1;
+        let Some(hit) = scene.intersect(ray, f32::INFINITY) else {
+            return Vec3A::ZERO;
+        };
+        let rho = scene.reflectance(hit.prim);
+        match self {
+            Integrator::Flat => rho,
+            Integrator::Direct => rho * (direct_light(scene, &hit, rays) + scene.ambient),
+        }
+    }
+}
+
+/// The lab's `D`: irradiance from the point light at a hit, zero when the light is
+/// behind the face (the lab's normals are one-sided) or something blocks it.
+#[inline]
+fn direct_light(scene: &Scene, hit: &crate::ray::Hit, rays: &mut u64) -> Vec3A {
+    let light = &scene.light;
+    let sp = scene.surface_point(hit);
+    let to_light = light.position - sp.p;
+    let r2 = to_light.length_squared();
+    let cos = to_light.dot(sp.n) / r2.sqrt();
+    if !(cos > 0.0 && r2 > 0.0) {
+        return Vec3A::ZERO;
+    }
+    *rays += 1;
+    let (shadow, t_max) = sp.ray_to(light.position);
+    if scene.occluded(&shadow, t_max) {
+        return Vec3A::ZERO;
+    }
+    light.power * (cos / (4.0 * PI * r2))
+}
+
+impl fmt::Display for Integrator {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for Integrator {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        Integrator::ALL
+            .into_iter()
+            .find(|i| i.name() == s)
+            .ok_or_else(|| format!("unknown integrator '{s}' (expected flat or direct)"))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::PointLight;
+    use crate::triangle::Triangle;
+
+    fn one_triangle(light: Vec3A, blocker: bool) -> Scene {
+        // A large floor triangle in the plane y = 1 whose lab normal points up (-y).
+        let mut tris = vec![Triangle::new(
+            Vec3A::new(-10.0, 1.0, -10.0),
+            Vec3A::new(0.0, 1.0, 10.0),
+            Vec3A::new(10.0, 1.0, -10.0),
+        )];
+        let mut rho = vec![Vec3A::new(0.5, 0.25, 1.0)];
+        if blocker {
+            tris.push(Triangle::new(
+                Vec3A::new(-1.0, 0.0, -1.0),
+                Vec3A::new(1.0, 0.0, -1.0),
+                Vec3A::new(0.0, 0.0, 1.0),
+            ));
+            rho.push(Vec3A::ONE);
+        }
+        let light = PointLight {
+            position: light,
+            power: Vec3A::new(10.0, 20.0, 30.0),
+        };
+        Scene::new(tris, rho, light, Vec3A::splat(0.1)).unwrap()
+    }
+
+    #[test]
+    fn lab_normal_of_the_test_floor_points_up() {
+        let s = one_triangle(Vec3A::ZERO, false);
+        assert!((s.normal(0) - Vec3A::NEG_Y).length() < 1e-6);
+    }
+
+    #[test]
+    fn direct_matches_the_hand_computed_value() {
+        // Light 2 above and 1 to the side of the point (0, 1, 0).
+        let s = one_triangle(Vec3A::new(1.0, -1.0, 0.0), false);
+        let ray = Ray::new(Vec3A::new(0.0, -1.0, -2.0), Vec3A::new(0.0, 2.0, 2.0).normalize());
+        let mut rays = 0;
+        let c = Integrator::Direct.radiance(&s, &ray, &mut rays);
+        // r² = 1 + 4 = 5, cos = 2/√5, D = P·cos/(4π r²).
+        let d = Vec3A::new(10.0, 20.0, 30.0) * (2.0 / 5f32.sqrt()) / (4.0 * PI * 5.0);
+        let want = Vec3A::new(0.5, 0.25, 1.0) * (d + 0.1);
+        assert!((c - want).abs().max_element() < 1e-5 * want.max_element(), "{c} {want}");
+        assert_eq!(rays, 2);
+        let flat = Integrator::Flat.radiance(&s, &ray, &mut rays);
+        assert_eq!(flat, Vec3A::new(0.5, 0.25, 1.0));
+        // Pointing away from the triangle: black.
+        let miss = Ray::new(ray.origin, -ray.dir);
+        assert_eq!(Integrator::Direct.radiance(&s, &miss, &mut rays), Vec3A::ZERO);
+    }
+
+    #[test]
+    fn shadowed_points_get_only_ambient() {
+        // The blocker at y = 0 lies between the light at y = -1 and the point (0, 1, 0).
+        let s = one_triangle(Vec3A::new(0.0, -1.0, 0.0), true);
+        let ray = Ray::new(Vec3A::new(0.0, -1.0, -4.0), Vec3A::new(0.0, 2.0, 4.0).normalize());
+        let mut rays = 0;
+        let c = Integrator::Direct.radiance(&s, &ray, &mut rays);
+        assert!((c - Vec3A::new(0.5, 0.25, 1.0) * 0.1).abs().max_element() < 1e-7, "{c}");
+        // A point beside the blocker's shadow is lit.
+        let lit = Ray::new(Vec3A::new(3.0, -1.0, -4.0), Vec3A::new(0.0, 2.0, 4.0).normalize());
+        let c = Integrator::Direct.radiance(&s, &lit, &mut rays);
+        // Hit point (3, 1, 0): r² = 9 + 4, cos = 2/√13.
+        let d = 10.0 * (2.0 / 13f32.sqrt()) / (4.0 * PI * 13.0);
+        assert!((c.x - 0.5 * (d + 0.1)).abs() < 1e-6, "{c}");
+    }
+
+    #[test]
+    fn light_behind_the_face_gives_ambient_only() {
+        let s = one_triangle(Vec3A::new(0.0, 3.0, 0.0), false);
+        let ray = Ray::new(Vec3A::new(0.0, -1.0, -2.0), Vec3A::new(0.0, 2.0, 2.0).normalize());
+        let mut rays = 0;
+        let c = Integrator::Direct.radiance(&s, &ray, &mut rays);
+        assert!((c - Vec3A::new(0.5, 0.25, 1.0) * 0.1).abs().max_element() < 1e-7);
+        assert_eq!(rays, 1, "no shadow ray for a light behind the face");
+    }
+
+    #[test]
+    fn names_round_trip() {
+        for i in Integrator::ALL {
+            assert_eq!(i.name().parse::<Integrator>(), Ok(i));
+        }
+        assert!("path".parse::<Integrator>().is_err());
+    }
+}

@@ -1,0 +1,35 @@
+//! raylab: a fast, physically based CPU ray tracer that grew out of the classic
+//! Cornell-box lab (ray–triangle intersection, a pinhole camera, a point light with
+//! shadows and a constant ambient term).
+//!
+//! The crate follows pbrt's split into small modules, one concept each:
+//!
+//! * [`ray`]: rays and robust spawning of secondary rays off a surface;
+//! * [`triangle`]: the watertight ray–triangle test;
+//! * [`bvh`]: the bounding volume hierarchy that answers scene queries;
+//! * [`scene`]: triangles with their materials and the light, behind the
+//!   [`Scene::intersect`] / [`Scene::occluded`] seam;
+//! * [`cornell`]: the lab's built-in Cornell box;
+//! * [`camera`]: the lab's pinhole camera (yaw/pitch);
+//! * [`integrator`]: `flat` and `direct` (the lab's lighting model);
+//! * [`render`]: tiles on rayon, deterministic per-pixel sampling;
+//! * [`film`]: the image buffer and atomic PNG/EXR output;
+//! * [`controls`]: the viewer's camera/light state and how input changes it.
+
+pub mod bvh;
+pub mod camera;
+pub mod controls;
+pub mod cornell;
+pub mod film;
+pub mod integrator;
+pub mod ray;
+pub mod render;
+pub mod sampler;
+pub mod scene;
+pub mod triangle;
+
+pub use camera::Camera;
+pub use integrator::Integrator;
+pub use ray::{Hit, Ray};
+pub use scene::{PointLight, Scene, SceneError};
+pub use triangle::Triangle;

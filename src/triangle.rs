@@ -1,0 +1,303 @@
+//! Triangles and the watertight ray–triangle test.
+//!
+//! We use the watertight test of Woop, Benthin and Wald (JCGT 2013) rather than
+//! Möller–Trumbore: it costs about the same (no division until a hit is accepted),
+//! but its edge functions are evaluated identically for the two triangles sharing an
+//! edge, so a ray through a shared edge or vertex always hits at least one of them
+//! (no cracks), and a ray parallel to a triangle or a zero-area triangle gives
+//! `det == 0`, which is rejected before any division (no NaN). Möller–Trumbore
+//! computes each triangle's barycentrics from its own edge vectors, so rounding can
+//! let a ray slip between two neighbours.
+
+use glam::{Mat3A, Vec3A};
+
+use crate::ray::{Ray, gamma};
+
+/// A triangle given by its three vertices, in the winding the scene defines.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Triangle {
+    /// The vertices `v0, v1, v2`.
+    pub v: [Vec3A; 3],
+}
+
+impl Triangle {
+    /// A triangle from three vertices.
+    pub fn new(v0: Vec3A, v1: Vec3A, v2: Vec3A) -> Self {
+        Self { v: [v0, v1, v2] }
+    }
+
+    /// The lab's face normal `normalize(cross(v2 − v0, v1 − v0))`; zero for a
+    /// degenerate triangle.
+    pub fn lab_normal(&self) -> Vec3A {
+        (self.v[2] - self.v[0])
+            .cross(self.v[1] - self.v[0])
+            .normalize_or_zero()
+    }
+
+    /// The triangle's area.
+    pub fn area(&self) -> f32 {
+        0.5 * (self.v[1] - self.v[0]).cross(self.v[2] - self.v[0]).length()
+    }
+
+    /// Componentwise minimum of the vertices.
+    pub fn min(&self) -> Vec3A {
+        self.v[0].min(self.v[1]).min(self.v[2])
+    }
+
+    /// Componentwise maximum of the vertices.
+    pub fn max(&self) -> Vec3A {
+        self.v[0].max(self.v[1]).max(self.v[2])
+    }
+
+    /// Whether all coordinates are finite.
+    pub fn is_finite(&self) -> bool {
+        self.v.iter().all(|v| v.is_finite())
+    }
+}
+
+/// Per-ray constants of the watertight test: the ray's origin and the shear that
+/// maps its direction onto +z after permuting axes so that the largest direction
+/// component becomes z. The permutation and shear form one matrix, so that
+/// transforming a vertex is a single SIMD matrix–vector product.
+#[derive(Clone, Copy, Debug)]
+pub struct RayShear {
+    origin: Vec3A,
+    /// Rows (as the columns of the transpose): `e_kx − sx·e_kz`, `e_ky − sy·e_kz`, `sz·e_kz`.
+    shear: Mat3A,
+}
+
+impl RayShear {
+    /// Precomputes the shear for `ray`.
+    #[inline]
+    pub fn new(ray: &Ray) -> Self {
+        let a = ray.dir.abs();
+        let kz = if a.x >= a.y && a.x >= a.z {
+            0
+        } else if a.y >= a.z {
+            1
+        } else {
+            2
+        };
+        let mut kx = (kz + 1) % 3;
+        let mut ky = (kx + 1) % 3;
+        // Keep the winding of the projected triangle consistent.
+        if ray.dir[kz] < 0.0 {
+            std::mem::swap(&mut kx, &mut ky);
+        }
+        let dz = ray.dir[kz];
+        let (sx, sy, sz) = (ray.dir[kx] / dz, ray.dir[ky] / dz, 1.0 / dz);
+        let mut rows = [Vec3A::ZERO; 3];
+        rows[0][kx] = 1.0;
+        rows[0][kz] = -sx;
+        rows[1][ky] = 1.0;
+        rows[1][kz] = -sy;
+        rows[2][kz] = sz;
+        Self {
+            origin: ray.origin,
+            shear: Mat3A::from_cols(rows[0], rows[1], rows[2]).transpose(),
+        }
+    }
+}
+
+/// Where a ray meets a triangle: `t` and the barycentric weights of `v1`, `v2`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TriangleHit {
+    /// Ray parameter.
+    pub t: f32,
+    /// Weight of `v1`.
+    pub b1: f32,
+    /// Weight of `v2`.
+    pub b2: f32,
+}
+
+/// Intersects a ray (via its shear) with a triangle, accepting `t` in `(0, t_max]`.
+///
+/// Both faces are hit (no culling). Returns `None` for parallel rays, degenerate
+/// triangles and NaN input. An infinite ray direction is the caller's to reject
+/// (the scene queries do, once per ray). A hit is only reported when `t` is
+/// provably positive given the rounding error of its computation (pbrt-v4 §6.8.4),
+/// so a ray leaving a surface never hits that surface, or a surface meeting it at a
+/// corner, at `t ≈ 0`.
+#[inline]
+pub fn intersect(s: &RayShear, v: &[Vec3A; 3], t_max: f32) -> Option<TriangleHit> {
+    let a = s.shear * (v[0] - s.origin);
+    let b = s.shear * (v[1] - s.origin);
+    let c = s.shear * (v[2] - s.origin);
+    let (ax, ay, az) = (a.x, a.y, a.z);
+    let (bx, by, bz) = (b.x, b.y, b.z);
+    let (cx, cy, cz) = (c.x, c.y, c.z);
+
+    let mut u = cx * by - cy * bx;
+    let mut w_v = ax * cy - ay * cx;
+    let mut w = bx * ay - by * ax;
+    // On an edge the f32 products can cancel to exactly zero; redo them in f64
+    // so that the two triangles sharing that edge agree on its side.
+    if u == 0.0 || w_v == 0.0 || w == 0.0 {
+        let f = |p: f32, q: f32, r: f32, s: f32| (p as f64 * q as f64 - r as f64 * s as f64) as f32;
+        u = f(cx, by, cy, bx);
+        w_v = f(ax, cy, ay, cx);
+        w = f(bx, ay, by, ax);
+    }
+    if (u < 0.0 || w_v < 0.0 || w < 0.0) && (u > 0.0 || w_v > 0.0 || w > 0.0) {
+        return None;
+    }
+    let det = u + w_v + w;
+    if det == 0.0 {
+        return None;
+    }
+    let t_scaled = u * az + w_v * bz + w * cz;
+    // Compare t = t_scaled / det against the interval without dividing; written so
+    // that NaN fails the test.
+    let (t_scaled, abs_det) = if det < 0.0 {
+        (-t_scaled, -det)
+    } else {
+        (t_scaled, det)
+    };
+    if !(t_scaled > 0.0 && t_scaled <= t_max * abs_det) {
+        return None;
+    }
+    let t = t_scaled / abs_det;
+    // Reject t within its own error bound of zero (pbrt-v4's conservative test).
+    let max_z = az.abs().max(bz.abs()).max(cz.abs());
+    let max_x = ax.abs().max(bx.abs()).max(cx.abs());
+    let max_y = ay.abs().max(by.abs()).max(cy.abs());
+    let max_e = u.abs().max(w_v.abs()).max(w.abs());
+    let delta_z = gamma(3) * max_z;
+    let delta_x = gamma(5) * (max_x + max_z);
+    let delta_y = gamma(5) * (max_y + max_z);
+    let delta_e = 2.0 * (gamma(2) * max_x * max_y + delta_y * max_x + delta_x * max_y);
+    let delta_t = 3.0 * (gamma(3) * max_e * max_z + delta_e * max_z + delta_z * max_e) / abs_det;
+    if t <= delta_t {
+        return None;
+    }
+    let inv = 1.0 / det;
+    Some(TriangleHit {
+        t,
+        b1: w_v * inv,
+        b2: w * inv,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn hit(ray: &Ray, tri: &Triangle) -> Option<TriangleHit> {
+        intersect(&RayShear::new(ray), &tri.v, f32::INFINITY)
+    }
+
+    fn unit() -> Triangle {
+        Triangle::new(
+            Vec3A::new(0.0, 0.0, 1.0),
+            Vec3A::new(1.0, 0.0, 1.0),
+            Vec3A::new(0.0, 1.0, 1.0),
+        )
+    }
+
+    #[test]
+    fn hits_with_exact_t_and_barycentrics() {
+        let ray = Ray::new(Vec3A::new(0.25, 0.5, -1.0), Vec3A::Z);
+        let h = hit(&ray, &unit()).expect("hit");
+        assert!((h.t - 2.0).abs() < 1e-6);
+        assert!((h.b1 - 0.25).abs() < 1e-6);
+        assert!((h.b2 - 0.5).abs() < 1e-6);
+        // Both faces are hit: the same ray from the other side.
+        let back = Ray::new(Vec3A::new(0.25, 0.5, 3.0), -Vec3A::Z);
+        assert!((hit(&back, &unit()).unwrap().t - 2.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn misses_outside_behind_and_beyond_t_max() {
+        let outside = Ray::new(Vec3A::new(0.75, 0.75, 0.0), Vec3A::Z);
+        assert!(hit(&outside, &unit()).is_none());
+        let behind = Ray::new(Vec3A::new(0.25, 0.25, 2.0), Vec3A::Z);
+        assert!(hit(&behind, &unit()).is_none());
+        let ray = Ray::new(Vec3A::new(0.25, 0.25, 0.0), Vec3A::Z);
+        let s = RayShear::new(&ray);
+        assert!(intersect(&s, &unit().v, 0.999).is_none());
+        assert!(intersect(&s, &unit().v, 1.0).is_some());
+        // A ray starting on the triangle does not hit it.
+        let on = Ray::new(Vec3A::new(0.25, 0.25, 1.0), Vec3A::new(0.3, 0.1, 1.0));
+        assert!(hit(&on, &unit()).is_none());
+    }
+
+    #[test]
+    fn parallel_rays_and_degenerate_triangles_never_hit() {
+        let parallel = Ray::new(Vec3A::new(-1.0, 0.25, 1.0), Vec3A::X);
+        assert!(hit(&parallel, &unit()).is_none());
+        let parallel_off = Ray::new(Vec3A::new(-1.0, 0.25, 0.5), Vec3A::X);
+        assert!(hit(&parallel_off, &unit()).is_none());
+        let p = Vec3A::new(0.2, 0.2, 1.0);
+        let point = Triangle::new(p, p, p);
+        let line = Triangle::new(
+            Vec3A::new(0.0, 0.0, 1.0),
+            Vec3A::new(1.0, 1.0, 1.0),
+            Vec3A::new(0.5, 0.5, 1.0),
+        );
+        for tri in [point, line] {
+            for dir in [Vec3A::Z, Vec3A::new(0.1, 0.2, 1.0).normalize(), Vec3A::X] {
+                let ray = Ray::new(Vec3A::new(0.2, 0.2, 0.0), dir);
+                assert!(hit(&ray, &tri).is_none(), "{tri:?} {dir:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn non_finite_rays_give_no_hit() {
+        for (o, d) in [
+            (Vec3A::splat(f32::NAN), Vec3A::Z),
+            (Vec3A::new(0.25, 0.25, 0.0), Vec3A::new(f32::NAN, 0.0, 1.0)),
+            (Vec3A::new(f32::INFINITY, 0.25, 0.0), Vec3A::Z),
+            (Vec3A::new(0.25, 0.25, 0.0), Vec3A::ZERO),
+        ] {
+            assert!(hit(&Ray::new(o, d), &unit()).is_none(), "{o:?} {d:?}");
+        }
+    }
+
+    /// Rays aimed exactly at a shared edge or vertex of a fan of triangles must hit
+    /// at least one of them, for many irregular fans and directions.
+    #[test]
+    fn shared_edges_and_vertices_have_no_cracks() {
+        let mut rng = crate::sampler::Rng::new(7, 0);
+        let mut tests = 0;
+        for _ in 0..2000 {
+            // A fan of triangles around a centre vertex, all in a tilted plane.
+            let centre = Vec3A::new(rng.next_f32(), rng.next_f32(), 2.0 + rng.next_f32());
+            let n = 5 + (rng.next_u32() % 4) as usize;
+            let rim: Vec<Vec3A> = (0..n)
+                .map(|i| {
+                    let a = (i as f32 + 0.5 * rng.next_f32()) / n as f32 * std::f32::consts::TAU;
+                    let r = 0.5 + rng.next_f32();
+                    centre + Vec3A::new(r * a.cos(), r * a.sin(), 0.3 * r * a.cos())
+                })
+                .collect();
+            let tris: Vec<Triangle> = (0..n)
+                .map(|i| Triangle::new(centre, rim[i], rim[(i + 1) % n]))
+                .collect();
+            let origin = Vec3A::new(rng.next_f32() - 0.5, rng.next_f32() - 0.5, -rng.next_f32());
+            // Aim at the centre vertex and at points exactly on each spoke.
+            let mut targets = vec![centre];
+            for r in &rim {
+                let s = rng.next_f32();
+                targets.push(centre + s * (*r - centre));
+            }
+            for target in targets {
+                let ray = Ray::new(origin, target - origin);
+                tests += 1;
+                assert!(
+                    tris.iter().any(|t| hit(&ray, t).is_some()),
+                    "crack at {target:?} from {origin:?}"
+                );
+            }
+        }
+        assert!(tests > 10_000);
+    }
+
+    #[test]
+    fn lab_normal_follows_the_lab_winding() {
+        // cross(v2 - v0, v1 - v0) for the unit triangle is (0,1,0) x (1,0,0) = -z.
+        assert_eq!(unit().lab_normal(), -Vec3A::Z);
+        let p = Vec3A::ONE;
+        assert_eq!(Triangle::new(p, p, p).lab_normal(), Vec3A::ZERO);
+    }
+}
