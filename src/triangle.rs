@@ -85,7 +85,8 @@ impl RayShear {
             std::mem::swap(&mut kx, &mut ky);
         }
         let dz = ray.dir[kz];
-        let (sx, sy, sz) = (ray.dir[kx] / dz, ray.dir[ky] / dz, 1.0 / dz);
+        let sz = 1.0 / dz;
+        let (sx, sy) = (ray.dir[kx] * sz, ray.dir[ky] * sz);
         let mut rows = [Vec3A::ZERO; 3];
         rows[0][kx] = 1.0;
         rows[0][kz] = -sx;

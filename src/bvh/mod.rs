@@ -1,0 +1,453 @@
+//! A four-wide bounding volume hierarchy over triangles.
+//!
+//! Built as a binary binned-SAH tree ([`build`]), then collapsed so that every node
+//! holds up to four children whose boxes are tested together, with leaves of one or
+//! two packets of four triangles in structure-of-arrays layout ([`packet`]).
+//! Closest-hit traversal visits children nearest first and skips any whose box
+//! starts beyond the closest hit so far; any-hit traversal stops at the first hit.
+
+mod build;
+mod packet;
+
+use std::mem::MaybeUninit;
+
+use glam::{Vec3A, Vec4};
+
+use crate::ray::{Hit, Ray, gamma};
+use crate::triangle::Triangle;
+use build::{BinNode, build_binary};
+use packet::{Packet, PacketRay};
+
+/// A reference to a child: an index into `nodes`, or, with [`LEAF`] set, the first
+/// packet (bits 4..31) and packet count (bits 0..4) of a leaf.
+type ChildRef = u32;
+const LEAF: u32 = 1 << 31;
+
+/// Four children's boxes, by coordinate: `bounds[0..3]` are the minima in x, y, z
+/// and `bounds[3..6]` the maxima, one lane per child. Empty lanes have min = +inf
+/// and max = -inf, which no ray can hit.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
+struct Node4 {
+    bounds: [Vec4; 6],
+    children: [ChildRef; 4],
+}
+
+/// Traversal stack size: SAH depth plus median splits of up to 2^32 triangles,
+/// three entries per level of a four-wide node.
+const STACK_SIZE: usize = 3 * (build::MAX_SAH_DEPTH + 32);
+
+/// The hierarchy, owning a copy of the triangles in leaf order.
+#[derive(Clone, Debug)]
+pub struct Bvh {
+    nodes: Vec<Node4>,
+    packets: Vec<Packet>,
+    root: Option<ChildRef>,
+    triangles: usize,
+}
+
+impl Bvh {
+    /// Builds the tree. Triangles with zero area or non-finite vertices can never be
+    /// hit and are left out; hits report indices into `triangles`.
+    pub fn build(triangles: &[Triangle]) -> Self {
+        let (bin, prims) = build_binary(triangles);
+        let mut bvh = Bvh {
+            nodes: Vec::with_capacity(bin.len() / 3 + 1),
+            packets: Vec::with_capacity(prims.len() / 3 + 1),
+            root: None,
+            triangles: prims.len(),
+        };
+        if !bin.is_empty() {
+            let order: Vec<(Triangle, u32)> =
+                prims.iter().map(|p| (triangles[p.id as usize], p.id)).collect();
+            bvh.root = Some(bvh.collapse(&bin, 0, &order));
+        }
+        bvh
+    }
+
+    /// Turns binary node `index` into a child reference, pulling up grandchildren
+    /// (largest box first) until a node has four children.
+    fn collapse(&mut self, bin: &[BinNode], index: usize, order: &[(Triangle, u32)]) -> ChildRef {
+        match &bin[index] {
+            BinNode::Leaf { first, count, .. } => {
+                let start = self.packets.len() as u32;
+                for chunk in order[*first..first + count].chunks(4) {
+                    self.packets.push(Packet::new(chunk));
+                }
+                let n = self.packets.len() as u32 - start;
+                assert!(start < 1 << 27, "too many triangles for the BVH");
+                LEAF | start << 4 | n
+            }
+            BinNode::Inner { children, .. } => {
+                let mut kids: Vec<usize> = children.to_vec();
+                while kids.len() < 4 {
+                    let widest = kids
+                        .iter()
+                        .enumerate()
+                        .filter(|(_, k)| matches!(bin[**k], BinNode::Inner { .. }))
+                        .max_by(|a, b| {
+                            let area = |k: usize| bin[k].bounds().half_area();
+                            area(*a.1).total_cmp(&area(*b.1))
+                        })
+                        .map(|(i, _)| i);
+                    let Some(i) = widest else { break };
+                    let BinNode::Inner { children, .. } = &bin[kids[i]] else {
+                        unreachable!()
+                    };
+                    kids.splice(i..=i, *children);
+                }
+                let slot = self.nodes.len();
+                self.nodes.push(Node4 {
+                    bounds: [
+                        Vec4::INFINITY,
+                        Vec4::INFINITY,
+                        Vec4::INFINITY,
+                        Vec4::NEG_INFINITY,
+                        Vec4::NEG_INFINITY,
+                        Vec4::NEG_INFINITY,
+                    ],
+                    children: [0; 4],
+                });
+                for (lane, &k) in kids.iter().enumerate() {
+                    let b = bin[k].bounds();
+                    let child = self.collapse(bin, k, order);
+                    let node = &mut self.nodes[slot];
+                    for axis in 0..3 {
+                        node.bounds[axis][lane] = b.min[axis];
+                        node.bounds[axis + 3][lane] = b.max[axis];
+                    }
+                    node.children[lane] = child;
+                }
+                slot as u32
+            }
+        }
+    }
+
+    /// The closest hit with `t` in `(0, t_max]`.
+    pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
+        let root = self.root?;
+        if !is_finite_ray(ray) {
+            return None;
+        }
+        let q = Query::new(ray);
+        let mut best: Option<Hit> = None;
+        let mut t_max = t_max;
+        let mut stack = Stack::<(ChildRef, f32)>::new();
+        let mut cur = root;
+        loop {
+            if cur & LEAF != 0 {
+                for p in self.leaf(cur) {
+                    if let Some((lane, h)) = packet::intersect(&q.packet, p, t_max) {
+                        t_max = h.t;
+                        best = Some(Hit {
+                            t: h.t,
+                            prim: p.prim(lane),
+                            b1: h.b1,
+                            b2: h.b2,
+                        });
+                    }
+                }
+            } else {
+                let node = &self.nodes[cur as usize];
+                let (t_near, mut mask) = q.hit_boxes(node, t_max);
+                if mask != 0 {
+                    // Push the hit children farthest first, continue with the nearest.
+                    let mut lanes = [(0u32, 0f32); 4];
+                    let mut n = 0;
+                    while mask != 0 {
+                        let lane = mask.trailing_zeros() as usize;
+                        mask &= mask - 1;
+                        let entry = (node.children[lane], t_near[lane]);
+                        let mut j = n;
+                        while j > 0 && lanes[j - 1].1 < entry.1 {
+                            lanes[j] = lanes[j - 1];
+                            j -= 1;
+                        }
+                        lanes[j] = entry;
+                        n += 1;
+                    }
+                    for &entry in &lanes[..n - 1] {
+                        stack.push(entry);
+                    }
+                    cur = lanes[n - 1].0;
+                    continue;
+                }
+            }
+            // Pop the next subtree that may still hold a closer hit.
+            loop {
+                let Some((r, t)) = stack.pop() else {
+                    return best;
+                };
+                if t <= t_max {
+                    cur = r;
+                    break;
+                }
+            }
+        }
+    }
+
+    /// Whether anything is hit with `t` in `(0, t_max]`; stops at the first hit found.
+    pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
+        let Some(root) = self.root else {
+            return false;
+        };
+        if !is_finite_ray(ray) {
+            return false;
+        }
+        let q = Query::new(ray);
+        let mut stack = Stack::<ChildRef>::new();
+        let mut cur = root;
+        loop {
+            if cur & LEAF != 0 {
+                if self
+                    .leaf(cur)
+                    .iter()
+                    .any(|p| packet::occluded(&q.packet, p, t_max))
+                {
+                    return true;
+                }
+            } else {
+                let node = &self.nodes[cur as usize];
+                let (_, mut mask) = q.hit_boxes(node, t_max);
+                while mask != 0 {
+                    let lane = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    stack.push(node.children[lane]);
+                }
+            }
+            match stack.pop() {
+                Some(next) => cur = next,
+                None => return false,
+            }
+        }
+    }
+
+    #[inline]
+    fn leaf(&self, r: ChildRef) -> &[Packet] {
+        let start = ((r & !LEAF) >> 4) as usize;
+        &self.packets[start..start + (r & 15) as usize]
+    }
+
+    /// Number of four-wide nodes.
+    pub fn node_count(&self) -> usize {
+        self.nodes.len()
+    }
+
+    /// Number of triangles in the tree (those that can be hit).
+    pub fn triangle_count(&self) -> usize {
+        self.triangles
+    }
+
+    /// Bytes used by nodes and triangle packets.
+    pub fn memory_bytes(&self) -> usize {
+        self.nodes.len() * std::mem::size_of::<Node4>()
+            + self.packets.len() * std::mem::size_of::<Packet>()
+    }
+}
+
+/// A fixed-size traversal stack that is not zeroed on creation: traversal runs once
+/// per ray, and clearing a few kilobytes each time cost more than the box tests.
+struct Stack<T: Copy> {
+    items: [MaybeUninit<T>; STACK_SIZE],
+    len: usize,
+}
+
+impl<T: Copy> Stack<T> {
+    #[inline(always)]
+    fn new() -> Self {
+        Self {
+            items: [const { MaybeUninit::uninit() }; STACK_SIZE],
+            len: 0,
+        }
+    }
+
+    #[inline(always)]
+    fn push(&mut self, item: T) {
+        // Indexing checks the bound: a too-deep tree panics rather than corrupts.
+        self.items[self.len] = MaybeUninit::new(item);
+        self.len += 1;
+    }
+
+    #[inline(always)]
+    fn pop(&mut self) -> Option<T> {
+        if self.len == 0 {
+            return None;
+        }
+        self.len -= 1;
+        // SAFETY: every slot below `len` was written by `push`.
+        Some(unsafe { self.items[self.len].assume_init() })
+    }
+}
+
+fn is_finite_ray(ray: &Ray) -> bool {
+    ray.origin.is_finite() && ray.dir.is_finite()
+}
+
+/// Per-ray constants of traversal.
+struct Query {
+    origin: [Vec4; 3],
+    inv_dir: [Vec4; 3],
+    /// Index into `Node4::bounds` of the near and far plane, per axis.
+    near: [usize; 3],
+    far: [usize; 3],
+    packet: PacketRay,
+}
+
+impl Query {
+    #[inline(always)]
+    fn new(ray: &Ray) -> Self {
+        // A zero component becomes a tiny one of the same sign, so the inverse is
+        // finite and a slab test never computes 0 · inf = NaN; the sign comes from
+        // the inverse so that -0.0 counts as negative.
+        let tiny = Vec3A::splat(1e-30);
+        let safe = Vec3A::select(ray.dir.abs().cmplt(tiny), tiny.copysign(ray.dir), ray.dir);
+        let inv = safe.recip();
+        let neg = inv.cmplt(Vec3A::ZERO).bitmask();
+        let (o, i) = (ray.origin.to_array(), inv.to_array());
+        let plane = |a: usize, flip: u32| a + 3 * ((neg >> a & 1) ^ flip) as usize;
+        Self {
+            origin: o.map(Vec4::splat),
+            inv_dir: i.map(Vec4::splat),
+            near: [plane(0, 0), plane(1, 0), plane(2, 0)],
+            far: [plane(0, 1), plane(1, 1), plane(2, 1)],
+            packet: PacketRay::new(ray.origin, ray.dir),
+        }
+    }
+
+    /// Slab test of the four boxes: entry distances and a bit mask of the boxes hit
+    /// within `[0, t_max]`. The exit distance is enlarged by `1 + 2γ(3)` so that
+    /// rounding never culls a box the ray grazes (Ize 2013).
+    #[inline]
+    fn hit_boxes(&self, node: &Node4, t_max: f32) -> (Vec4, u32) {
+        let slab = |plane: usize, a: usize| (node.bounds[plane] - self.origin[a]) * self.inv_dir[a];
+        let t0 = slab(self.near[0], 0)
+            .max(slab(self.near[1], 1))
+            .max(slab(self.near[2], 2))
+            .max(Vec4::ZERO);
+        let t1 = slab(self.far[0], 0)
+            .min(slab(self.far[1], 1))
+            .min(slab(self.far[2], 2))
+            * (1.0 + 2.0 * gamma(3));
+        let t1 = t1.min(Vec4::splat(t_max));
+        (t0, t0.cmple(t1).bitmask())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::triangle::{self, RayShear};
+    use crate::sampler::Rng;
+
+    fn random_triangles(rng: &mut Rng, n: usize) -> Vec<Triangle> {
+        let mut p = || Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 2.0 - 1.0;
+        (0..n)
+            .map(|_| {
+                let c = p();
+                Triangle::new(c, c + 0.2 * p(), c + 0.2 * p())
+            })
+            .collect()
+    }
+
+    fn brute_force(tris: &[Triangle], ray: &Ray, t_max: f32) -> Option<Hit> {
+        let s = RayShear::new(ray);
+        let mut best: Option<Hit> = None;
+        for (i, t) in tris.iter().enumerate() {
+            let limit = best.map_or(t_max, |b| b.t);
+            if let Some(h) = triangle::intersect(&s, &t.v, limit) {
+                best = Some(Hit {
+                    t: h.t,
+                    prim: i as u32,
+                    b1: h.b1,
+                    b2: h.b2,
+                });
+            }
+        }
+        best
+    }
+
+    #[test]
+    fn agrees_with_brute_force_on_random_soup() {
+        let mut rng = Rng::new(3, 1);
+        for &n in &[1usize, 2, 7, 100, 3000] {
+            let tris = random_triangles(&mut rng, n);
+            let bvh = Bvh::build(&tris);
+            for _ in 0..2000 {
+                let o = Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 3.0 - 1.5;
+                let d = (Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) - 0.5)
+                    .normalize();
+                let ray = Ray::new(o, d);
+                let a = bvh.intersect(&ray, f32::INFINITY);
+                let b = brute_force(&tris, &ray, f32::INFINITY);
+                assert_eq!(a.is_some(), b.is_some(), "n={n} {ray:?}");
+                if let (Some(a), Some(b)) = (a, b) {
+                    assert!((a.t - b.t).abs() <= 1e-5 * b.t, "{a:?} {b:?}");
+                    assert!(a.prim == b.prim || a.t == b.t, "{a:?} {b:?}");
+                }
+                // Any-hit agrees with closest-hit, with and without a t_max cut.
+                assert_eq!(bvh.occluded(&ray, f32::INFINITY), b.is_some());
+                let cut = 0.5;
+                assert_eq!(
+                    bvh.occluded(&ray, cut),
+                    brute_force(&tris, &ray, cut).is_some()
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn empty_and_degenerate_inputs() {
+        let ray = Ray::new(Vec3A::ZERO, Vec3A::Z);
+        let empty = Bvh::build(&[]);
+        assert!(empty.intersect(&ray, f32::INFINITY).is_none());
+        assert!(!empty.occluded(&ray, f32::INFINITY));
+        let p = Vec3A::new(0.0, 0.0, 1.0);
+        let degenerate = vec![Triangle::new(p, p, p); 5];
+        let bvh = Bvh::build(&degenerate);
+        assert_eq!(bvh.triangle_count(), 0);
+        assert!(bvh.intersect(&ray, f32::INFINITY).is_none());
+        // Non-finite vertices are dropped, the rest keep their indices.
+        let good = Triangle::new(
+            Vec3A::new(-1.0, -1.0, 2.0),
+            Vec3A::new(1.0, -1.0, 2.0),
+            Vec3A::new(0.0, 1.0, 2.0),
+        );
+        let bad = Triangle::new(Vec3A::splat(f32::NAN), p, p);
+        let bvh = Bvh::build(&[bad, good]);
+        assert_eq!(bvh.intersect(&ray, f32::INFINITY).unwrap().prim, 1);
+        // NaN and infinite rays hit nothing and do not panic.
+        for r in [
+            Ray::new(Vec3A::splat(f32::NAN), Vec3A::Z),
+            Ray::new(Vec3A::ZERO, Vec3A::new(f32::NAN, 0.0, 1.0)),
+            Ray::new(Vec3A::ZERO, Vec3A::ZERO),
+            Ray::new(Vec3A::splat(f32::INFINITY), Vec3A::Z),
+            Ray::new(Vec3A::ZERO, Vec3A::new(0.0, 0.0, f32::INFINITY)),
+        ] {
+            assert!(bvh.intersect(&r, f32::INFINITY).is_none(), "{r:?}");
+            assert!(!bvh.occluded(&r, f32::INFINITY), "{r:?}");
+        }
+    }
+
+    #[test]
+    fn axis_aligned_rays_on_box_planes_still_hit() {
+        // Boxes flat in z whose min x plane contains the ray, which has zero x and y
+        // direction components: the slab test sees 0 * inf = NaN on x.
+        let a = Triangle::new(
+            Vec3A::new(0.0, -1.0, 2.0),
+            Vec3A::new(2.0, -1.0, 2.0),
+            Vec3A::new(0.0, 1.0, 2.0),
+        );
+        let b = Triangle::new(
+            Vec3A::new(0.0, -1.0, 4.0),
+            Vec3A::new(0.0, 1.0, 4.0),
+            Vec3A::new(-2.0, 1.0, 4.0),
+        );
+        let bvh = Bvh::build(&[a, b]);
+        for (dir, want) in [(Vec3A::Z, (0, 2.0)), (-Vec3A::Z, (1, 4.0))] {
+            let origin = if dir.z > 0.0 { Vec3A::ZERO } else { Vec3A::new(0.0, 0.0, 8.0) };
+            let hit = bvh.intersect(&Ray::new(origin, dir), f32::INFINITY).expect("hit");
+            assert_eq!((hit.prim, hit.t), want);
+            assert!(bvh.occluded(&Ray::new(origin, dir), f32::INFINITY));
+        }
+    }
+}

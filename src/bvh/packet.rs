@@ -1,0 +1,237 @@
+//! Four triangles in structure-of-arrays layout and the watertight test of one ray
+//! against all four at once (glam's `Vec4`: SSE2 on x86-64, scalar elsewhere).
+
+use glam::{BVec4A, Vec3A, Vec4};
+
+use crate::ray::{Ray, gamma};
+use crate::triangle::{self, RayShear, Triangle, TriangleHit};
+
+/// Four triangles, lane by lane: `v[vertex][axis]`. Unused lanes repeat the last
+/// triangle, so they never change a result.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(16))]
+pub struct Packet {
+    v: [[Vec4; 3]; 3],
+    prim: [u32; 4],
+}
+
+impl Packet {
+    /// Packs up to four triangles with their scene indices.
+    pub fn new(tris: &[(Triangle, u32)]) -> Self {
+        assert!((1..=4).contains(&tris.len()));
+        let lane = |i: usize| tris[i.min(tris.len() - 1)];
+        let coord = |vertex: usize, axis: usize| {
+            Vec4::from_array(std::array::from_fn(|i| lane(i).0.v[vertex][axis]))
+        };
+        Self {
+            v: std::array::from_fn(|vertex| std::array::from_fn(|axis| coord(vertex, axis))),
+            prim: std::array::from_fn(|i| lane(i).1),
+        }
+    }
+
+    /// The triangle in lane `i`.
+    fn triangle(&self, i: usize) -> [Vec3A; 3] {
+        std::array::from_fn(|vertex| {
+            Vec3A::new(self.v[vertex][0][i], self.v[vertex][1][i], self.v[vertex][2][i])
+        })
+    }
+
+    /// Scene index of the triangle in lane `i`.
+    pub fn prim(&self, i: usize) -> u32 {
+        self.prim[i]
+    }
+}
+
+/// Per-ray constants of the four-wide test.
+#[derive(Clone, Copy, Debug)]
+pub struct PacketRay {
+    k: [usize; 3],
+    origin: [Vec4; 3],
+    shear: [Vec4; 3],
+    ray: Ray,
+}
+
+impl PacketRay {
+    /// Precomputes the axis permutation and shear (see [`RayShear`]).
+    #[inline(always)]
+    pub fn new(origin: Vec3A, dir: Vec3A) -> Self {
+        let (d, o) = (dir.to_array(), origin.to_array());
+        let a = dir.abs();
+        let kz = if a.x >= a.y && a.x >= a.z {
+            0
+        } else if a.y >= a.z {
+            1
+        } else {
+            2
+        };
+        let (mut kx, mut ky) = ((kz + 1) % 3, (kz + 2) % 3);
+        if d[kz] < 0.0 {
+            std::mem::swap(&mut kx, &mut ky);
+        }
+        let inv_z = 1.0 / d[kz];
+        Self {
+            k: [kx, ky, kz],
+            origin: [Vec4::splat(o[kx]), Vec4::splat(o[ky]), Vec4::splat(o[kz])],
+            shear: [
+                Vec4::splat(d[kx] * inv_z),
+                Vec4::splat(d[ky] * inv_z),
+                Vec4::splat(inv_z),
+            ],
+            ray: Ray::new(origin, dir),
+        }
+    }
+}
+
+/// Which lanes hit within `(0, t_max]`, with their `t`, edge functions and `det`.
+struct Candidates {
+    valid: BVec4A,
+    t: Vec4,
+    v: Vec4,
+    w: Vec4,
+    det: Vec4,
+}
+
+#[inline(always)]
+fn candidates(r: &PacketRay, p: &Packet, t_max: f32) -> Result<Candidates, ()> {
+    let [kx, ky, kz] = r.k;
+    let [sx, sy, sz] = r.shear;
+    let xform = |vertex: &[Vec4; 3]| {
+        let dx = vertex[kx] - r.origin[0];
+        let dy = vertex[ky] - r.origin[1];
+        let dz = vertex[kz] - r.origin[2];
+        (dx - sx * dz, dy - sy * dz, sz * dz)
+    };
+    let (ax, ay, az) = xform(&p.v[0]);
+    let (bx, by, bz) = xform(&p.v[1]);
+    let (cx, cy, cz) = xform(&p.v[2]);
+    let u = cx * by - cy * bx;
+    let v = ax * cy - ay * cx;
+    let w = bx * ay - by * ax;
+    let zero = Vec4::ZERO;
+    // Exact zeros need the f64 edge functions: let the scalar test decide.
+    if (u.cmpeq(zero) | v.cmpeq(zero) | w.cmpeq(zero)).any() {
+        return Err(());
+    }
+    let any_neg = u.cmplt(zero) | v.cmplt(zero) | w.cmplt(zero);
+    let any_pos = u.cmpgt(zero) | v.cmpgt(zero) | w.cmpgt(zero);
+    let det = u + v + w;
+    let t_scaled = (u * az + v * bz + w * cz) * det.signum();
+    let abs_det = det.abs();
+    let mut valid = !(any_neg & any_pos)
+        & det.cmpne(zero)
+        & t_scaled.cmpgt(zero)
+        & t_scaled.cmple(Vec4::splat(t_max) * abs_det);
+    if !valid.any() {
+        return Ok(Candidates { valid, t: zero, v, w, det });
+    }
+    let t = t_scaled / abs_det;
+    // The conservative positive-t test of the scalar version, lane by lane.
+    let max_z = az.abs().max(bz.abs()).max(cz.abs());
+    let max_x = ax.abs().max(bx.abs()).max(cx.abs());
+    let max_y = ay.abs().max(by.abs()).max(cy.abs());
+    let max_e = u.abs().max(v.abs()).max(w.abs());
+    let delta_z = gamma(3) * max_z;
+    let delta_x = gamma(5) * (max_x + max_z);
+    let delta_y = gamma(5) * (max_y + max_z);
+    let delta_e = 2.0 * (gamma(2) * max_x * max_y + delta_y * max_x + delta_x * max_y);
+    let delta_t = 3.0 * (gamma(3) * max_e * max_z + delta_e * max_z + delta_z * max_e) / abs_det;
+    valid &= t.cmpgt(delta_t);
+    Ok(Candidates { valid, t, v, w, det })
+}
+
+/// The closest hit among the four triangles: `(lane, hit)`.
+#[inline]
+pub fn intersect(r: &PacketRay, p: &Packet, t_max: f32) -> Option<(usize, TriangleHit)> {
+    let Ok(c) = candidates(r, p, t_max) else {
+        return scalar_closest(r, p, t_max);
+    };
+    let mask = c.valid.bitmask();
+    if mask == 0 {
+        return None;
+    }
+    let t = Vec4::select(c.valid, c.t, Vec4::INFINITY);
+    let t_min = t.min_element();
+    let lane = (t.cmpeq(Vec4::splat(t_min)).bitmask() & mask).trailing_zeros() as usize;
+    let inv = 1.0 / c.det[lane];
+    Some((
+        lane,
+        TriangleHit {
+            t: c.t[lane],
+            b1: c.v[lane] * inv,
+            b2: c.w[lane] * inv,
+        },
+    ))
+}
+
+/// Whether any of the four triangles is hit within `(0, t_max]`.
+#[inline]
+pub fn occluded(r: &PacketRay, p: &Packet, t_max: f32) -> bool {
+    match candidates(r, p, t_max) {
+        Ok(c) => c.valid.any(),
+        Err(()) => scalar_closest(r, p, t_max).is_some(),
+    }
+}
+
+#[cold]
+fn scalar_closest(r: &PacketRay, p: &Packet, t_max: f32) -> Option<(usize, TriangleHit)> {
+    let shear = RayShear::new(&r.ray);
+    let mut best: Option<(usize, TriangleHit)> = None;
+    for lane in 0..4 {
+        let limit = best.map_or(t_max, |(_, h)| h.t);
+        if let Some(h) = triangle::intersect(&shear, &p.triangle(lane), limit) {
+            if best.is_none_or(|(_, b)| h.t < b.t) {
+                best = Some((lane, h));
+            }
+        }
+    }
+    best
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampler::Rng;
+
+    #[test]
+    fn four_wide_test_agrees_with_the_scalar_test() {
+        let mut rng = Rng::new(11, 0);
+        let p3 = |rng: &mut Rng, s: f32| Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * s;
+        let mut hits = 0;
+        for round in 0..4000 {
+            let n = 1 + round % 4;
+            let tris: Vec<(Triangle, u32)> = (0..n)
+                .map(|i| {
+                    let c = p3(&mut rng, 2.0) - 1.0;
+                    let (e1, e2) = (p3(&mut rng, 1.0) - 0.5, p3(&mut rng, 1.0) - 0.5);
+                    (Triangle::new(c, c + e1, c + e2), i as u32 * 7)
+                })
+                .collect();
+            let packet = Packet::new(&tris);
+            let origin = p3(&mut rng, 4.0) - 2.0;
+            // Aim at a point of one of the triangles (sometimes just outside it).
+            let (tri, _) = tris[round % n];
+            let (s1, s2) = (rng.next_f32() * 1.2, rng.next_f32() * 1.2);
+            let (s1, s2) = if s1 + s2 > 1.2 { (1.2 - s1, 1.2 - s2) } else { (s1, s2) };
+            let target = tri.v[0] + s1 * (tri.v[1] - tri.v[0]) + s2 * (tri.v[2] - tri.v[0]);
+            let dir = (target - origin).normalize();
+            let ray = Ray::new(origin, dir);
+            let pr = PacketRay::new(origin, dir);
+            let s = RayShear::new(&ray);
+            let t_max = if round % 3 == 0 { 1.0 } else { f32::INFINITY };
+            let want = tris
+                .iter()
+                .filter_map(|(t, id)| triangle::intersect(&s, &t.v, t_max).map(|h| (h, *id)))
+                .min_by(|a, b| a.0.t.total_cmp(&b.0.t));
+            let got = intersect(&pr, &packet, t_max).map(|(lane, h)| (h, packet.prim(lane)));
+            assert_eq!(got.is_some(), want.is_some(), "round {round}");
+            assert_eq!(occluded(&pr, &packet, t_max), want.is_some());
+            if let (Some((g, gid)), Some((w, wid))) = (got, want) {
+                hits += 1;
+                assert_eq!(gid, wid);
+                assert!((g.t - w.t).abs() <= 1e-6 * w.t);
+                assert!((g.b1 - w.b1).abs() < 1e-5 && (g.b2 - w.b2).abs() < 1e-5);
+            }
+        }
+        assert!(hits > 1500, "{hits}");
+    }
+}
