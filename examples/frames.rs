@@ -7,8 +7,14 @@ fn main() {
         let t = std::time::Instant::now();
         let n = 50;
         let mut rays = 0;
-        for _ in 0..n { rays += render::render(&scene, &cam, &s, &|_| {}).rays; }
+        for _ in 0..n {
+            rays += render::render(&scene, &cam, &s, &|_| {}).rays;
+        }
         let dt = t.elapsed().as_secs_f64() / n as f64;
-        println!("{:.2} ms/frame {:.1} Mrays/s", dt * 1e3, rays as f64 / n as f64 / dt / 1e6);
+        println!(
+            "{:.2} ms/frame {:.1} Mrays/s",
+            dt * 1e3,
+            rays as f64 / n as f64 / dt / 1e6
+        );
     }
 }

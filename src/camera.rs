@@ -97,7 +97,11 @@ mod tests {
             for (x, y) in [(0u32, 0u32), (249, 199), (499, 399), (17, 311)] {
                 // R·(x + 0.5 − W/2, y + 0.5 − H/2, f), the formula written out.
                 let d = [x as f32 + 0.5 - 250.0, y as f32 + 0.5 - 200.0, h as f32];
-                let rx = [d[0], b.cos() * d[1] - b.sin() * d[2], b.sin() * d[1] + b.cos() * d[2]];
+                let rx = [
+                    d[0],
+                    b.cos() * d[1] - b.sin() * d[2],
+                    b.sin() * d[1] + b.cos() * d[2],
+                ];
                 let want = Vec3A::new(
                     a.cos() * rx[0] + a.sin() * rx[2],
                     rx[1],

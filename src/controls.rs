@@ -165,7 +165,10 @@ mod tests {
             t.apply(a, &init);
             t.light_pos - l
         };
-        assert!(close(moved(Action::LightForward), Vec3A::new(0.0, 0.0, 0.1)));
+        assert!(close(
+            moved(Action::LightForward),
+            Vec3A::new(0.0, 0.0, 0.1)
+        ));
         assert!(close(moved(Action::LightBack), Vec3A::new(0.0, 0.0, -0.1)));
         assert!(close(moved(Action::LightLeft), Vec3A::new(-0.1, 0.0, 0.0)));
         assert!(close(moved(Action::LightRight), Vec3A::new(0.1, 0.0, 0.0)));

@@ -81,9 +81,8 @@ fn srgb_decode(y: f64) -> f64 {
 #[inline]
 pub fn srgb8(x: f32) -> u8 {
     static THRESHOLDS: OnceLock<[f32; 255]> = OnceLock::new();
-    let t = THRESHOLDS.get_or_init(|| {
-        std::array::from_fn(|i| srgb_decode((i as f64 + 0.5) / 255.0) as f32)
-    });
+    let t = THRESHOLDS
+        .get_or_init(|| std::array::from_fn(|i| srgb_decode((i as f64 + 0.5) / 255.0) as f32));
     t.partition_point(|&edge| edge <= x) as u8
 }
 
@@ -126,7 +125,10 @@ pub enum Format {
 impl Format {
     /// The format for `path`'s extension (case-insensitive).
     pub fn from_path(path: &Path) -> Result<Self, OutputError> {
-        let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase);
         match ext.as_deref() {
             Some("png") => Ok(Format::Png),
             Some("exr") => Ok(Format::Exr),
@@ -200,10 +202,9 @@ fn write_format(film: &Film, format: Format, path: &Path, tmp: &Path) -> Result<
 
 /// A hidden sibling of `path`, unique to this process.
 fn temp_path(path: &Path) -> PathBuf {
-    let name = path.file_name().map_or_else(
-        || "image".into(),
-        |n| n.to_string_lossy().into_owned(),
-    );
+    let name = path
+        .file_name()
+        .map_or_else(|| "image".into(), |n| n.to_string_lossy().into_owned());
     path.with_file_name(format!(".{name}.{}.tmp", std::process::id()))
 }
 

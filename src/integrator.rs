@@ -122,31 +122,49 @@ mod tests {
     fn direct_matches_the_hand_computed_value() {
         // Light 2 above and 1 to the side of the point (0, 1, 0).
         let s = one_triangle(Vec3A::new(1.0, -1.0, 0.0), false);
-        let ray = Ray::new(Vec3A::new(0.0, -1.0, -2.0), Vec3A::new(0.0, 2.0, 2.0).normalize());
+        let ray = Ray::new(
+            Vec3A::new(0.0, -1.0, -2.0),
+            Vec3A::new(0.0, 2.0, 2.0).normalize(),
+        );
         let mut rays = 0;
         let c = Integrator::Direct.radiance(&s, &ray, &mut rays);
         // r² = 1 + 4 = 5, cos = 2/√5, D = P·cos/(4π r²).
         let d = Vec3A::new(10.0, 20.0, 30.0) * (2.0 / 5f32.sqrt()) / (4.0 * PI * 5.0);
         let want = Vec3A::new(0.5, 0.25, 1.0) * (d + 0.1);
-        assert!((c - want).abs().max_element() < 1e-5 * want.max_element(), "{c} {want}");
+        assert!(
+            (c - want).abs().max_element() < 1e-5 * want.max_element(),
+            "{c} {want}"
+        );
         assert_eq!(rays, 2);
         let flat = Integrator::Flat.radiance(&s, &ray, &mut rays);
         assert_eq!(flat, Vec3A::new(0.5, 0.25, 1.0));
         // Pointing away from the triangle: black.
         let miss = Ray::new(ray.origin, -ray.dir);
-        assert_eq!(Integrator::Direct.radiance(&s, &miss, &mut rays), Vec3A::ZERO);
+        assert_eq!(
+            Integrator::Direct.radiance(&s, &miss, &mut rays),
+            Vec3A::ZERO
+        );
     }
 
     #[test]
     fn shadowed_points_get_only_ambient() {
         // The blocker at y = 0 lies between the light at y = -1 and the point (0, 1, 0).
         let s = one_triangle(Vec3A::new(0.0, -1.0, 0.0), true);
-        let ray = Ray::new(Vec3A::new(0.0, -1.0, -4.0), Vec3A::new(0.0, 2.0, 4.0).normalize());
+        let ray = Ray::new(
+            Vec3A::new(0.0, -1.0, -4.0),
+            Vec3A::new(0.0, 2.0, 4.0).normalize(),
+        );
         let mut rays = 0;
         let c = Integrator::Direct.radiance(&s, &ray, &mut rays);
-        assert!((c - Vec3A::new(0.5, 0.25, 1.0) * 0.1).abs().max_element() < 1e-7, "{c}");
+        assert!(
+            (c - Vec3A::new(0.5, 0.25, 1.0) * 0.1).abs().max_element() < 1e-7,
+            "{c}"
+        );
         // A point beside the blocker's shadow is lit.
-        let lit = Ray::new(Vec3A::new(3.0, -1.0, -4.0), Vec3A::new(0.0, 2.0, 4.0).normalize());
+        let lit = Ray::new(
+            Vec3A::new(3.0, -1.0, -4.0),
+            Vec3A::new(0.0, 2.0, 4.0).normalize(),
+        );
         let c = Integrator::Direct.radiance(&s, &lit, &mut rays);
         // Hit point (3, 1, 0): r² = 9 + 4, cos = 2/√13.
         let d = 10.0 * (2.0 / 13f32.sqrt()) / (4.0 * PI * 13.0);
@@ -156,7 +174,10 @@ mod tests {
     #[test]
     fn light_behind_the_face_gives_ambient_only() {
         let s = one_triangle(Vec3A::new(0.0, 3.0, 0.0), false);
-        let ray = Ray::new(Vec3A::new(0.0, -1.0, -2.0), Vec3A::new(0.0, 2.0, 2.0).normalize());
+        let ray = Ray::new(
+            Vec3A::new(0.0, -1.0, -2.0),
+            Vec3A::new(0.0, 2.0, 2.0).normalize(),
+        );
         let mut rays = 0;
         let c = Integrator::Direct.radiance(&s, &ray, &mut rays);
         assert!((c - Vec3A::new(0.5, 0.25, 1.0) * 0.1).abs().max_element() < 1e-7);

@@ -16,6 +16,8 @@
 //! * [`film`]: the image buffer and atomic PNG/EXR output;
 //! * [`controls`]: the viewer's camera/light state and how input changes it.
 
+#![warn(missing_docs)]
+
 pub mod bvh;
 pub mod camera;
 pub mod controls;

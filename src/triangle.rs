@@ -36,7 +36,9 @@ impl Triangle {
 
     /// The triangle's area.
     pub fn area(&self) -> f32 {
-        0.5 * (self.v[1] - self.v[0]).cross(self.v[2] - self.v[0]).length()
+        0.5 * (self.v[1] - self.v[0])
+            .cross(self.v[2] - self.v[0])
+            .length()
     }
 
     /// Componentwise minimum of the vertices.

@@ -40,8 +40,15 @@ impl Aabb {
 /// A node of the binary tree: a leaf with `count` triangles from `first` on
 /// (in build order), or an inner node with two children.
 pub(super) enum BinNode {
-    Leaf { bounds: Aabb, first: usize, count: usize },
-    Inner { bounds: Aabb, children: [usize; 2] },
+    Leaf {
+        bounds: Aabb,
+        first: usize,
+        count: usize,
+    },
+    Inner {
+        bounds: Aabb,
+        children: [usize; 2],
+    },
 }
 
 impl BinNode {
@@ -83,7 +90,12 @@ pub(super) fn build_binary(triangles: &[Triangle]) -> (Vec<BinNode>, Vec<BuildPr
 }
 
 /// Builds the subtree of `prims`, which start at index `first` of the full array.
-fn build_range(nodes: &mut Vec<BinNode>, prims: &mut [BuildPrim], first: usize, depth: usize) -> usize {
+fn build_range(
+    nodes: &mut Vec<BinNode>,
+    prims: &mut [BuildPrim],
+    first: usize,
+    depth: usize,
+) -> usize {
     let mut bounds = Aabb::EMPTY;
     let mut cbounds = Aabb::EMPTY;
     for p in prims.iter() {
@@ -150,7 +162,7 @@ fn best_split(prims: &[BuildPrim], cbounds: &Aabb, bounds: &Aabb) -> Option<(usi
     let parent_area = bounds.half_area();
     for axis in 0..3 {
         let (lo, extent) = (cbounds.min[axis], cbounds.max[axis] - cbounds.min[axis]);
-        if !(extent > 0.0) {
+        if extent <= 0.0 {
             continue;
         }
         let mut bins = [(Aabb::EMPTY, 0u32); BINS];
@@ -176,9 +188,8 @@ fn best_split(prims: &[BuildPrim], cbounds: &Aabb, bounds: &Aabb) -> Option<(usi
             if count == 0 || count as usize == prims.len() {
                 continue;
             }
-            let cost =
-                TRAVERSAL_COST
-                    + (acc.half_area() * leaf_cost(count as usize) + right_cost[i + 1]) / parent_area;
+            let cost = TRAVERSAL_COST
+                + (acc.half_area() * leaf_cost(count as usize) + right_cost[i + 1]) / parent_area;
             if cost < best_cost {
                 best_cost = cost;
                 best = Some((axis, i));
@@ -198,4 +209,3 @@ fn partition<T>(items: &mut [T], pred: impl Fn(&T) -> bool) -> usize {
     }
     mid
 }
-

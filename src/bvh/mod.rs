@@ -58,8 +58,10 @@ impl Bvh {
             triangles: prims.len(),
         };
         if !bin.is_empty() {
-            let order: Vec<(Triangle, u32)> =
-                prims.iter().map(|p| (triangles[p.id as usize], p.id)).collect();
+            let order: Vec<(Triangle, u32)> = prims
+                .iter()
+                .map(|p| (triangles[p.id as usize], p.id))
+                .collect();
             bvh.root = Some(bvh.collapse(&bin, 0, &order));
         }
         bvh
@@ -336,8 +338,8 @@ impl Query {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::triangle::{self, RayShear};
     use crate::sampler::Rng;
+    use crate::triangle::{self, RayShear};
 
     fn random_triangles(rng: &mut Rng, n: usize) -> Vec<Triangle> {
         let mut p = || Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 2.0 - 1.0;
@@ -374,8 +376,8 @@ mod tests {
             let bvh = Bvh::build(&tris);
             for _ in 0..2000 {
                 let o = Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 3.0 - 1.5;
-                let d = (Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) - 0.5)
-                    .normalize();
+                let d =
+                    (Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) - 0.5).normalize();
                 let ray = Ray::new(o, d);
                 let a = bvh.intersect(&ray, f32::INFINITY);
                 let b = brute_force(&tris, &ray, f32::INFINITY);
@@ -444,8 +446,14 @@ mod tests {
         );
         let bvh = Bvh::build(&[a, b]);
         for (dir, want) in [(Vec3A::Z, (0, 2.0)), (-Vec3A::Z, (1, 4.0))] {
-            let origin = if dir.z > 0.0 { Vec3A::ZERO } else { Vec3A::new(0.0, 0.0, 8.0) };
-            let hit = bvh.intersect(&Ray::new(origin, dir), f32::INFINITY).expect("hit");
+            let origin = if dir.z > 0.0 {
+                Vec3A::ZERO
+            } else {
+                Vec3A::new(0.0, 0.0, 8.0)
+            };
+            let hit = bvh
+                .intersect(&Ray::new(origin, dir), f32::INFINITY)
+                .expect("hit");
             assert_eq!((hit.prim, hit.t), want);
             assert!(bvh.occluded(&Ray::new(origin, dir), f32::INFINITY));
         }

@@ -32,7 +32,11 @@ impl Packet {
     /// The triangle in lane `i`.
     fn triangle(&self, i: usize) -> [Vec3A; 3] {
         std::array::from_fn(|vertex| {
-            Vec3A::new(self.v[vertex][0][i], self.v[vertex][1][i], self.v[vertex][2][i])
+            Vec3A::new(
+                self.v[vertex][0][i],
+                self.v[vertex][1][i],
+                self.v[vertex][2][i],
+            )
         })
     }
 
@@ -122,7 +126,13 @@ fn candidates(r: &PacketRay, p: &Packet, t_max: f32) -> Result<Candidates, ()> {
         & t_scaled.cmpgt(zero)
         & t_scaled.cmple(Vec4::splat(t_max) * abs_det);
     if !valid.any() {
-        return Ok(Candidates { valid, t: zero, v, w, det });
+        return Ok(Candidates {
+            valid,
+            t: zero,
+            v,
+            w,
+            det,
+        });
     }
     let t = t_scaled / abs_det;
     // The conservative positive-t test of the scalar version, lane by lane.
@@ -136,7 +146,13 @@ fn candidates(r: &PacketRay, p: &Packet, t_max: f32) -> Result<Candidates, ()> {
     let delta_e = 2.0 * (gamma(2) * max_x * max_y + delta_y * max_x + delta_x * max_y);
     let delta_t = 3.0 * (gamma(3) * max_e * max_z + delta_e * max_z + delta_z * max_e) / abs_det;
     valid &= t.cmpgt(delta_t);
-    Ok(Candidates { valid, t, v, w, det })
+    Ok(Candidates {
+        valid,
+        t,
+        v,
+        w,
+        det,
+    })
 }
 
 /// The closest hit among the four triangles: `(lane, hit)`.
@@ -178,10 +194,10 @@ fn scalar_closest(r: &PacketRay, p: &Packet, t_max: f32) -> Option<(usize, Trian
     let mut best: Option<(usize, TriangleHit)> = None;
     for lane in 0..4 {
         let limit = best.map_or(t_max, |(_, h)| h.t);
-        if let Some(h) = triangle::intersect(&shear, &p.triangle(lane), limit) {
-            if best.is_none_or(|(_, b)| h.t < b.t) {
-                best = Some((lane, h));
-            }
+        if let Some(h) = triangle::intersect(&shear, &p.triangle(lane), limit)
+            && best.is_none_or(|(_, b)| h.t < b.t)
+        {
+            best = Some((lane, h));
         }
     }
     best
@@ -195,7 +211,8 @@ mod tests {
     #[test]
     fn four_wide_test_agrees_with_the_scalar_test() {
         let mut rng = Rng::new(11, 0);
-        let p3 = |rng: &mut Rng, s: f32| Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * s;
+        let p3 =
+            |rng: &mut Rng, s: f32| Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * s;
         let mut hits = 0;
         for round in 0..4000 {
             let n = 1 + round % 4;
@@ -211,7 +228,11 @@ mod tests {
             // Aim at a point of one of the triangles (sometimes just outside it).
             let (tri, _) = tris[round % n];
             let (s1, s2) = (rng.next_f32() * 1.2, rng.next_f32() * 1.2);
-            let (s1, s2) = if s1 + s2 > 1.2 { (1.2 - s1, 1.2 - s2) } else { (s1, s2) };
+            let (s1, s2) = if s1 + s2 > 1.2 {
+                (1.2 - s1, 1.2 - s2)
+            } else {
+                (s1, s2)
+            };
             let target = tri.v[0] + s1 * (tri.v[1] - tri.v[0]) + s2 * (tri.v[2] - tri.v[0]);
             let dir = (target - origin).normalize();
             let ray = Ray::new(origin, dir);

@@ -40,10 +40,10 @@ pub struct SceneArgs {
     #[arg(default_value = "cornell")]
     pub scene: String,
     /// Image width in pixels.
-    #[arg(long, default_value_t = 500, value_name = "W", value_parser = parse_side)]
+    #[arg(long, default_value_t = 500, value_name = "W", allow_hyphen_values = true, value_parser = parse_side)]
     pub width: u32,
     /// Image height in pixels (also the focal length in pixels).
-    #[arg(long, default_value_t = 500, value_name = "H", value_parser = parse_side)]
+    #[arg(long, default_value_t = 500, value_name = "H", allow_hyphen_values = true, value_parser = parse_side)]
     pub height: u32,
     /// How to light the image: `flat` (surface colour) or `direct` (the lab's model).
     #[arg(long, default_value = "direct", value_parser = parse_integrator)]
@@ -61,10 +61,10 @@ pub struct SceneArgs {
     #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true, value_parser = parse_vec3)]
     pub light_pos: Option<Vec3A>,
     /// Point light power P per colour channel.
-    #[arg(long, default_value_t = raylab::cornell::LIGHT_POWER, value_name = "P", value_parser = parse_non_negative)]
+    #[arg(long, default_value_t = raylab::cornell::LIGHT_POWER, value_name = "P", allow_hyphen_values = true, value_parser = parse_non_negative)]
     pub light_power: f32,
     /// Ambient term N added to the direct light (the lab's stand-in for indirect light).
-    #[arg(long, default_value_t = raylab::cornell::AMBIENT, value_name = "N", value_parser = parse_non_negative)]
+    #[arg(long, default_value_t = raylab::cornell::AMBIENT, value_name = "N", allow_hyphen_values = true, value_parser = parse_non_negative)]
     pub ambient: f32,
 }
 
@@ -76,14 +76,19 @@ pub struct RenderArgs {
     #[arg(short, long, value_name = "FILE")]
     pub output: Option<PathBuf>,
     /// Samples per pixel: sample 0 goes through the pixel centre, others are jittered.
-    #[arg(long, default_value_t = 1, value_name = "N", value_parser = parse_spp)]
+    #[arg(long, default_value_t = 1, value_name = "N", allow_hyphen_values = true, value_parser = parse_spp)]
     pub spp: u32,
     /// Seed of the sample positions; the same seed gives the same image on any
     /// number of threads.
-    #[arg(long, default_value_t = 0, value_name = "S")]
+    #[arg(
+        long,
+        default_value_t = 0,
+        value_name = "S",
+        allow_hyphen_values = true
+    )]
     pub seed: u64,
     /// Worker threads [default: one per core].
-    #[arg(long, value_name = "N", value_parser = parse_threads)]
+    #[arg(long, value_name = "N", allow_hyphen_values = true, value_parser = parse_threads)]
     pub threads: Option<usize>,
     /// No progress bar and no summary line.
     #[arg(short, long)]
@@ -99,14 +104,18 @@ pub struct ViewArgs {
 fn parse_side(s: &str) -> Result<u32, String> {
     match s.parse::<u32>() {
         Ok(v) if (1..=MAX_SIDE).contains(&v) => Ok(v),
-        _ => Err(format!("expected a whole number of pixels from 1 to {MAX_SIDE}")),
+        _ => Err(format!(
+            "expected a whole number of pixels from 1 to {MAX_SIDE}"
+        )),
     }
 }
 
 fn parse_spp(s: &str) -> Result<u32, String> {
     match s.parse::<u32>() {
         Ok(v) if (1..=MAX_SPP).contains(&v) => Ok(v),
-        _ => Err(format!("expected a whole number of samples from 1 to {MAX_SPP}")),
+        _ => Err(format!(
+            "expected a whole number of samples from 1 to {MAX_SPP}"
+        )),
     }
 }
 
@@ -136,7 +145,9 @@ fn parse_pitch(s: &str) -> Result<f32, String> {
     let limit = raylab::controls::MAX_PITCH_DEG;
     match parse_angle(s)? {
         v if v.abs() <= limit => Ok(v),
-        _ => Err(format!("expected an angle from -{limit} to {limit} degrees")),
+        _ => Err(format!(
+            "expected an angle from -{limit} to {limit} degrees"
+        )),
     }
 }
 

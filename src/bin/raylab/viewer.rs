@@ -6,11 +6,11 @@ use std::rc::Rc;
 use std::time::{Duration, Instant};
 
 use anyhow::{Context, anyhow};
-use rayon::prelude::*;
 use raylab::Scene;
 use raylab::controls::{Action, ViewState};
 use raylab::film::{Film, srgb8, write_image};
 use raylab::render::accumulate;
+use rayon::prelude::*;
 use winit::application::ApplicationHandler;
 use winit::dpi::PhysicalSize;
 use winit::event::{ElementState, MouseButton, WindowEvent};
@@ -147,6 +147,10 @@ impl Viewer {
         match action {
             Action::Quit => event_loop.exit(),
             Action::Screenshot => {
+                // After a change the sums are stale until the next frame: draw it now.
+                if self.samples == 0 {
+                    self.draw()?;
+                }
                 let path = self.save_screenshot()?;
                 eprintln!("saved {}", path.display());
             }
@@ -231,8 +235,7 @@ impl Viewer {
     }
 
     fn resize(&mut self, size: PhysicalSize<u32>) -> anyhow::Result<()> {
-        let (Some(w), Some(h)) = (NonZeroU32::new(size.width), NonZeroU32::new(size.height))
-        else {
+        let (Some(w), Some(h)) = (NonZeroU32::new(size.width), NonZeroU32::new(size.height)) else {
             return Ok(()); // minimised
         };
         if let Some(gfx) = self.gfx.as_mut() {
@@ -311,7 +314,10 @@ impl ApplicationHandler for Viewer {
                 self.cursor = (position.x, position.y);
                 if let Some((x0, y0)) = self.drag {
                     self.drag = Some(self.cursor);
-                    if self.state.drag((position.x - x0) as f32, (position.y - y0) as f32) {
+                    if self
+                        .state
+                        .drag((position.x - x0) as f32, (position.y - y0) as f32)
+                    {
                         self.restart();
                     }
                 }

@@ -1,0 +1,230 @@
+//! The `raylab` command as users and scripts drive it: exit codes, one-line
+//! messages, output formats and atomic writes.
+
+use std::path::Path;
+use std::process::{Command, Output, Stdio};
+use std::time::Duration;
+
+fn raylab(args: &[&str], dir: &Path) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_raylab"))
+        .args(args)
+        .current_dir(dir)
+        .env_remove("DISPLAY")
+        .stdin(Stdio::null())
+        .output()
+        .expect("run raylab")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+#[test]
+fn bad_arguments_exit_2_with_one_line_naming_the_argument() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases: &[(&[&str], &str)] = &[
+        (&["render", "--integrator", "path"], "--integrator"),
+        (&["render", "--width", "0"], "--width"),
+        (&["render", "--height", "-5"], "--height"),
+        (&["render", "--width", "100000"], "--width"),
+        (&["render", "--spp", "0"], "--spp"),
+        (&["render", "--camera-pos", "1,2"], "--camera-pos"),
+        (&["render", "--camera-pos", "NaN,0,0"], "--camera-pos"),
+        (&["render", "--light-pos", "0,inf,0"], "--light-pos"),
+        (&["render", "--yaw", "nan"], "--yaw"),
+        (&["render", "--pitch", "95"], "--pitch"),
+        (&["render", "--light-power", "-1"], "--light-power"),
+        (&["render", "--threads", "0"], "--threads"),
+        (&["render", "--spp", "-3"], "--spp"),
+        (&["render", "--seed", "-1"], "--seed"),
+        (&["render", "--ambient", "-0.5"], "--ambient"),
+        (&["render", "--bogus"], "--bogus"),
+        (&["view", "--width", "0"], "--width"),
+        (&["frobnicate"], "frobnicate"),
+    ];
+    for (args, name) in cases {
+        let out = raylab(args, dir.path());
+        let err = stderr(&out);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
+        assert!(
+            err.starts_with("error: ") && err.contains(name),
+            "{args:?}: {err}"
+        );
+    }
+    // Nothing was written by any of them.
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+}
+
+#[test]
+fn runtime_failures_exit_1_with_one_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases: &[(&[&str], &str)] = &[
+        (&["render", "-o", "no/such/dir/x.png"], "no/such/dir/x.png"),
+        (&["render", "-o", "picture.jpg"], "picture.jpg"),
+        (&["render", "nosuchscene"], "nosuchscene"),
+        (&["view"], "display"),
+    ];
+    for (args, needle) in cases {
+        let out = raylab(args, dir.path());
+        let err = stderr(&out);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
+        assert!(
+            err.starts_with("error: ") && err.contains(needle),
+            "{args:?}: {err}"
+        );
+    }
+}
+
+#[test]
+fn render_writes_the_default_png_and_a_summary() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = raylab(&["render", "--width", "64", "--height", "48"], dir.path());
+    assert!(out.status.success(), "{}", stderr(&out));
+    let err = stderr(&out);
+    // One summary line with size, integrator, spp, time, rays and speed.
+    assert_eq!(err.lines().count(), 1, "{err}");
+    for needle in [
+        "cornell.png",
+        "64x48",
+        "direct",
+        "1 spp",
+        " ms",
+        "rays",
+        "Mrays/s",
+    ] {
+        assert!(err.contains(needle), "{needle} missing from {err}");
+    }
+    let img = image::open(dir.path().join("cornell.png"))
+        .unwrap()
+        .to_rgb8();
+    assert_eq!(img.dimensions(), (64, 48));
+    // Quiet prints nothing; only the output file is left in the folder.
+    let out = raylab(&["render", "--quiet", "-o", "q.png"], dir.path());
+    assert!(out.status.success() && out.stderr.is_empty());
+    let mut names: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .collect();
+    names.sort();
+    assert_eq!(names, ["cornell.png", "q.png"]);
+}
+
+#[test]
+fn exr_holds_the_linear_values_unchanged_and_png_the_srgb_encoding() {
+    use raylab::render::{RenderSettings, render};
+    let dir = tempfile::tempdir().unwrap();
+    let args = [
+        "render",
+        "--width",
+        "40",
+        "--height",
+        "30",
+        "--spp",
+        "3",
+        "--seed",
+        "7",
+        "--camera-pos=-0.3,0.2,-2",
+        "--yaw",
+        "-10",
+        "--pitch",
+        "5",
+        "--light-pos",
+        "0.2,-0.6,-0.5",
+        "--light-power",
+        "20",
+        "--ambient",
+        "0.25",
+        "--threads",
+        "1",
+    ];
+    for file in ["a.exr", "a.png"] {
+        let mut all = args.to_vec();
+        all.extend(["-o", file, "--quiet"]);
+        let out = raylab(&all, dir.path());
+        assert!(out.status.success(), "{}", stderr(&out));
+    }
+    let mut scene = raylab::cornell::scene();
+    scene.light.position = glam::Vec3A::new(0.2, -0.6, -0.5);
+    scene.light.power = glam::Vec3A::splat(20.0);
+    scene.ambient = glam::Vec3A::splat(0.25);
+    let cam = raylab::Camera::lab(glam::Vec3A::new(-0.3, 0.2, -2.0), -10.0, 5.0, 40, 30);
+    let settings = RenderSettings {
+        spp: 3,
+        seed: 7,
+        ..RenderSettings::default()
+    };
+    let want = render(&scene, &cam, &settings, &|_| {}).film;
+    let exr = raylab::film::read_exr(&dir.path().join("a.exr")).unwrap();
+    assert_eq!(exr, want);
+    let png = image::open(dir.path().join("a.png")).unwrap().to_rgb8();
+    assert_eq!(png.as_raw(), &want.to_srgb8(1.0));
+}
+
+#[test]
+fn an_interrupted_render_leaves_the_old_image_and_no_partial_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let target = dir.path().join("big.png");
+    std::fs::write(&target, b"the earlier image").unwrap();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_raylab"))
+        .args([
+            "render", "-o", "big.png", "--width", "4000", "--height", "4000", "--spp", "64",
+        ])
+        .current_dir(dir.path())
+        .stdin(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(700));
+    assert!(
+        child.try_wait().unwrap().is_none(),
+        "the render should still be running"
+    );
+    child.kill().unwrap();
+    child.wait().unwrap();
+    assert_eq!(std::fs::read(&target).unwrap(), b"the earlier image");
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+}
+
+#[test]
+fn help_and_version_exit_0() {
+    let dir = tempfile::tempdir().unwrap();
+    for args in [&["--help"][..], &["render", "--help"], &["--version"]] {
+        let out = raylab(args, dir.path());
+        assert_eq!(out.status.code(), Some(0));
+        assert!(!out.stdout.is_empty());
+    }
+    let help = String::from_utf8(raylab(&["render", "--help"], dir.path()).stdout).unwrap();
+    for flag in [
+        "--width",
+        "--height",
+        "--integrator",
+        "--spp",
+        "--seed",
+        "--threads",
+        "--camera-pos",
+        "--yaw",
+        "--pitch",
+        "--light-pos",
+        "--light-power",
+        "--ambient",
+        "--quiet",
+        "--output",
+    ] {
+        assert!(help.contains(flag), "{flag}");
+    }
+}
+
+#[test]
+fn without_a_display_the_default_command_renders_and_explains() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = raylab(&[], dir.path());
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(dir.path().join("cornell.png").exists());
+    let err = stderr(&out);
+    assert!(
+        err.contains("cornell.png") && err.contains("raylab view"),
+        "{err}"
+    );
+}

@@ -1,0 +1,269 @@
+//! The viewer for real: under Xvfb, start `raylab view`, drive it with xdotool,
+//! save screenshots with P and check that each input changed the image the way it
+//! says. Needs the `xvfb` and `xdotool` packages (`.ci/run` installs them); set
+//! RAYLAB_SKIP_XVFB=1 to skip where they cannot be installed.
+
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+use image::RgbImage;
+
+/// Kills the child process when dropped, so a failing test leaves nothing running.
+struct Killed(Child);
+
+impl Drop for Killed {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+fn have(tool: &str) -> bool {
+    Command::new("sh")
+        .args(["-c", &format!("command -v {tool}")])
+        .stdout(Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success())
+}
+
+fn wait_for(what: &str, timeout: Duration, mut ready: impl FnMut() -> bool) {
+    let start = Instant::now();
+    while !ready() {
+        assert!(start.elapsed() < timeout, "timed out waiting for {what}");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+}
+
+/// Starts Xvfb on the first free display number.
+fn start_xvfb() -> (Killed, String) {
+    for n in 90..190 {
+        if Path::new(&format!("/tmp/.X{n}-lock")).exists() {
+            continue;
+        }
+        let child = Command::new("Xvfb")
+            .args([
+                format!(":{n}").as_str(),
+                "-screen",
+                "0",
+                "800x600x24",
+                "-nolisten",
+                "tcp",
+            ])
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("start Xvfb");
+        let mut xvfb = Killed(child);
+        let socket = PathBuf::from(format!("/tmp/.X11-unix/X{n}"));
+        let start = Instant::now();
+        while start.elapsed() < Duration::from_secs(10) {
+            if socket.exists() {
+                return (xvfb, format!(":{n}"));
+            }
+            if xvfb.0.try_wait().unwrap().is_some() {
+                break; // lost a race for this display: try the next
+            }
+            std::thread::sleep(Duration::from_millis(50));
+        }
+    }
+    panic!("could not start Xvfb on any display from :90 to :189");
+}
+
+struct Session {
+    display: String,
+    dir: PathBuf,
+    window: String,
+    shots: usize,
+}
+
+impl Session {
+    fn xdotool(&self, args: &[&str]) -> String {
+        let out = Command::new("timeout")
+            .arg("20")
+            .arg("xdotool")
+            .args(args)
+            .env("DISPLAY", &self.display)
+            .output()
+            .expect("run xdotool");
+        assert!(
+            out.status.success(),
+            "xdotool {args:?}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        String::from_utf8_lossy(&out.stdout).trim().to_string()
+    }
+
+    fn keys(&self, keys: &[&str]) {
+        for key in keys {
+            self.xdotool(&["key", "--window", &self.window, key]);
+        }
+    }
+
+    /// Presses P and loads the screenshot it saves.
+    fn screenshot(&mut self) -> RgbImage {
+        self.shots += 1;
+        let path = self.dir.join(format!("raylab-{:04}.png", self.shots));
+        self.keys(&["p"]);
+        // The file appears by rename, complete.
+        wait_for(&path.display().to_string(), Duration::from_secs(20), || {
+            path.exists()
+        });
+        image::open(&path).unwrap().to_rgb8()
+    }
+}
+
+/// Mean of one channel (0 = red ...) over a rectangle.
+fn mean(img: &RgbImage, x0: u32, x1: u32, y0: u32, y1: u32, channel: usize) -> f64 {
+    let mut sum = 0.0;
+    for y in y0..y1 {
+        for x in x0..x1 {
+            sum += img.get_pixel(x, y).0[channel] as f64;
+        }
+    }
+    sum / ((x1 - x0) * (y1 - y0)) as f64
+}
+
+/// Centroid x and count of the tall block's blue pixels.
+fn blue_block(img: &RgbImage) -> (f64, usize) {
+    let (mut sx, mut n) = (0.0, 0);
+    for (x, _, p) in img.enumerate_pixels() {
+        let [r, g, b] = p.0;
+        if b as i32 > r as i32 + 60 && b as i32 > g as i32 + 60 {
+            sx += x as f64;
+            n += 1;
+        }
+    }
+    (sx / n.max(1) as f64, n)
+}
+
+#[test]
+fn viewer_under_xvfb_responds_to_keys_and_mouse() {
+    if std::env::var_os("RAYLAB_SKIP_XVFB").is_some() {
+        eprintln!("RAYLAB_SKIP_XVFB is set: viewer test skipped");
+        return;
+    }
+    assert!(
+        have("Xvfb") && have("xdotool"),
+        "the viewer test needs Xvfb and xdotool: apt-get install xvfb xdotool \
+         (or set RAYLAB_SKIP_XVFB=1 to skip it)"
+    );
+    let (_xvfb, display) = start_xvfb();
+    let dir = tempfile::tempdir().unwrap();
+    let log = std::fs::File::create(dir.path().join("viewer.log")).unwrap();
+    let mut viewer = Killed(
+        Command::new(env!("CARGO_BIN_EXE_raylab"))
+            .args(["view", "--width", "200", "--height", "200"])
+            .current_dir(dir.path())
+            .env("DISPLAY", &display)
+            .stdin(Stdio::null())
+            .stderr(log)
+            .spawn()
+            .unwrap(),
+    );
+    let mut s = Session {
+        display,
+        dir: dir.path().to_owned(),
+        window: String::new(),
+        shots: 0,
+    };
+    s.window = s
+        .xdotool(&["search", "--sync", "--name", "^raylab"])
+        .lines()
+        .next()
+        .unwrap()
+        .to_string();
+    s.xdotool(&["windowfocus", "--sync", &s.window]);
+
+    let base = s.screenshot();
+    assert_eq!(base.dimensions(), (200, 200));
+    let title = s.xdotool(&["getwindowname", &s.window]);
+    assert!(
+        title.contains("direct") && title.contains("ms") && title.contains("fps"),
+        "{title}"
+    );
+
+    // A: the light moves left, so the left (purple) wall brightens and the right
+    // (yellow) wall darkens. Measured in each wall's weak channel, which never clips.
+    s.keys(&["a"; 5]);
+    let lit_left = s.screenshot();
+    let left = |img: &RgbImage| mean(img, 2, 25, 70, 130, 1);
+    let right = |img: &RgbImage| mean(img, 175, 198, 70, 130, 2);
+    assert!(
+        left(&lit_left) > left(&base) + 10.0,
+        "{} -> {}",
+        left(&base),
+        left(&lit_left)
+    );
+    assert!(
+        right(&lit_left) < right(&base) - 5.0,
+        "{} -> {}",
+        right(&base),
+        right(&lit_left)
+    );
+
+    // 1: flat shows the back wall's reflectance 0.75 exactly (sRGB 225).
+    s.keys(&["1"]);
+    let flat = s.screenshot();
+    assert_eq!(flat.get_pixel(100, 60).0, [225, 225, 225]);
+    assert_eq!(
+        flat.get_pixel(100, 20).0,
+        [108, 225, 225],
+        "the ceiling is cyan"
+    );
+    assert!(s.xdotool(&["getwindowname", &s.window]).contains("flat"));
+
+    // R: back to the start, and 2 back to direct: the first image again.
+    s.keys(&["r", "2"]);
+    let reset = s.screenshot();
+    assert!((mean(&reset, 0, 200, 0, 200, 0) - mean(&base, 0, 200, 0, 200, 0)).abs() < 1.0);
+
+    // Up: the camera moves forward, so the tall block looks bigger.
+    s.keys(&["Up"; 5]);
+    let closer = s.screenshot();
+    let (_, n0) = blue_block(&base);
+    let (_, n1) = blue_block(&closer);
+    assert!(n1 as f64 > 1.3 * n0 as f64, "{n0} -> {n1} blue pixels");
+
+    // Right: the camera turns right, so the block moves left in the image.
+    s.keys(&["r", "Right", "Right"]);
+    let turned = s.screenshot();
+    let (x0, _) = blue_block(&base);
+    let (x1, _) = blue_block(&turned);
+    assert!(x1 < x0 - 10.0, "block centroid x {x0} -> {x1}");
+
+    // Dragging the mouse right by 40 pixels also turns right (10 degrees).
+    s.keys(&["r"]);
+    s.xdotool(&["mousemove", "--window", &s.window, "100", "100"]);
+    s.xdotool(&["mousedown", "1"]);
+    s.xdotool(&["mousemove_relative", "--sync", "40", "0"]);
+    s.xdotool(&["mouseup", "1"]);
+    let dragged = s.screenshot();
+    let (x2, _) = blue_block(&dragged);
+    assert!(
+        x2 < x0 - 10.0,
+        "block centroid x {x0} -> {x2} after dragging"
+    );
+
+    // Resizing the window changes the render size.
+    s.xdotool(&["windowsize", "--sync", &s.window, "240", "160"]);
+    let resized = s.screenshot();
+    assert_eq!(resized.dimensions(), (240, 160));
+
+    // Esc quits cleanly (on the press: a release would find no window left).
+    s.xdotool(&["keydown", "--window", &s.window, "Escape"]);
+    let start = Instant::now();
+    let status = loop {
+        if let Some(status) = viewer.0.try_wait().unwrap() {
+            break status;
+        }
+        assert!(
+            start.elapsed() < Duration::from_secs(10),
+            "viewer did not quit on Esc"
+        );
+        std::thread::sleep(Duration::from_millis(50));
+    };
+    let log = std::fs::read_to_string(dir.path().join("viewer.log")).unwrap();
+    assert!(status.success(), "viewer exited with {status}: {log}");
+    assert!(log.contains("saved raylab-0001.png"), "{log}");
+}
