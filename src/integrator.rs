@@ -6,7 +6,7 @@ use std::str::FromStr;
 
 use glam::Vec3A;
 
-use crate::ray::Ray;
+use crate::ray::{Hit, Ray};
 use crate::scene::Scene;
 
 /// The light transport algorithm used for each camera ray.
@@ -47,24 +47,69 @@ impl Integrator {
     }
 }
 
+impl Integrator {
+    /// [`Integrator::radiance`] for four coherent rays (a pixel quad), traced
+    /// together. Gives the same values as four single calls, except at exact ties.
+    #[inline]
+    pub fn radiance4(self, scene: &Scene, rays: &[Ray; 4], count: &mut u64) -> [Vec3A; 4] {
+        *count += 4;
+        let hits = scene.intersect4(rays, f32::INFINITY);
+        let rho = hits.map(|h| h.map_or(Vec3A::ZERO, |h| scene.reflectance(h.prim)));
+        if self == Integrator::Flat {
+            return rho;
+        }
+        // One shadow ray per lit hit, all towards the light: coherent again.
+        let mut shadow = *rays;
+        let mut t_max = [0.0; 4];
+        let mut lit = [false; 4];
+        let mut irradiance = [Vec3A::ZERO; 4];
+        for lane in 0..4 {
+            if let Some((ray, t, d)) = hits[lane].and_then(|h| unshadowed_light(scene, &h)) {
+                (shadow[lane], t_max[lane], irradiance[lane]) = (ray, t, d);
+                lit[lane] = true;
+                *count += 1;
+            }
+        }
+        let blocked = scene.occluded4(&shadow, t_max, lit);
+        std::array::from_fn(|lane| {
+            let d = if lit[lane] && !blocked[lane] {
+                irradiance[lane]
+            } else {
+                Vec3A::ZERO
+            };
+            rho[lane] * (d + scene.ambient)
+        })
+    }
+}
+
 /// The lab's `D`: irradiance from the point light at a hit, zero when the light is
 /// behind the face (the lab's normals are one-sided) or something blocks it.
 #[inline]
-fn direct_light(scene: &Scene, hit: &crate::ray::Hit, rays: &mut u64) -> Vec3A {
+fn direct_light(scene: &Scene, hit: &Hit, rays: &mut u64) -> Vec3A {
+    let Some((shadow, t_max, d)) = unshadowed_light(scene, hit) else {
+        return Vec3A::ZERO;
+    };
+    *rays += 1;
+    if scene.occluded(&shadow, t_max) {
+        return Vec3A::ZERO;
+    }
+    d
+}
+
+/// For a hit facing the light: the shadow ray towards it, the ray's `t_max`, and
+/// the irradiance `P·cos/(4πr²)` it brings if nothing blocks it.
+#[inline]
+fn unshadowed_light(scene: &Scene, hit: &Hit) -> Option<(Ray, f32, Vec3A)> {
     let light = &scene.light;
     let sp = scene.surface_point(hit);
     let to_light = light.position - sp.p;
     let r2 = to_light.length_squared();
     let cos = to_light.dot(sp.n) / r2.sqrt();
     if !(cos > 0.0 && r2 > 0.0) {
-        return Vec3A::ZERO;
+        return None;
     }
-    *rays += 1;
     let (shadow, t_max) = sp.ray_to(light.position);
-    if scene.occluded(&shadow, t_max) {
-        return Vec3A::ZERO;
-    }
-    light.power * (cos / (4.0 * PI * r2))
+    Some((shadow, t_max, light.power * (cos / (4.0 * PI * r2))))
 }
 
 impl fmt::Display for Integrator {

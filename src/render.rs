@@ -9,11 +9,12 @@ use rayon::prelude::*;
 use crate::camera::Camera;
 use crate::film::Film;
 use crate::integrator::Integrator;
+use crate::ray::Ray;
 use crate::sampler::Rng;
 use crate::scene::Scene;
 
 /// Rows per tile: small enough to balance two cores on small images, large enough
-/// that scheduling costs nothing.
+/// that scheduling costs nothing; even, so that tiles hold whole pixel quads.
 pub const TILE_ROWS: usize = 4;
 
 /// How to render.
@@ -87,26 +88,50 @@ pub fn accumulate(
         .par_chunks_mut(width * TILE_ROWS)
         .enumerate()
         .map(|(tile, rows)| {
+            let y0 = tile * TILE_ROWS;
+            let n_rows = rows.len() / width;
             let mut rays = 0u64;
-            let first = tile * TILE_ROWS * width;
-            for (i, sum) in rows.iter_mut().enumerate() {
-                let index = first + i;
-                let (x, y) = ((index % width) as f32, (index / width) as f32);
-                for s in samples.clone() {
-                    let (dx, dy) = if s == 0 {
-                        (0.5, 0.5)
-                    } else {
-                        let mut rng = Rng::for_sample(seed, index as u64, s);
-                        (rng.next_f32(), rng.next_f32())
-                    };
-                    let ray = camera.ray(x + dx, y + dy);
-                    *sum += integrator.radiance(scene, &ray, &mut rays);
+            for s in samples.clone() {
+                // 2×2 pixel quads traced together; a last odd row or column alone.
+                for qy in (0..n_rows).step_by(2) {
+                    for qx in (0..width).step_by(2) {
+                        if qy + 1 < n_rows && qx + 1 < width {
+                            let quad = [(qx, qy), (qx + 1, qy), (qx, qy + 1), (qx + 1, qy + 1)];
+                            let primary =
+                                quad.map(|(x, y)| pixel_ray(camera, seed, s, x, y0 + y, width));
+                            let values = integrator.radiance4(scene, &primary, &mut rays);
+                            for ((x, y), v) in quad.into_iter().zip(values) {
+                                rows[y * width + x] += v;
+                            }
+                        } else {
+                            for y in qy..(qy + 2).min(n_rows) {
+                                for x in qx..(qx + 2).min(width) {
+                                    let ray = pixel_ray(camera, seed, s, x, y0 + y, width);
+                                    rows[y * width + x] +=
+                                        integrator.radiance(scene, &ray, &mut rays);
+                                }
+                            }
+                        }
+                    }
                 }
             }
-            progress((rows.len() / width) as u64);
+            progress(n_rows as u64);
             rays
         })
         .sum()
+}
+
+/// The camera ray of sample `s` of pixel `(x, y)`: through the centre for sample
+/// 0, uniformly jittered by the (seed, pixel, sample) generator otherwise.
+#[inline]
+fn pixel_ray(camera: &Camera, seed: u64, s: u32, x: usize, y: usize, width: usize) -> Ray {
+    let (dx, dy) = if s == 0 {
+        (0.5, 0.5)
+    } else {
+        let mut rng = Rng::for_sample(seed, (y * width + x) as u64, s);
+        (rng.next_f32(), rng.next_f32())
+    };
+    camera.ray(x as f32 + dx, y as f32 + dy)
 }
 
 /// The value of one pixel sample, for tests and tools that probe single pixels.

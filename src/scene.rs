@@ -106,6 +106,21 @@ impl Scene {
         self.bvh.occluded(ray, t_max)
     }
 
+    /// The closest hits of four coherent rays (say, a 2×2 pixel quad), traced
+    /// together; the same answers as four calls of [`Scene::intersect`] except
+    /// which triangle is reported at an exact tie.
+    #[inline]
+    pub fn intersect4(&self, rays: &[Ray; 4], t_max: f32) -> [Option<Hit>; 4] {
+        self.bvh.intersect4(rays, t_max)
+    }
+
+    /// Whether anything blocks each of four rays within its own `t_max`; lanes
+    /// not `active` answer `false`.
+    #[inline]
+    pub fn occluded4(&self, rays: &[Ray; 4], t_max: [f32; 4], active: [bool; 4]) -> [bool; 4] {
+        self.bvh.occluded4(rays, t_max, active)
+    }
+
     /// The triangles, in input order.
     pub fn triangles(&self) -> &[Triangle] {
         &self.triangles

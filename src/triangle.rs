@@ -72,20 +72,7 @@ impl RayShear {
     /// Precomputes the shear for `ray`.
     #[inline]
     pub fn new(ray: &Ray) -> Self {
-        let a = ray.dir.abs();
-        let kz = if a.x >= a.y && a.x >= a.z {
-            0
-        } else if a.y >= a.z {
-            1
-        } else {
-            2
-        };
-        let mut kx = (kz + 1) % 3;
-        let mut ky = (kx + 1) % 3;
-        // Keep the winding of the projected triangle consistent.
-        if ray.dir[kz] < 0.0 {
-            std::mem::swap(&mut kx, &mut ky);
-        }
+        let [kx, ky, kz] = axis_order(ray.dir);
         let dz = ray.dir[kz];
         let sz = 1.0 / dz;
         let (sx, sy) = (ray.dir[kx] * sz, ray.dir[ky] * sz);
@@ -99,6 +86,27 @@ impl RayShear {
             origin: ray.origin,
             shear: Mat3A::from_cols(rows[0], rows[1], rows[2]).transpose(),
         }
+    }
+}
+
+/// The watertight test's axis order for direction `dir`: `kz` is the axis of the
+/// largest component, and `kx`, `ky` follow it, swapped when `dir[kz] < 0` to keep
+/// the projected winding.
+#[inline(always)]
+pub fn axis_order(dir: Vec3A) -> [usize; 3] {
+    let a = dir.abs();
+    let kz = if a.x >= a.y && a.x >= a.z {
+        0
+    } else if a.y >= a.z {
+        1
+    } else {
+        2
+    };
+    let (kx, ky) = ((kz + 1) % 3, (kz + 2) % 3);
+    if dir[kz] < 0.0 {
+        [ky, kx, kz]
+    } else {
+        [kx, ky, kz]
     }
 }
 

@@ -56,9 +56,10 @@ fn direct_matches_the_independent_reference() {
         }
     }
     eprintln!("{differ} pixels differ, {worst_off_diagonal} off the diagonals");
-    // Measured: all differing pixels but a handful lie on the diagonals, where the
-    // two walls meeting at the box's edge tie exactly.
-    assert!(differ <= 450, "{differ} of 250000 pixels differ");
+    // Measured: 386 to 469 differing pixels (by traversal order), all but one on
+    // the 1000 diagonal pixels, whose rays run exactly along the box's edges, where
+    // the two walls meeting there tie and each renderer may pick either.
+    assert!(differ <= 600, "{differ} of 250000 pixels differ");
     assert!(
         worst_off_diagonal <= 5,
         "{worst_off_diagonal} pixels off the diagonals differ"

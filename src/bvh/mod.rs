@@ -8,6 +8,7 @@
 
 mod build;
 mod packet;
+mod ray4;
 
 use std::mem::MaybeUninit;
 
@@ -22,6 +23,8 @@ use packet::{Packet, PacketRay};
 /// packet (bits 4..31) and packet count (bits 0..4) of a leaf.
 type ChildRef = u32;
 const LEAF: u32 = 1 << 31;
+/// An unused child slot (never a valid leaf: leaves start below packet 2^27).
+const EMPTY: ChildRef = u32::MAX;
 
 /// Four children's boxes, by coordinate: `bounds[0..3]` are the minima in x, y, z
 /// and `bounds[3..6]` the maxima, one lane per child. Empty lanes have min = +inf
@@ -108,7 +111,7 @@ impl Bvh {
                         Vec4::NEG_INFINITY,
                         Vec4::NEG_INFINITY,
                     ],
-                    children: [0; 4],
+                    children: [EMPTY; 4],
                 });
                 for (lane, &k) in kids.iter().enumerate() {
                     let b = bin[k].bounds();
@@ -153,25 +156,17 @@ impl Bvh {
                 let node = &self.nodes[cur as usize];
                 let (t_near, mut mask) = q.hit_boxes(node, t_max);
                 if mask != 0 {
-                    // Push the hit children farthest first, continue with the nearest.
-                    let mut lanes = [(0u32, 0f32); 4];
-                    let mut n = 0;
+                    // Continue with the nearest child; push the others (the pop
+                    // skips any that start beyond the closest hit by then).
+                    let nearest = (t_near.cmpeq(Vec4::splat(t_near.min_element())).bitmask() & mask)
+                        .trailing_zeros() as usize;
+                    mask &= !(1 << nearest);
                     while mask != 0 {
                         let lane = mask.trailing_zeros() as usize;
                         mask &= mask - 1;
-                        let entry = (node.children[lane], t_near[lane]);
-                        let mut j = n;
-                        while j > 0 && lanes[j - 1].1 < entry.1 {
-                            lanes[j] = lanes[j - 1];
-                            j -= 1;
-                        }
-                        lanes[j] = entry;
-                        n += 1;
+                        stack.push((node.children[lane], t_near[lane]));
                     }
-                    for &entry in &lanes[..n - 1] {
-                        stack.push(entry);
-                    }
-                    cur = lanes[n - 1].0;
+                    cur = node.children[nearest];
                     continue;
                 }
             }
@@ -316,8 +311,8 @@ impl Query {
         }
     }
 
-    /// Slab test of the four boxes: entry distances and a bit mask of the boxes hit
-    /// within `[0, t_max]`. The exit distance is enlarged by `1 + 2γ(3)` so that
+    /// Slab test of the four boxes: entry distances (infinite for a miss) and a bit
+    /// mask of the boxes hit within `[0, t_max]`. The exit distance is enlarged by `1 + 2γ(3)` so that
     /// rounding never culls a box the ray grazes (Ize 2013).
     #[inline]
     fn hit_boxes(&self, node: &Node4, t_max: f32) -> (Vec4, u32) {
@@ -330,8 +325,8 @@ impl Query {
             .min(slab(self.far[1], 1))
             .min(slab(self.far[2], 2))
             * (1.0 + 2.0 * gamma(3));
-        let t1 = t1.min(Vec4::splat(t_max));
-        (t0, t0.cmple(t1).bitmask())
+        let hit = t0.cmple(t1.min(Vec4::splat(t_max)));
+        (Vec4::select(hit, t0, Vec4::INFINITY), hit.bitmask())
     }
 }
 

@@ -4,7 +4,7 @@
 use glam::{BVec4A, Vec3A, Vec4};
 
 use crate::ray::{Ray, gamma};
-use crate::triangle::{self, RayShear, Triangle, TriangleHit};
+use crate::triangle::{self, RayShear, Triangle, TriangleHit, axis_order};
 
 /// Four triangles, lane by lane: `v[vertex][axis]`. Unused lanes repeat the last
 /// triangle, so they never change a result.
@@ -30,7 +30,7 @@ impl Packet {
     }
 
     /// The triangle in lane `i`.
-    fn triangle(&self, i: usize) -> [Vec3A; 3] {
+    pub(super) fn triangle(&self, i: usize) -> [Vec3A; 3] {
         std::array::from_fn(|vertex| {
             Vec3A::new(
                 self.v[vertex][0][i],
@@ -43,6 +43,20 @@ impl Packet {
     /// Scene index of the triangle in lane `i`.
     pub fn prim(&self, i: usize) -> u32 {
         self.prim[i]
+    }
+
+    /// The triangle in lane `i` broadcast to all four lanes, for testing four rays.
+    #[inline(always)]
+    pub(super) fn broadcast(&self, i: usize) -> [[Vec4; 3]; 3] {
+        self.v.map(|vertex| vertex.map(|axis| Vec4::splat(axis[i])))
+    }
+
+    /// How many lanes hold distinct triangles (the rest repeat the last one).
+    #[inline(always)]
+    pub(super) fn len(&self) -> usize {
+        1 + (1..4)
+            .take_while(|&i| self.prim[i] != self.prim[i - 1])
+            .count()
     }
 }
 
@@ -60,18 +74,7 @@ impl PacketRay {
     #[inline(always)]
     pub fn new(origin: Vec3A, dir: Vec3A) -> Self {
         let (d, o) = (dir.to_array(), origin.to_array());
-        let a = dir.abs();
-        let kz = if a.x >= a.y && a.x >= a.z {
-            0
-        } else if a.y >= a.z {
-            1
-        } else {
-            2
-        };
-        let (mut kx, mut ky) = ((kz + 1) % 3, (kz + 2) % 3);
-        if d[kz] < 0.0 {
-            std::mem::swap(&mut kx, &mut ky);
-        }
+        let [kx, ky, kz] = axis_order(dir);
         let inv_z = 1.0 / d[kz];
         Self {
             k: [kx, ky, kz],
@@ -87,27 +90,39 @@ impl PacketRay {
 }
 
 /// Which lanes hit within `(0, t_max]`, with their `t`, edge functions and `det`.
-struct Candidates {
-    valid: BVec4A,
-    t: Vec4,
-    v: Vec4,
-    w: Vec4,
-    det: Vec4,
+pub(super) struct Candidates {
+    pub(super) valid: BVec4A,
+    pub(super) t: Vec4,
+    pub(super) v: Vec4,
+    pub(super) w: Vec4,
+    pub(super) det: Vec4,
 }
 
+/// The watertight test of [`crate::triangle::intersect`] on four lanes: either one
+/// ray against four triangles or four rays against one triangle (broadcast). Each
+/// lane computes exactly the scalar test's operations, so the answers agree bit for
+/// bit. `Err` means an edge function was exactly zero somewhere: the caller
+/// must ask the scalar test, which has the f64 fallback for that case.
 #[inline(always)]
-fn candidates(r: &PacketRay, p: &Packet, t_max: f32) -> Result<Candidates, ()> {
-    let [kx, ky, kz] = r.k;
-    let [sx, sy, sz] = r.shear;
+pub(super) fn candidates(
+    vertices: &[[Vec4; 3]; 3],
+    k: [usize; 3],
+    origin: &[Vec4; 3],
+    shear: &[Vec4; 3],
+    t_max: Vec4,
+) -> Result<Candidates, ()> {
+    let [kx, ky, kz] = k;
+    let [sx, sy, sz] = *shear;
     let xform = |vertex: &[Vec4; 3]| {
-        let dx = vertex[kx] - r.origin[0];
-        let dy = vertex[ky] - r.origin[1];
-        let dz = vertex[kz] - r.origin[2];
+        let dx = vertex[kx] - origin[0];
+        let dy = vertex[ky] - origin[1];
+        let dz = vertex[kz] - origin[2];
         (dx - sx * dz, dy - sy * dz, sz * dz)
     };
-    let (ax, ay, az) = xform(&p.v[0]);
-    let (bx, by, bz) = xform(&p.v[1]);
-    let (cx, cy, cz) = xform(&p.v[2]);
+    let p = vertices;
+    let (ax, ay, az) = xform(&p[0]);
+    let (bx, by, bz) = xform(&p[1]);
+    let (cx, cy, cz) = xform(&p[2]);
     let u = cx * by - cy * bx;
     let v = ax * cy - ay * cx;
     let w = bx * ay - by * ax;
@@ -124,7 +139,7 @@ fn candidates(r: &PacketRay, p: &Packet, t_max: f32) -> Result<Candidates, ()> {
     let mut valid = !(any_neg & any_pos)
         & det.cmpne(zero)
         & t_scaled.cmpgt(zero)
-        & t_scaled.cmple(Vec4::splat(t_max) * abs_det);
+        & t_scaled.cmple(t_max * abs_det);
     if !valid.any() {
         return Ok(Candidates {
             valid,
@@ -158,7 +173,7 @@ fn candidates(r: &PacketRay, p: &Packet, t_max: f32) -> Result<Candidates, ()> {
 /// The closest hit among the four triangles: `(lane, hit)`.
 #[inline]
 pub fn intersect(r: &PacketRay, p: &Packet, t_max: f32) -> Option<(usize, TriangleHit)> {
-    let Ok(c) = candidates(r, p, t_max) else {
+    let Ok(c) = candidates(&p.v, r.k, &r.origin, &r.shear, Vec4::splat(t_max)) else {
         return scalar_closest(r, p, t_max);
     };
     let mask = c.valid.bitmask();
@@ -182,7 +197,7 @@ pub fn intersect(r: &PacketRay, p: &Packet, t_max: f32) -> Option<(usize, Triang
 /// Whether any of the four triangles is hit within `(0, t_max]`.
 #[inline]
 pub fn occluded(r: &PacketRay, p: &Packet, t_max: f32) -> bool {
-    match candidates(r, p, t_max) {
+    match candidates(&p.v, r.k, &r.origin, &r.shear, Vec4::splat(t_max)) {
         Ok(c) => c.valid.any(),
         Err(()) => scalar_closest(r, p, t_max).is_some(),
     }
