@@ -9,7 +9,9 @@
 //! computes each triangle's barycentrics from its own edge vectors, so rounding can
 //! let a ray slip between two neighbours.
 
-use glam::{Mat3A, Vec3A};
+use std::ops::{Add, Div, Mul};
+
+use glam::{Mat3A, Vec3A, Vec4};
 
 use crate::ray::{Ray, gamma};
 
@@ -110,6 +112,56 @@ pub fn axis_order(dir: Vec3A) -> [usize; 3] {
     }
 }
 
+/// Numbers the error bound is computed on: `f32` for one ray, [`Vec4`] for four
+/// lanes at once, with the same operations in the same order.
+pub trait Lanes: Copy + Add<Output = Self> + Mul<Output = Self> + Div<Output = Self> {
+    /// The value `x` in every lane.
+    fn splat(x: f32) -> Self;
+    /// Absolute value per lane.
+    fn abs(self) -> Self;
+    /// Maximum per lane.
+    fn max(self, other: Self) -> Self;
+}
+
+impl Lanes for f32 {
+    fn splat(x: f32) -> Self {
+        x
+    }
+    fn abs(self) -> Self {
+        f32::abs(self)
+    }
+    fn max(self, other: Self) -> Self {
+        f32::max(self, other)
+    }
+}
+
+impl Lanes for Vec4 {
+    fn splat(x: f32) -> Self {
+        Vec4::splat(x)
+    }
+    fn abs(self) -> Self {
+        Vec4::abs(self)
+    }
+    fn max(self, other: Self) -> Self {
+        Vec4::max(self, other)
+    }
+}
+
+/// Bound on the rounding error of the watertight test's `t` (pbrt-v4 §6.8.4), from
+/// the sheared vertices `a`, `b`, `c`, the edge functions `e` and `|det|`.
+#[inline(always)]
+pub fn t_error_bound<T: Lanes>(a: [T; 3], b: [T; 3], c: [T; 3], e: [T; 3], abs_det: T) -> T {
+    let max3 = |i: usize| a[i].abs().max(b[i].abs()).max(c[i].abs());
+    let (max_x, max_y, max_z) = (max3(0), max3(1), max3(2));
+    let max_e = e[0].abs().max(e[1].abs()).max(e[2].abs());
+    let g = |n| T::splat(gamma(n));
+    let delta_z = g(3) * max_z;
+    let delta_x = g(5) * (max_x + max_z);
+    let delta_y = g(5) * (max_y + max_z);
+    let delta_e = T::splat(2.0) * (g(2) * max_x * max_y + delta_y * max_x + delta_x * max_y);
+    T::splat(3.0) * (g(3) * max_e * max_z + delta_e * max_z + delta_z * max_e) / abs_det
+}
+
 /// Where a ray meets a triangle: `t` and the barycentric weights of `v1`, `v2`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TriangleHit {
@@ -169,15 +221,13 @@ pub fn intersect(s: &RayShear, v: &[Vec3A; 3], t_max: f32) -> Option<TriangleHit
     }
     let t = t_scaled / abs_det;
     // Reject t within its own error bound of zero (pbrt-v4's conservative test).
-    let max_z = az.abs().max(bz.abs()).max(cz.abs());
-    let max_x = ax.abs().max(bx.abs()).max(cx.abs());
-    let max_y = ay.abs().max(by.abs()).max(cy.abs());
-    let max_e = u.abs().max(w_v.abs()).max(w.abs());
-    let delta_z = gamma(3) * max_z;
-    let delta_x = gamma(5) * (max_x + max_z);
-    let delta_y = gamma(5) * (max_y + max_z);
-    let delta_e = 2.0 * (gamma(2) * max_x * max_y + delta_y * max_x + delta_x * max_y);
-    let delta_t = 3.0 * (gamma(3) * max_e * max_z + delta_e * max_z + delta_z * max_e) / abs_det;
+    let delta_t = t_error_bound(
+        [ax, ay, az],
+        [bx, by, bz],
+        [cx, cy, cz],
+        [u, w_v, w],
+        abs_det,
+    );
     if t <= delta_t {
         return None;
     }

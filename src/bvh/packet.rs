@@ -3,8 +3,8 @@
 
 use glam::{BVec4A, Vec3A, Vec4};
 
-use crate::ray::{Ray, gamma};
-use crate::triangle::{self, RayShear, Triangle, TriangleHit, axis_order};
+use crate::ray::Ray;
+use crate::triangle::{self, RayShear, Triangle, TriangleHit, axis_order, t_error_bound};
 
 /// Four triangles, lane by lane: `v[vertex][axis]`. Unused lanes repeat the last
 /// triangle, so they never change a result.
@@ -151,15 +151,7 @@ pub(super) fn candidates(
     }
     let t = t_scaled / abs_det;
     // The conservative positive-t test of the scalar version, lane by lane.
-    let max_z = az.abs().max(bz.abs()).max(cz.abs());
-    let max_x = ax.abs().max(bx.abs()).max(cx.abs());
-    let max_y = ay.abs().max(by.abs()).max(cy.abs());
-    let max_e = u.abs().max(v.abs()).max(w.abs());
-    let delta_z = gamma(3) * max_z;
-    let delta_x = gamma(5) * (max_x + max_z);
-    let delta_y = gamma(5) * (max_y + max_z);
-    let delta_e = 2.0 * (gamma(2) * max_x * max_y + delta_y * max_x + delta_x * max_y);
-    let delta_t = 3.0 * (gamma(3) * max_e * max_z + delta_e * max_z + delta_z * max_e) / abs_det;
+    let delta_t = t_error_bound([ax, ay, az], [bx, by, bz], [cx, cy, cz], [u, v, w], abs_det);
     valid &= t.cmpgt(delta_t);
     Ok(Candidates {
         valid,
