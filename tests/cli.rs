@@ -40,6 +40,10 @@ fn bad_arguments_exit_2_with_one_line_naming_the_argument() {
         (&["render", "--ambient", "-0.5"], "--ambient"),
         (&["render", "--bogus"], "--bogus"),
         (&["view", "--width", "0"], "--width"),
+        (
+            &["render", "--width", "16000", "--height", "16000"],
+            "--width",
+        ),
         (&["frobnicate"], "frobnicate"),
     ];
     for (args, name) in cases {

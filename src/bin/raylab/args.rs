@@ -8,6 +8,8 @@ use raylab::Integrator;
 
 /// Largest accepted image side, in pixels.
 pub const MAX_SIDE: u32 = 16_384;
+/// Largest accepted image, in pixels (the film takes 16 bytes a pixel).
+pub const MAX_PIXELS: u64 = 1 << 27;
 /// Largest accepted samples per pixel.
 pub const MAX_SPP: u32 = 1 << 20;
 
@@ -99,6 +101,20 @@ pub struct RenderArgs {
 pub struct ViewArgs {
     #[command(flatten)]
     pub scene: SceneArgs,
+}
+
+impl SceneArgs {
+    /// Checks what single arguments cannot: the image's total size.
+    pub fn validate(&self) -> Result<(), String> {
+        let pixels = self.width as u64 * self.height as u64;
+        if pixels > MAX_PIXELS {
+            return Err(format!(
+                "error: --width {} × --height {} is {pixels} pixels, more than the limit of {MAX_PIXELS}",
+                self.width, self.height
+            ));
+        }
+        Ok(())
+    }
 }
 
 fn parse_side(s: &str) -> Result<u32, String> {

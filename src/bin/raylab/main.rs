@@ -28,6 +28,15 @@ fn main() -> ExitCode {
             }
         },
     };
+    let scene_args = match &cli.command {
+        Some(Command::Render(a)) => Some(&a.scene),
+        Some(Command::View(a)) => Some(&a.scene),
+        None => None,
+    };
+    if let Some(Err(message)) = scene_args.map(SceneArgs::validate) {
+        eprintln!("{message}");
+        return ExitCode::from(2);
+    }
     match run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {

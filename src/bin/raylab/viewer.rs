@@ -157,7 +157,6 @@ impl Viewer {
             _ => {
                 if self.state.apply(action, &self.initial) {
                     self.restart();
-                    self.set_title();
                 }
             }
         }
@@ -203,7 +202,10 @@ impl Viewer {
         }
         self.present()?;
         let refining = self.samples < MAX_SAMPLES;
-        if self.timing.frame(start.elapsed().as_secs_f64() * 1e3) || !refining {
+        // Refresh the title a few times a second, and at once after a change (the
+        // integrator may be new) or when refinement ends.
+        let due = self.timing.frame(start.elapsed().as_secs_f64() * 1e3);
+        if due || self.samples == 1 || !refining {
             self.set_title();
         }
         if let (true, Some(gfx)) = (refining, &self.gfx) {
