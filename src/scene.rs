@@ -145,3 +145,66 @@ impl Scene {
         SurfacePoint::on_triangle(&self.triangles[prim].v, hit.b1, hit.b2, self.normals[prim])
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn light() -> PointLight {
+        PointLight {
+            position: Vec3A::ZERO,
+            power: Vec3A::ONE,
+        }
+    }
+
+    #[test]
+    fn bad_input_is_refused_with_the_triangle_named() {
+        let ok = Triangle::new(Vec3A::ZERO, Vec3A::X, Vec3A::Y);
+        let nan = Triangle::new(Vec3A::ZERO, Vec3A::new(f32::NAN, 0.0, 0.0), Vec3A::Y);
+        let inf = Triangle::new(Vec3A::splat(f32::INFINITY), Vec3A::X, Vec3A::Y);
+        let grey = Vec3A::splat(0.5);
+        let err = |tris: Vec<Triangle>, rho: Vec<Vec3A>| {
+            Scene::new(tris, rho, light(), Vec3A::ZERO).unwrap_err()
+        };
+        assert_eq!(
+            err(vec![ok, nan], vec![grey; 2]),
+            SceneError::NonFiniteVertex { index: 1 }
+        );
+        assert_eq!(
+            err(vec![inf], vec![grey]),
+            SceneError::NonFiniteVertex { index: 0 }
+        );
+        assert!(matches!(
+            err(vec![ok], vec![Vec3A::new(0.5, 1.5, 0.5)]),
+            SceneError::BadReflectance { index: 0, .. }
+        ));
+        assert!(matches!(
+            err(vec![ok], vec![Vec3A::splat(f32::NAN)]),
+            SceneError::BadReflectance { index: 0, .. }
+        ));
+        assert_eq!(
+            err(vec![ok, ok], vec![grey]),
+            SceneError::LengthMismatch {
+                triangles: 2,
+                reflectances: 1
+            }
+        );
+        assert_eq!(
+            SceneError::NonFiniteVertex { index: 3 }.to_string(),
+            "triangle 3 has a non-finite vertex"
+        );
+    }
+
+    #[test]
+    fn empty_and_degenerate_scenes_render_black() {
+        let p = Vec3A::new(0.0, 0.0, 1.0);
+        for tris in [vec![], vec![Triangle::new(p, p, p); 3]] {
+            let n = tris.len();
+            let scene = Scene::new(tris, vec![Vec3A::ONE; n], light(), Vec3A::ONE).unwrap();
+            let cam = crate::Camera::lab(Vec3A::new(0.0, 0.0, -3.0), 0.0, 0.0, 16, 16);
+            let settings = crate::render::RenderSettings::default();
+            let out = crate::render::render(&scene, &cam, &settings, &|_| {});
+            assert!(out.film.pixels.iter().all(|p| *p == Vec3A::ZERO));
+        }
+    }
+}

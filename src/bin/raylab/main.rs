@@ -68,8 +68,9 @@ fn run_default() -> anyhow::Result<()> {
         light_power: raylab::cornell::LIGHT_POWER,
         ambient: raylab::cornell::AMBIENT,
     };
-    if viewer::display_available() {
-        return viewer::run(&scene);
+    if let Ok(event_loop) = viewer::open_display() {
+        let (loaded, initial) = load(&scene)?;
+        return viewer::run_on(event_loop, loaded, initial, &scene);
     }
     let args = RenderArgs {
         scene,
@@ -82,7 +83,7 @@ fn run_default() -> anyhow::Result<()> {
     render_cmd::run(&args)?;
     eprintln!(
         "no display found, so raylab rendered an image instead of opening the viewer; \
-         run `raylab view` where a display is available (DISPLAY set)"
+         run `raylab view` where an X display is available"
     );
     Ok(())
 }

@@ -26,19 +26,34 @@ const MAX_SAMPLES: u32 = 64;
 /// How often the title's timing figures are refreshed.
 const TITLE_INTERVAL: Duration = Duration::from_millis(250);
 
-/// Whether an X display is configured (the viewer is built for X11).
-pub fn display_available() -> bool {
-    std::env::var_os("DISPLAY").is_some_and(|d| !d.is_empty())
-}
-
-pub fn run(args: &SceneArgs) -> anyhow::Result<()> {
-    let (scene, initial) = crate::load(args)?;
-    if !display_available() {
+/// Connects to the X display: the viewer's event loop, or why there is none.
+pub fn open_display() -> anyhow::Result<EventLoop<()>> {
+    let Some(display) = std::env::var_os("DISPLAY").filter(|d| !d.is_empty()) else {
         return Err(anyhow!(
             "cannot open a window: no X display (DISPLAY is not set); use `raylab render` instead"
         ));
-    }
-    let event_loop = EventLoop::new().map_err(|e| anyhow!("cannot open a window: {e}"))?;
+    };
+    EventLoop::new().map_err(|_| {
+        anyhow!(
+            "cannot open a window: no X server answers on DISPLAY={}",
+            display.to_string_lossy()
+        )
+    })
+}
+
+/// Opens the viewer on the scene of `args`.
+pub fn run(args: &SceneArgs) -> anyhow::Result<()> {
+    let (scene, initial) = crate::load(args)?;
+    run_on(open_display()?, scene, initial, args)
+}
+
+/// Runs the viewer on an event loop already connected to a display.
+pub fn run_on(
+    event_loop: EventLoop<()>,
+    scene: Scene,
+    initial: ViewState,
+    args: &SceneArgs,
+) -> anyhow::Result<()> {
     let mut app = Viewer {
         scene,
         initial,
