@@ -155,6 +155,15 @@ pub fn write_image(film: &Film, path: &Path) -> Result<(), OutputError> {
             .and_then(|()| std::fs::rename(&tmp, path))
             .map_err(io_err)
     });
+    if result.is_ok() {
+        // Make the rename itself durable; not every file system lets a folder be
+        // synced, and the image is complete either way.
+        let folder = match path.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p,
+            _ => Path::new("."),
+        };
+        let _ = File::open(folder).and_then(|d| d.sync_all());
+    }
     if result.is_err() {
         let _ = std::fs::remove_file(&tmp);
     }
@@ -270,14 +279,32 @@ mod tests {
     #[test]
     fn failed_write_keeps_the_old_file_and_leaves_no_temporary() {
         let dir = tempfile::tempdir().unwrap();
+        let names = || {
+            let mut n: Vec<String> = std::fs::read_dir(dir.path())
+                .unwrap()
+                .map(|e| e.unwrap().file_name().into_string().unwrap())
+                .collect();
+            n.sort();
+            n
+        };
+        // Failure before anything is written: a folder squats on the temporary name.
         let path = dir.path().join("keep.png");
         std::fs::write(&path, b"old").unwrap();
-        // A directory squatting on the temporary name makes the write fail midway.
         std::fs::create_dir(temp_path(&path)).unwrap();
         let err = write_image(&Film::new(2, 2), &path).unwrap_err();
         assert!(err.to_string().contains("keep.png"), "{err}");
         assert_eq!(std::fs::read(&path).unwrap(), b"old");
+        std::fs::remove_dir(temp_path(&path)).unwrap();
+        // Failure after the whole image is written: the rename onto a folder fails,
+        // and the complete temporary file is removed again.
+        let folder = dir.path().join("taken.exr");
+        std::fs::create_dir(&folder).unwrap();
+        std::fs::write(folder.join("inside"), b"x").unwrap();
+        assert!(write_image(&Film::new(2, 2), &folder).is_err());
+        assert_eq!(names(), ["keep.png", "taken.exr"]);
+        assert_eq!(std::fs::read(folder.join("inside")).unwrap(), b"x");
         let bad = write_image(&Film::new(2, 2), &dir.path().join("x.jpg")).unwrap_err();
         assert!(matches!(bad, OutputError::UnsupportedFormat { .. }));
+        assert_eq!(names(), ["keep.png", "taken.exr"]);
     }
 }

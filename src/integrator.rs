@@ -70,6 +70,16 @@ impl Integrator {
                 *count += 1;
             }
         }
+        // Unlit lanes borrow a lit lane's ray so that the four can still share the
+        // triangle test's axis order; their answers are not used.
+        let Some(first) = lit.iter().position(|&l| l) else {
+            return rho.map(|r| r * scene.ambient);
+        };
+        for lane in 0..4 {
+            if !lit[lane] {
+                shadow[lane] = shadow[first];
+            }
+        }
         let blocked = scene.occluded4(&shadow, t_max, lit);
         std::array::from_fn(|lane| {
             let d = if lit[lane] && !blocked[lane] {

@@ -3,7 +3,7 @@
 
 use std::ops::Range;
 
-use glam::Vec3A;
+use glam::{DVec3, Vec3A};
 use rayon::prelude::*;
 
 use crate::camera::Camera;
@@ -71,8 +71,8 @@ pub fn render(
 
 /// Adds samples `samples` of every pixel to `sums`, in sample order, and returns
 /// the number of rays cast. Sample 0 goes through the pixel centre; the others are
-/// uniformly jittered over the pixel. Calling it for `0..1`, then `1..2`, ... gives
-/// exactly the sums of one call for `0..n` (the viewer refines that way).
+/// uniformly jittered over the pixel. The viewer refines by calls for `0..1`,
+/// `1..2`, ...; one call for `0..n` gives the same sums up to f32 rounding.
 pub fn accumulate(
     scene: &Scene,
     camera: &Camera,
@@ -91,6 +91,18 @@ pub fn accumulate(
             let y0 = tile * TILE_ROWS;
             let n_rows = rows.len() / width;
             let mut rays = 0u64;
+            // Many samples are summed in f64 (one buffer per tile), so that even
+            // 2^20 of them lose nothing to f32 rounding; one sample goes straight
+            // into `sums`, which keeps progressive refinement exact.
+            let mut wide = if samples.len() > 1 {
+                vec![DVec3::ZERO; rows.len()]
+            } else {
+                Vec::new()
+            };
+            let mut add = |i: usize, v: Vec3A| match wide.get_mut(i) {
+                Some(w) => *w += v.as_dvec3(),
+                None => rows[i] += v,
+            };
             for s in samples.clone() {
                 // 2×2 pixel quads traced together; a last odd row or column alone.
                 for qy in (0..n_rows).step_by(2) {
@@ -101,19 +113,21 @@ pub fn accumulate(
                                 quad.map(|(x, y)| pixel_ray(camera, seed, s, x, y0 + y, width));
                             let values = integrator.radiance4(scene, &primary, &mut rays);
                             for ((x, y), v) in quad.into_iter().zip(values) {
-                                rows[y * width + x] += v;
+                                add(y * width + x, v);
                             }
                         } else {
                             for y in qy..(qy + 2).min(n_rows) {
                                 for x in qx..(qx + 2).min(width) {
                                     let ray = pixel_ray(camera, seed, s, x, y0 + y, width);
-                                    rows[y * width + x] +=
-                                        integrator.radiance(scene, &ray, &mut rays);
+                                    add(y * width + x, integrator.radiance(scene, &ray, &mut rays));
                                 }
                             }
                         }
                     }
                 }
+            }
+            for (sum, w) in rows.iter_mut().zip(&wide) {
+                *sum += w.as_vec3a();
             }
             progress(n_rows as u64);
             rays

@@ -296,7 +296,7 @@ impl Query {
         // A zero component becomes a tiny one of the same sign, so the inverse is
         // finite and a slab test never computes 0 · inf = NaN; the sign comes from
         // the inverse so that -0.0 counts as negative.
-        let tiny = Vec3A::splat(1e-30);
+        let tiny = Vec3A::splat(f32::MIN_POSITIVE);
         let safe = Vec3A::select(ray.dir.abs().cmplt(tiny), tiny.copysign(ray.dir), ray.dir);
         let inv = safe.recip();
         let neg = inv.cmplt(Vec3A::ZERO).bitmask();

@@ -49,7 +49,7 @@ impl<'a> Query4<'a> {
         ];
         // As in the single-ray query: tiny instead of zero components keep the
         // inverse finite, so slab tests never produce NaN.
-        let tiny = Vec4::splat(1e-30);
+        let tiny = Vec4::splat(f32::MIN_POSITIVE);
         let safe_inv = |d: Vec4| Vec4::select(d.abs().cmplt(tiny), tiny.copysign(d), d).recip();
         let inv_z = Vec4::ONE / dir[k[2]];
         Some(Self {
@@ -130,8 +130,10 @@ impl Bvh {
                 if !hit.any() {
                     continue;
                 }
-                let near = Vec4::select(hit, near, Vec4::INFINITY);
-                let key = near.min_element();
+                // Lanes that miss get NaN, which no `t` compares below, so the pop
+                // skips the entry for them even while their best `t` is infinite.
+                let key = Vec4::select(hit, near, Vec4::INFINITY).min_element();
+                let near = Vec4::select(hit, near, Vec4::NAN);
                 match next {
                     Some((n, nv, nk)) if nk <= key => {
                         stack.push((child, near));

@@ -62,8 +62,8 @@ pub fn run_on(
         sums: Film::new(args.width, args.height),
         samples: 0,
         gfx: None,
-        drag: None,
-        cursor: (0.0, 0.0),
+        dragging: false,
+        cursor: None,
         timing: Timing::new(),
         error: None,
     };
@@ -91,9 +91,10 @@ struct Viewer {
     sums: Film,
     samples: u32,
     gfx: Option<Graphics>,
-    /// Cursor position where a left-button drag last moved the view.
-    drag: Option<(f64, f64)>,
-    cursor: (f64, f64),
+    /// Whether the left button is down (dragging looks around).
+    dragging: bool,
+    /// Last known cursor position; unknown until the cursor first moves.
+    cursor: Option<(f64, f64)>,
     timing: Timing,
     error: Option<anyhow::Error>,
 }
@@ -166,8 +167,11 @@ impl Viewer {
                 if self.samples == 0 {
                     self.draw()?;
                 }
-                let path = self.save_screenshot()?;
-                eprintln!("saved {}", path.display());
+                // A screenshot that cannot be saved is reported, not fatal.
+                match self.save_screenshot() {
+                    Ok(path) => eprintln!("saved {}", path.display()),
+                    Err(e) => eprintln!("error: screenshot not saved: {e:#}"),
+                }
             }
             _ => {
                 if self.state.apply(action, &self.initial) {
@@ -324,20 +328,17 @@ impl ApplicationHandler for Viewer {
                 button: MouseButton::Left,
                 ..
             } => {
-                self.drag = (state == ElementState::Pressed).then_some(self.cursor);
+                self.dragging = state == ElementState::Pressed;
                 Ok(())
             }
             WindowEvent::CursorMoved { position, .. } => {
-                self.cursor = (position.x, position.y);
-                if let Some((x0, y0)) = self.drag {
-                    self.drag = Some(self.cursor);
-                    if self
-                        .state
-                        .drag((position.x - x0) as f32, (position.y - y0) as f32)
-                    {
-                        self.restart();
-                    }
+                let now = (position.x, position.y);
+                if let (true, Some((x0, y0))) = (self.dragging, self.cursor)
+                    && self.state.drag((now.0 - x0) as f32, (now.1 - y0) as f32)
+                {
+                    self.restart();
                 }
+                self.cursor = Some(now);
                 Ok(())
             }
             _ => Ok(()),
