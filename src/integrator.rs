@@ -45,9 +45,7 @@ impl Integrator {
             Integrator::Direct => rho * (direct_light(scene, &hit, rays) + scene.ambient),
         }
     }
-}
 
-impl Integrator {
     /// [`Integrator::radiance`] for four coherent rays (a pixel quad), traced
     /// together. Gives the same values as four single calls, except at exact ties.
     #[inline]
