@@ -144,12 +144,30 @@ impl Format {
 /// the temporary file removed.
 pub fn write_image(film: &Film, path: &Path) -> Result<(), OutputError> {
     let format = Format::from_path(path)?;
+    write_atomic(path, |tmp| write_format(film, format, path, tmp))
+}
+
+/// Writes `bytes` to `path` atomically (as [`write_image`] does).
+pub fn write_bytes(bytes: &[u8], path: &Path) -> Result<(), OutputError> {
+    write_atomic(path, |tmp| {
+        std::fs::write(tmp, bytes).map_err(|source| OutputError::Io {
+            path: path.to_owned(),
+            source,
+        })
+    })
+}
+
+/// Runs `write` on a hidden temporary sibling of `path`, then makes it `path`.
+fn write_atomic(
+    path: &Path,
+    write: impl FnOnce(&Path) -> Result<(), OutputError>,
+) -> Result<(), OutputError> {
     let io_err = |source| OutputError::Io {
         path: path.to_owned(),
         source,
     };
     let tmp = temp_path(path);
-    let result = write_format(film, format, path, &tmp).and_then(|()| {
+    let result = write(&tmp).and_then(|()| {
         File::open(&tmp)
             .and_then(|f| f.sync_all())
             .and_then(|()| std::fs::rename(&tmp, path))
@@ -157,14 +175,13 @@ pub fn write_image(film: &Film, path: &Path) -> Result<(), OutputError> {
     });
     if result.is_ok() {
         // Make the rename itself durable; not every file system lets a folder be
-        // synced, and the image is complete either way.
+        // synced, and the file is complete either way.
         let folder = match path.parent() {
             Some(p) if !p.as_os_str().is_empty() => p,
             _ => Path::new("."),
         };
         let _ = File::open(folder).and_then(|d| d.sync_all());
-    }
-    if result.is_err() {
+    } else {
         let _ = std::fs::remove_file(&tmp);
     }
     result

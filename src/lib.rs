@@ -10,11 +10,13 @@
 //! * [`scene`]: triangles with their materials and the light, behind the
 //!   [`Scene::intersect`] / [`Scene::occluded`] seam;
 //! * [`cornell`]: the lab's built-in Cornell box;
+//! * [`obj`]: Wavefront OBJ/MTL meshes;
 //! * [`camera`]: the lab's pinhole camera (yaw/pitch);
 //! * [`integrator`]: `flat` and `direct` (the lab's lighting model);
 //! * [`render`]: tiles on rayon, deterministic per-pixel sampling;
 //! * [`film`]: the image buffer and atomic PNG/EXR output;
-//! * [`controls`]: the viewer's camera/light state and how input changes it.
+//! * [`controls`]: the viewer's camera/light state and how input changes it;
+//! * [`workload`]: the ray-casting workloads of `raylab bench`.
 
 #![warn(missing_docs)]
 
@@ -24,11 +26,13 @@ pub mod controls;
 pub mod cornell;
 pub mod film;
 pub mod integrator;
+pub mod obj;
 pub mod ray;
 pub mod render;
 pub mod sampler;
 pub mod scene;
 pub mod triangle;
+pub mod workload;
 
 pub use camera::Camera;
 pub use integrator::Integrator;

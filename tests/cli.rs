@@ -232,3 +232,113 @@ fn without_a_display_the_default_command_renders_and_explains() {
         "{err}"
     );
 }
+
+/// A small closed mesh: a unit tetrahedron at the origin.
+fn write_tetrahedron(dir: &Path) -> std::path::PathBuf {
+    let path = dir.join("tet.obj");
+    std::fs::write(
+        &path,
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n",
+    )
+    .unwrap();
+    path
+}
+
+#[test]
+fn bench_prints_key_value_lines_and_writes_hits() {
+    let dir = tempfile::tempdir().unwrap();
+    write_tetrahedron(dir.path());
+    // Two rays: one through the tetrahedron's base (prim 0) and one past it.
+    let rays: Vec<f32> = vec![0.2, 0.2, -1.0, 0.0, 0.0, 1.0, 5.0, 5.0, -1.0, 0.0, 0.0, 1.0];
+    let bytes: Vec<u8> = rays.iter().flat_map(|v| v.to_le_bytes()).collect();
+    std::fs::write(dir.path().join("r.rays"), bytes).unwrap();
+    let out = raylab(
+        &[
+            "bench",
+            "tet.obj",
+            "--rays",
+            "r.rays",
+            "--hits",
+            "h.bin",
+            "--threads",
+            "1,2",
+            "--repeat",
+            "2",
+        ],
+        dir.path(),
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = String::from_utf8(out.stdout).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines.len(), 3, "{text}");
+    assert!(
+        lines[0].starts_with("build triangles=4 build_ms=")
+            && lines[0].contains("bytes_per_triangle=")
+    );
+    for (line, threads) in lines[1..].iter().zip([1, 2]) {
+        assert!(
+            line.starts_with(&format!(
+                "workload=rays threads={threads} rays=2 mrays_per_s="
+            )),
+            "{line}"
+        );
+        assert!(line.contains(" median_ms="), "{line}");
+    }
+    let hits = std::fs::read(dir.path().join("h.bin")).unwrap();
+    assert_eq!(hits.len(), 16);
+    assert_eq!(f32::from_le_bytes(hits[0..4].try_into().unwrap()), 1.0);
+    assert_eq!(u32::from_le_bytes(hits[4..8].try_into().unwrap()), 0);
+    assert_eq!(
+        f32::from_le_bytes(hits[8..12].try_into().unwrap()),
+        f32::INFINITY
+    );
+    assert_eq!(
+        u32::from_le_bytes(hits[12..16].try_into().unwrap()),
+        u32::MAX
+    );
+    // Shadow queries over [0, 0.5] miss the base at t = 1; over [0, 2] they hit.
+    for (tfar, want) in [("0.5", 0u8), ("2", 1u8)] {
+        let out = raylab(
+            &[
+                "bench", "tet.obj", "--rays", "r.rays", "--shadow", "--tfar", tfar, "--hits",
+                "o.bin", "--repeat", "1",
+            ],
+            dir.path(),
+        );
+        assert!(out.status.success(), "{}", stderr(&out));
+        assert!(
+            String::from_utf8(out.stdout)
+                .unwrap()
+                .contains("workload=shadow")
+        );
+        assert_eq!(std::fs::read(dir.path().join("o.bin")).unwrap(), [want, 0]);
+    }
+}
+
+#[test]
+fn bench_refuses_bad_input_with_one_line() {
+    let dir = tempfile::tempdir().unwrap();
+    write_tetrahedron(dir.path());
+    std::fs::write(dir.path().join("bad.obj"), "v 0 0 0\nv 1 0 0\nf 1 2 9\n").unwrap();
+    std::fs::write(dir.path().join("odd.rays"), [0u8; 30]).unwrap();
+    let cases: &[(&[&str], i32, &str)] = &[
+        (&["bench", "missing.obj"], 1, "missing.obj"),
+        (
+            &["bench", "bad.obj"],
+            1,
+            "bad.obj:3: face refers to vertex 9",
+        ),
+        (&["bench", "tet.obj", "--rays", "odd.rays"], 1, "odd.rays"),
+        (&["bench", "tet.obj", "--hits", "h.bin"], 2, "--rays"),
+        (&["bench", "tet.obj", "--threads", "0"], 2, "--threads"),
+        (&["bench", "tet.obj", "--tfar", "-1"], 2, "--tfar"),
+        (&["bench", "tet.obj", "--repeat", "0"], 2, "--repeat"),
+    ];
+    for (args, code, needle) in cases {
+        let out = raylab(args, dir.path());
+        let err = stderr(&out);
+        assert_eq!(out.status.code(), Some(*code), "{args:?}: {err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
+        assert!(err.contains(needle), "{args:?}: {err}");
+    }
+}

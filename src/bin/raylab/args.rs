@@ -33,6 +33,33 @@ pub enum Command {
     Render(RenderArgs),
     /// Open an interactive window that re-renders as you move the camera and light.
     View(ViewArgs),
+    /// Measure ray-casting throughput on a mesh (standard workloads or a ray file).
+    Bench(BenchArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct BenchArgs {
+    /// Wavefront OBJ mesh to trace.
+    pub mesh: PathBuf,
+    /// Ray file: little-endian f32, six per ray (ox oy oz dx dy dz) [default: the
+    /// standard primary, incoherent and shadow workloads].
+    #[arg(long, value_name = "FILE")]
+    pub rays: Option<PathBuf>,
+    /// Write per ray `f32 t, u32 prim` (with --shadow one `u8`, 1 = occluded); needs --rays.
+    #[arg(long, value_name = "FILE", requires = "rays")]
+    pub hits: Option<PathBuf>,
+    /// Any-hit queries over [0, T] instead of closest hits (with --rays).
+    #[arg(long, requires = "rays")]
+    pub shadow: bool,
+    /// Far end of the rays' interval [default: infinity].
+    #[arg(long, value_name = "T", allow_hyphen_values = true, value_parser = parse_positive)]
+    pub tfar: Option<f32>,
+    /// Thread counts to run, e.g. `1,2` [default: all cores].
+    #[arg(long, value_name = "N[,N...]", value_delimiter = ',', allow_hyphen_values = true, value_parser = parse_threads)]
+    pub threads: Vec<usize>,
+    /// Timed runs per workload after one warm-up; the median is reported.
+    #[arg(long, default_value_t = 5, value_name = "K", allow_hyphen_values = true, value_parser = parse_repeat)]
+    pub repeat: usize,
 }
 
 /// Scene, image size, camera and light: shared by `render` and `view`.
@@ -139,6 +166,20 @@ fn parse_threads(s: &str) -> Result<usize, String> {
     match s.parse::<usize>() {
         Ok(v) if (1..=1024).contains(&v) => Ok(v),
         _ => Err("expected a whole number of threads from 1 to 1024".into()),
+    }
+}
+
+fn parse_repeat(s: &str) -> Result<usize, String> {
+    match s.parse::<usize>() {
+        Ok(v) if (1..=1000).contains(&v) => Ok(v),
+        _ => Err("expected a whole number of runs from 1 to 1000".into()),
+    }
+}
+
+fn parse_positive(s: &str) -> Result<f32, String> {
+    match s.trim().parse::<f32>() {
+        Ok(v) if v > 0.0 => Ok(v),
+        _ => Err("expected a number > 0 (inf allowed)".into()),
     }
 }
 

@@ -1,6 +1,7 @@
 //! The `raylab` command: `render`, `view`, and a sensible default without arguments.
 
 mod args;
+mod bench;
 mod keys;
 mod render_cmd;
 mod viewer;
@@ -20,10 +21,15 @@ fn main() -> ExitCode {
             | ErrorKind::DisplayVersion
             | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand => e.exit(),
             _ => {
-                // clap's message spans several lines; its first line says it all.
+                // clap's message spans several lines: its first paragraph, on one line.
                 let text = e.render().to_string();
-                let first = text.lines().find(|l| !l.trim().is_empty()).unwrap_or("");
-                eprintln!("{first}");
+                let first: Vec<&str> = text
+                    .lines()
+                    .skip_while(|l| l.trim().is_empty())
+                    .take_while(|l| !l.trim().is_empty())
+                    .map(str::trim)
+                    .collect();
+                eprintln!("{}", first.join(" "));
                 return ExitCode::from(2);
             }
         },
@@ -31,7 +37,7 @@ fn main() -> ExitCode {
     let scene_args = match &cli.command {
         Some(Command::Render(a)) => Some(&a.scene),
         Some(Command::View(a)) => Some(&a.scene),
-        None => None,
+        Some(Command::Bench(_)) | None => None,
     };
     if let Some(Err(message)) = scene_args.map(SceneArgs::validate) {
         eprintln!("{message}");
@@ -50,6 +56,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Some(Command::Render(args)) => render_cmd::run(&args),
         Some(Command::View(args)) => viewer::run(&args.scene),
+        Some(Command::Bench(args)) => bench::run(&args),
         None => run_default(),
     }
 }

@@ -1,0 +1,164 @@
+//! `raylab bench`: ray-casting throughput on a mesh, as `key=value` lines on stdout.
+
+use std::time::Instant;
+
+use anyhow::{Context, anyhow};
+use raylab::bvh::Bvh;
+use raylab::film::write_bytes;
+use raylab::ray::{Hit, Ray};
+use raylab::workload::{self, cast_closest, cast_closest4, cast_occluded, encode_hits};
+
+use crate::args::BenchArgs;
+
+/// Rays of the generated incoherent and shadow workloads.
+const INCOHERENT_RAYS: usize = 1 << 20;
+
+/// One set of rays and how to cast them.
+struct Workload {
+    name: &'static str,
+    rays: Vec<Ray>,
+    t_max: f32,
+    query: Query,
+}
+
+#[derive(Clone, Copy, PartialEq)]
+enum Query {
+    Closest,
+    Closest4,
+    Any,
+}
+
+impl Query {
+    fn api(self) -> &'static str {
+        match self {
+            Query::Closest | Query::Any => "single",
+            Query::Closest4 => "packet4",
+        }
+    }
+}
+
+pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
+    let mesh = raylab::obj::load_obj(&args.mesh)?;
+    for w in &mesh.warnings {
+        eprintln!("warning: {w}");
+    }
+    let tris = &mesh.triangles;
+
+    // Build a few times and report the median (the first build also warms up).
+    let mut times = Vec::new();
+    let mut bvh = Bvh::build(tris);
+    for _ in 0..3 {
+        let start = Instant::now();
+        bvh = Bvh::build(tris);
+        times.push(start.elapsed().as_secs_f64() * 1e3);
+    }
+    times.sort_by(f64::total_cmp);
+    println!(
+        "build triangles={} build_ms={:.1} bytes_per_triangle={:.1} nodes={}",
+        tris.len(),
+        times[1],
+        bvh.memory_bytes() as f64 / tris.len() as f64,
+        bvh.node_count()
+    );
+
+    let workloads = match &args.rays {
+        Some(path) => {
+            let rays = workload::read_rays(path).map_err(|e| anyhow!(e))?;
+            let t_max = args.tfar.unwrap_or(f32::INFINITY);
+            let (name, query) = if args.shadow {
+                ("shadow", Query::Any)
+            } else {
+                ("rays", Query::Closest)
+            };
+            vec![Workload {
+                name,
+                rays,
+                t_max,
+                query,
+            }]
+        }
+        None => {
+            let (lo, hi) = workload::bounds(tris);
+            let diag = (hi - lo).length();
+            let incoherent = workload::incoherent(lo, hi, INCOHERENT_RAYS);
+            let primary = workload::primary(lo, hi);
+            let t_max = args.tfar.unwrap_or(f32::INFINITY);
+            vec![
+                Workload {
+                    name: "primary",
+                    rays: primary.clone(),
+                    t_max,
+                    query: Query::Closest,
+                },
+                Workload {
+                    name: "primary",
+                    rays: primary,
+                    t_max,
+                    query: Query::Closest4,
+                },
+                Workload {
+                    name: "incoherent",
+                    rays: incoherent.clone(),
+                    t_max,
+                    query: Query::Closest,
+                },
+                Workload {
+                    name: "shadow",
+                    rays: incoherent,
+                    t_max: args.tfar.unwrap_or(diag),
+                    query: Query::Any,
+                },
+            ]
+        }
+    };
+
+    let threads = if args.threads.is_empty() {
+        vec![rayon::current_num_threads()]
+    } else {
+        args.threads.clone()
+    };
+    let mut hits: Vec<Option<Hit>> = Vec::new();
+    let mut blocked: Vec<bool> = Vec::new();
+    for &n in &threads {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build()
+            .context("cannot start worker threads")?;
+        for w in &workloads {
+            hits.resize(w.rays.len(), None);
+            blocked.resize(w.rays.len(), false);
+            let mut times = Vec::with_capacity(args.repeat);
+            pool.install(|| {
+                for run in 0..=args.repeat {
+                    let start = Instant::now();
+                    match w.query {
+                        Query::Closest => cast_closest(&bvh, &w.rays, w.t_max, &mut hits),
+                        Query::Closest4 => cast_closest4(&bvh, &w.rays, w.t_max, &mut hits),
+                        Query::Any => cast_occluded(&bvh, &w.rays, w.t_max, &mut blocked),
+                    }
+                    if run > 0 {
+                        times.push(start.elapsed().as_secs_f64());
+                    }
+                }
+            });
+            times.sort_by(f64::total_cmp);
+            let median = times[times.len() / 2];
+            println!(
+                "workload={} threads={n} rays={} mrays_per_s={:.2} median_ms={:.1} api={}",
+                w.name,
+                w.rays.len(),
+                w.rays.len() as f64 / median / 1e6,
+                median * 1e3,
+                w.query.api()
+            );
+        }
+    }
+    if let (Some(path), Some(w)) = (&args.hits, workloads.first()) {
+        let bytes = match w.query {
+            Query::Any => blocked.iter().map(|&b| b as u8).collect(),
+            _ => encode_hits(&hits),
+        };
+        write_bytes(&bytes, path)?;
+    }
+    Ok(())
+}
