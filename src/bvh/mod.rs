@@ -53,27 +53,32 @@ impl Bvh {
     /// Builds the tree. Triangles with zero area or non-finite vertices can never be
     /// hit and are left out; hits report indices into `triangles`.
     pub fn build(triangles: &[Triangle]) -> Self {
-        let (bin, prims) = build_binary(triangles);
+        let Some((root, prims)) = build_binary(triangles) else {
+            return Bvh {
+                nodes: Vec::new(),
+                packets: Vec::new(),
+                root: None,
+                triangles: 0,
+            };
+        };
         let mut bvh = Bvh {
-            nodes: Vec::with_capacity(bin.len() / 3 + 1),
+            nodes: Vec::with_capacity(prims.len() / 6 + 1),
             packets: Vec::with_capacity(prims.len() / 3 + 1),
             root: None,
             triangles: prims.len(),
         };
-        if !bin.is_empty() {
-            let order: Vec<(Triangle, u32)> = prims
-                .iter()
-                .map(|p| (triangles[p.id as usize], p.id))
-                .collect();
-            bvh.root = Some(bvh.collapse(&bin, 0, &order));
-        }
+        let order: Vec<(Triangle, u32)> = prims
+            .iter()
+            .map(|p| (triangles[p.id as usize], p.id))
+            .collect();
+        bvh.root = Some(bvh.collapse(&root, &order));
         bvh
     }
 
-    /// Turns binary node `index` into a child reference, pulling up grandchildren
+    /// Turns a binary node into a child reference, pulling up grandchildren
     /// (largest box first) until a node has four children.
-    fn collapse(&mut self, bin: &[BinNode], index: usize, order: &[(Triangle, u32)]) -> ChildRef {
-        match &bin[index] {
+    fn collapse(&mut self, node: &BinNode, order: &[(Triangle, u32)]) -> ChildRef {
+        match node {
             BinNode::Leaf { first, count, .. } => {
                 let start = self.packets.len() as u32;
                 for chunk in order[*first..first + count].chunks(4) {
@@ -84,22 +89,26 @@ impl Bvh {
                 LEAF | start << 4 | n
             }
             BinNode::Inner { children, .. } => {
-                let mut kids: Vec<usize> = children.to_vec();
-                while kids.len() < 4 {
-                    let widest = kids
-                        .iter()
-                        .enumerate()
-                        .filter(|(_, k)| matches!(bin[**k], BinNode::Inner { .. }))
-                        .max_by(|a, b| {
-                            let area = |k: usize| bin[k].bounds().half_area();
-                            area(*a.1).total_cmp(&area(*b.1))
-                        })
-                        .map(|(i, _)| i);
+                let mut kids: [&BinNode; 4] =
+                    [&children[0], &children[1], &children[0], &children[0]];
+                let mut n = 2;
+                while n < 4 {
+                    // The inner child with the largest box gives up its children.
+                    let widest = (0..n)
+                        .filter(|&i| matches!(kids[i], BinNode::Inner { .. }))
+                        .max_by(|&a, &b| {
+                            kids[a]
+                                .bounds()
+                                .half_area()
+                                .total_cmp(&kids[b].bounds().half_area())
+                        });
                     let Some(i) = widest else { break };
-                    let BinNode::Inner { children, .. } = &bin[kids[i]] else {
+                    let BinNode::Inner { children, .. } = kids[i] else {
                         unreachable!()
                     };
-                    kids.splice(i..=i, *children);
+                    kids[i] = &children[0];
+                    kids[n] = &children[1];
+                    n += 1;
                 }
                 let slot = self.nodes.len();
                 self.nodes.push(Node4 {
@@ -113,9 +122,9 @@ impl Bvh {
                     ],
                     children: [EMPTY; 4],
                 });
-                for (lane, &k) in kids.iter().enumerate() {
-                    let b = bin[k].bounds();
-                    let child = self.collapse(bin, k, order);
+                for (lane, kid) in kids[..n].iter().enumerate() {
+                    let b = *kid.bounds();
+                    let child = self.collapse(kid, order);
                     let node = &mut self.nodes[slot];
                     for axis in 0..3 {
                         node.bounds[axis][lane] = b.min[axis];
