@@ -30,9 +30,23 @@ impl Camera {
     ///
     /// Positive yaw turns towards +x; positive pitch looks up (towards −y).
     pub fn lab(position: Vec3A, yaw_deg: f32, pitch_deg: f32, width: u32, height: u32) -> Self {
+        Self::oriented(position, Mat3A::IDENTITY, yaw_deg, pitch_deg, width, height)
+    }
+
+    /// The lab's camera in another frame: `base` is the camera-to-world rotation at
+    /// yaw = pitch = 0 (for example [`Y_UP_TOWARDS_MINUS_Z`]), and yaw and pitch
+    /// turn the view within it as in the lab.
+    pub fn oriented(
+        position: Vec3A,
+        base: Mat3A,
+        yaw_deg: f32,
+        pitch_deg: f32,
+        width: u32,
+        height: u32,
+    ) -> Self {
         Self {
             position,
-            rotation: lab_rotation(yaw_deg, pitch_deg),
+            rotation: base * lab_rotation(yaw_deg, pitch_deg),
             focal_px: height as f32,
             width,
             height,
@@ -65,6 +79,10 @@ impl Camera {
         self.rotation.y_axis
     }
 }
+
+/// Camera frame for y-up scenes (OBJ, glTF) seen from the +z side: image right is
+/// +x, image down is −y, the view goes along −z.
+pub const Y_UP_TOWARDS_MINUS_Z: Mat3A = Mat3A::from_cols(Vec3A::X, Vec3A::NEG_Y, Vec3A::NEG_Z);
 
 /// The lab's `Ry(yaw)·Rx(pitch)`, angles in degrees.
 pub fn lab_rotation(yaw_deg: f32, pitch_deg: f32) -> Mat3A {
@@ -113,6 +131,22 @@ mod tests {
                 assert!((ray.dir - want).length() < 1e-6, "{yaw} {pitch} {x} {y}");
             }
         }
+    }
+
+    #[test]
+    fn y_up_frame_looks_down_minus_z_with_up_up() {
+        let cam = Camera::oriented(Vec3A::ZERO, Y_UP_TOWARDS_MINUS_Z, 0.0, 0.0, 10, 10);
+        assert_eq!(cam.forward(), Vec3A::NEG_Z);
+        assert!(cam.ray(5.0, 0.0).dir.y > 0.0, "the top row looks up (+y)");
+        assert!(
+            cam.ray(10.0, 5.0).dir.x > 0.0,
+            "the right column looks right (+x)"
+        );
+        // Yaw still turns right and pitch still looks up.
+        let turned = Camera::oriented(Vec3A::ZERO, Y_UP_TOWARDS_MINUS_Z, 90.0, 0.0, 10, 10);
+        assert!((turned.forward() - Vec3A::X).length() < 1e-6);
+        let up = Camera::oriented(Vec3A::ZERO, Y_UP_TOWARDS_MINUS_Z, 0.0, 30.0, 10, 10);
+        assert!(up.forward().y > 0.4);
     }
 
     #[test]

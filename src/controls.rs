@@ -1,17 +1,16 @@
 //! The viewer's state (camera, light, integrator) and how user input changes it,
 //! kept free of any windowing code so that it can be tested on its own.
 
-use glam::Vec3A;
+use glam::{Mat3A, Vec3A};
 
 use crate::camera::{Camera, lab_rotation};
 use crate::integrator::Integrator;
 
-/// Camera travel per key press, in scene units (the lab box is 2 units wide).
-pub const MOVE_STEP: f32 = 0.1;
+/// Camera and light travel per key press in the lab box (2 units wide); other
+/// scenes scale it with their size (see [`ViewState::step`]).
+pub const LAB_STEP: f32 = 0.1;
 /// Camera turn per key press, in degrees.
 pub const TURN_STEP_DEG: f32 = 5.0;
-/// Light travel per key press, in scene units.
-pub const LIGHT_STEP: f32 = 0.1;
 /// Degrees of yaw or pitch per pixel of mouse drag.
 pub const DRAG_DEG_PER_PIXEL: f32 = 0.25;
 /// Pitch stays within ±this, so the view never flips over.
@@ -50,12 +49,16 @@ pub enum Action {
     Quit,
 }
 
-/// What the viewer shows: a lab camera (position, yaw, pitch), the light position
-/// and the integrator.
+/// What the viewer shows: a lab camera (position, yaw, pitch in a base frame), the
+/// light position and the integrator.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ViewState {
     /// Camera position.
     pub camera_pos: Vec3A,
+    /// Camera-to-world rotation at yaw = pitch = 0 (identity in the lab box).
+    pub base: Mat3A,
+    /// Camera and light travel per key press, in scene units.
+    pub step: f32,
     /// Camera yaw in degrees.
     pub yaw_deg: f32,
     /// Camera pitch in degrees.
@@ -69,28 +72,36 @@ pub struct ViewState {
 impl ViewState {
     /// The camera for an image of `width × height`.
     pub fn camera(&self, width: u32, height: u32) -> Camera {
-        Camera::lab(self.camera_pos, self.yaw_deg, self.pitch_deg, width, height)
+        Camera::oriented(
+            self.camera_pos,
+            self.base,
+            self.yaw_deg,
+            self.pitch_deg,
+            width,
+            height,
+        )
     }
 
     /// Applies a state-changing action; returns whether anything changed.
     /// `initial` is the state that [`Action::Reset`] returns to.
     pub fn apply(&mut self, action: Action, initial: &ViewState) -> bool {
         let before = *self;
-        let rot = lab_rotation(self.yaw_deg, self.pitch_deg);
+        let rot = self.base * lab_rotation(self.yaw_deg, self.pitch_deg);
         // The light moves in the camera's level frame: forward without pitch, so
         // W/S keep the light's height; "up" is the image's up.
-        let level = lab_rotation(self.yaw_deg, 0.0);
+        let level = self.base * lab_rotation(self.yaw_deg, 0.0);
+        let step = self.step;
         match action {
-            Action::CameraForward => self.camera_pos += MOVE_STEP * rot.z_axis,
-            Action::CameraBack => self.camera_pos -= MOVE_STEP * rot.z_axis,
+            Action::CameraForward => self.camera_pos += step * rot.z_axis,
+            Action::CameraBack => self.camera_pos -= step * rot.z_axis,
             Action::TurnLeft => self.yaw_deg -= TURN_STEP_DEG,
             Action::TurnRight => self.yaw_deg += TURN_STEP_DEG,
-            Action::LightForward => self.light_pos += LIGHT_STEP * level.z_axis,
-            Action::LightBack => self.light_pos -= LIGHT_STEP * level.z_axis,
-            Action::LightLeft => self.light_pos -= LIGHT_STEP * level.x_axis,
-            Action::LightRight => self.light_pos += LIGHT_STEP * level.x_axis,
-            Action::LightUp => self.light_pos -= LIGHT_STEP * level.y_axis,
-            Action::LightDown => self.light_pos += LIGHT_STEP * level.y_axis,
+            Action::LightForward => self.light_pos += step * level.z_axis,
+            Action::LightBack => self.light_pos -= step * level.z_axis,
+            Action::LightLeft => self.light_pos -= step * level.x_axis,
+            Action::LightRight => self.light_pos += step * level.x_axis,
+            Action::LightUp => self.light_pos -= step * level.y_axis,
+            Action::LightDown => self.light_pos += step * level.y_axis,
             Action::Reset => *self = *initial,
             Action::Use(integrator) => self.integrator = integrator,
             Action::Screenshot | Action::Quit => {}
@@ -122,6 +133,8 @@ mod tests {
     fn start() -> ViewState {
         ViewState {
             camera_pos: Vec3A::new(0.0, 0.0, -3.0),
+            base: Mat3A::IDENTITY,
+            step: LAB_STEP,
             yaw_deg: 0.0,
             pitch_deg: 0.0,
             light_pos: Vec3A::new(0.0, -0.5, -0.7),
@@ -194,6 +207,29 @@ mod tests {
         assert_eq!(s, init);
         assert!(!s.apply(Action::Screenshot, &init));
         assert!(!s.apply(Action::Quit, &init));
+    }
+
+    #[test]
+    fn y_up_scenes_move_in_their_own_frame() {
+        let mut init = start();
+        init.base = crate::camera::Y_UP_TOWARDS_MINUS_Z;
+        init.step = 2.0;
+        let mut s = init;
+        s.apply(Action::CameraForward, &init);
+        assert!(close(
+            s.camera_pos - init.camera_pos,
+            Vec3A::new(0.0, 0.0, -2.0)
+        ));
+        s.apply(Action::LightUp, &init);
+        assert!(close(
+            s.light_pos - init.light_pos,
+            Vec3A::new(0.0, 2.0, 0.0)
+        ));
+        s.apply(Action::LightRight, &init);
+        assert!(close(
+            s.light_pos - init.light_pos,
+            Vec3A::new(2.0, 2.0, 0.0)
+        ));
     }
 
     #[test]

@@ -42,7 +42,7 @@ impl Integrator {
         let rho = scene.reflectance(hit.prim);
         match self {
             Integrator::Flat => rho,
-            Integrator::Direct => rho * (direct_light(scene, &hit, rays) + scene.ambient),
+            Integrator::Direct => rho * (direct_light(scene, &hit, ray.dir, rays) + scene.ambient),
         }
     }
 
@@ -62,7 +62,9 @@ impl Integrator {
         let mut lit = [false; 4];
         let mut irradiance = [Vec3A::ZERO; 4];
         for lane in 0..4 {
-            if let Some((ray, t, d)) = hits[lane].and_then(|h| unshadowed_light(scene, &h)) {
+            if let Some((ray, t, d)) =
+                hits[lane].and_then(|h| unshadowed_light(scene, &h, rays[lane].dir))
+            {
                 (shadow[lane], t_max[lane], irradiance[lane]) = (ray, t, d);
                 lit[lane] = true;
                 *count += 1;
@@ -93,8 +95,8 @@ impl Integrator {
 /// The lab's `D`: irradiance from the point light at a hit, zero when the light is
 /// behind the face (the lab's normals are one-sided) or something blocks it.
 #[inline]
-fn direct_light(scene: &Scene, hit: &Hit, rays: &mut u64) -> Vec3A {
-    let Some((shadow, t_max, d)) = unshadowed_light(scene, hit) else {
+fn direct_light(scene: &Scene, hit: &Hit, dir: Vec3A, rays: &mut u64) -> Vec3A {
+    let Some((shadow, t_max, d)) = unshadowed_light(scene, hit, dir) else {
         return Vec3A::ZERO;
     };
     *rays += 1;
@@ -107,9 +109,9 @@ fn direct_light(scene: &Scene, hit: &Hit, rays: &mut u64) -> Vec3A {
 /// For a hit facing the light: the shadow ray towards it, the ray's `t_max`, and
 /// the irradiance `P·cos/(4πr²)` it brings if nothing blocks it.
 #[inline]
-fn unshadowed_light(scene: &Scene, hit: &Hit) -> Option<(Ray, f32, Vec3A)> {
+fn unshadowed_light(scene: &Scene, hit: &Hit, dir: Vec3A) -> Option<(Ray, f32, Vec3A)> {
     let light = &scene.light;
-    let sp = scene.surface_point(hit);
+    let sp = scene.surface_point(hit, dir);
     let to_light = light.position - sp.p;
     let r2 = to_light.length_squared();
     let cos = to_light.dot(sp.n) / r2.sqrt();

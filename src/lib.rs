@@ -10,7 +10,7 @@
 //! * [`scene`]: triangles with their materials and the light, behind the
 //!   [`Scene::intersect`] / [`Scene::occluded`] seam;
 //! * [`cornell`]: the lab's built-in Cornell box;
-//! * [`obj`]: Wavefront OBJ/MTL meshes;
+//! * [`obj`]: Wavefront OBJ/MTL meshes, and [`framing`]: a camera and light for them;
 //! * [`camera`]: the lab's pinhole camera (yaw/pitch);
 //! * [`integrator`]: `flat` and `direct` (the lab's lighting model);
 //! * [`render`]: tiles on rayon, deterministic per-pixel sampling;
@@ -25,6 +25,7 @@ pub mod camera;
 pub mod controls;
 pub mod cornell;
 pub mod film;
+pub mod framing;
 pub mod integrator;
 pub mod obj;
 pub mod ray;

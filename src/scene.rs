@@ -55,6 +55,10 @@ pub struct Scene {
     pub light: PointLight,
     /// The lab's constant ambient term `N` (indirect light stand-in).
     pub ambient: Vec3A,
+    /// Whether surfaces are lit from both sides. The lab box is one-sided, as in
+    /// the lab (its normal is `cross(v2 − v0, v1 − v0)`); meshes are two-sided,
+    /// since their windings vary (and OBJ's is the opposite of the lab's).
+    pub two_sided: bool,
 }
 
 impl Scene {
@@ -91,6 +95,7 @@ impl Scene {
             bvh,
             light,
             ambient,
+            two_sided: false,
         })
     }
 
@@ -138,11 +143,17 @@ impl Scene {
         self.reflectance[prim as usize]
     }
 
-    /// The hit point with its error bound, for spawning rays off the surface.
+    /// The hit point of a ray along `dir` with its error bound, for spawning rays
+    /// off the surface. Its normal is the face normal, turned towards the ray's
+    /// origin in a two-sided scene.
     #[inline]
-    pub fn surface_point(&self, hit: &Hit) -> SurfacePoint {
+    pub fn surface_point(&self, hit: &Hit, dir: Vec3A) -> SurfacePoint {
         let prim = hit.prim as usize;
-        SurfacePoint::on_triangle(&self.triangles[prim].v, hit.b1, hit.b2, self.normals[prim])
+        let mut n = self.normals[prim];
+        if self.two_sided && n.dot(dir) > 0.0 {
+            n = -n;
+        }
+        SurfacePoint::on_triangle(&self.triangles[prim].v, hit.b1, hit.b2, n)
     }
 }
 

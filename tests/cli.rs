@@ -342,3 +342,35 @@ fn bench_refuses_bad_input_with_one_line() {
         assert!(err.contains(needle), "{args:?}: {err}");
     }
 }
+
+#[test]
+fn a_mesh_renders_framed_and_lit_into_its_own_png() {
+    let dir = tempfile::tempdir().unwrap();
+    write_tetrahedron(dir.path());
+    let out = raylab(
+        &["render", "tet.obj", "--width", "64", "--height", "64"],
+        dir.path(),
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    let img = image::open(dir.path().join("tet.png")).unwrap().to_rgb8();
+    // The mesh fills part of the frame: black around it, lit faces inside.
+    let lum: Vec<u32> = img
+        .pixels()
+        .map(|p| p.0.iter().map(|&c| c as u32).sum())
+        .collect();
+    assert_eq!(lum[0], 0, "the corner sees no mesh");
+    let lit = lum.iter().filter(|&&l| l > 3 * 120).count();
+    assert!(lit > 200, "only {lit} lit pixels");
+    // Flat shows the default grey reflectance 0.75 (sRGB 225) where the mesh is.
+    let out = raylab(
+        &["render", "tet.obj", "--integrator", "flat", "-o", "f.png"],
+        dir.path(),
+    );
+    assert!(out.status.success());
+    let flat = image::open(dir.path().join("f.png")).unwrap().to_rgb8();
+    assert!(flat.pixels().any(|p| p.0 == [225, 225, 225]));
+    assert!(
+        flat.pixels()
+            .all(|p| p.0 == [225, 225, 225] || p.0 == [0, 0, 0])
+    );
+}

@@ -65,7 +65,7 @@ pub struct BenchArgs {
 /// Scene, image size, camera and light: shared by `render` and `view`.
 #[derive(Debug, Clone, Args)]
 pub struct SceneArgs {
-    /// Scene to load: `cornell` (the lab's box, built in).
+    /// Scene to load: `cornell` (the lab's box, built in) or a Wavefront OBJ file.
     #[arg(default_value = "cornell")]
     pub scene: String,
     /// Image width in pixels.
@@ -77,7 +77,7 @@ pub struct SceneArgs {
     /// How to light the image: `flat` (surface colour) or `direct` (the lab's model).
     #[arg(long, default_value = "direct", value_parser = parse_integrator)]
     pub integrator: Integrator,
-    /// Camera position [default: 0,0,-3].
+    /// Camera position [default: 0,0,-3 in the box; framing the mesh otherwise].
     #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true, value_parser = parse_vec3)]
     pub camera_pos: Option<Vec3A>,
     /// Camera yaw in degrees (positive turns towards +x).
@@ -86,15 +86,17 @@ pub struct SceneArgs {
     /// Camera pitch in degrees (positive looks up), within ±89.
     #[arg(long, default_value_t = 0.0, value_name = "DEG", allow_hyphen_values = true, value_parser = parse_pitch)]
     pub pitch: f32,
-    /// Point light position [default: 0,-0.5,-0.7].
+    /// Point light position [default: 0,-0.5,-0.7 in the box; near the camera otherwise].
     #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true, value_parser = parse_vec3)]
     pub light_pos: Option<Vec3A>,
-    /// Point light power P per colour channel.
-    #[arg(long, default_value_t = raylab::cornell::LIGHT_POWER, value_name = "P", allow_hyphen_values = true, value_parser = parse_non_negative)]
-    pub light_power: f32,
-    /// Ambient term N added to the direct light (the lab's stand-in for indirect light).
-    #[arg(long, default_value_t = raylab::cornell::AMBIENT, value_name = "N", allow_hyphen_values = true, value_parser = parse_non_negative)]
-    pub ambient: f32,
+    /// Point light power P per colour channel [default: 14 in the box; for a mesh,
+    /// enough for a direct light of 0.5 at its centre].
+    #[arg(long, value_name = "P", allow_hyphen_values = true, value_parser = parse_non_negative)]
+    pub light_power: Option<f32>,
+    /// Ambient term N added to the direct light (the lab's stand-in for indirect
+    /// light) [default: 0.5 in the box, 0.15 for a mesh].
+    #[arg(long, value_name = "N", allow_hyphen_values = true, value_parser = parse_non_negative)]
+    pub ambient: Option<f32>,
 }
 
 #[derive(Debug, Args)]

@@ -72,8 +72,8 @@ fn run_default() -> anyhow::Result<()> {
         yaw: 0.0,
         pitch: 0.0,
         light_pos: None,
-        light_power: raylab::cornell::LIGHT_POWER,
-        ambient: raylab::cornell::AMBIENT,
+        light_power: None,
+        ambient: None,
     };
     if let Ok(event_loop) = viewer::open_display() {
         let (loaded, initial) = load(&scene)?;
@@ -95,17 +95,47 @@ fn run_default() -> anyhow::Result<()> {
     Ok(())
 }
 
+/// Ambient term of mesh scenes unless the user gives one.
+const MESH_AMBIENT: f32 = 0.15;
+
 /// Builds the scene and the initial view from the shared arguments.
 fn load(args: &SceneArgs) -> anyhow::Result<(raylab::Scene, raylab::controls::ViewState)> {
-    let mut scene = match args.scene.as_str() {
-        "cornell" => raylab::cornell::scene(),
-        other => anyhow::bail!("scene '{other}': unknown scene (built in: cornell)"),
+    use glam::{Mat3A, Vec3A};
+    use raylab::cornell;
+    let is_obj = std::path::Path::new(&args.scene)
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("obj"));
+    let (mut scene, camera_pos, base, step) = if args.scene == "cornell" {
+        let mut scene = cornell::scene();
+        scene.light.power = Vec3A::splat(args.light_power.unwrap_or(cornell::LIGHT_POWER));
+        scene.ambient = Vec3A::splat(args.ambient.unwrap_or(cornell::AMBIENT));
+        let step = raylab::controls::LAB_STEP;
+        (scene, cornell::CAMERA_POSITION, Mat3A::IDENTITY, step)
+    } else if is_obj {
+        let mesh = raylab::obj::load_obj(std::path::Path::new(&args.scene))?;
+        for w in &mesh.warnings {
+            eprintln!("warning: {w}");
+        }
+        let ambient = args.ambient.unwrap_or(MESH_AMBIENT);
+        let (mut scene, framing) = raylab::framing::mesh_scene(mesh, ambient)
+            .map_err(|e| anyhow::anyhow!("{}: {e}", args.scene))?;
+        if let Some(p) = args.light_power {
+            scene.light.power = Vec3A::splat(p);
+        }
+        (scene, framing.camera_pos, framing.base, framing.step)
+    } else {
+        anyhow::bail!(
+            "scene '{}': unknown scene (built in: cornell; or a Wavefront .obj file)",
+            args.scene
+        );
     };
-    scene.light.position = args.light_pos.unwrap_or(raylab::cornell::LIGHT_POSITION);
-    scene.light.power = glam::Vec3A::splat(args.light_power);
-    scene.ambient = glam::Vec3A::splat(args.ambient);
+    if let Some(p) = args.light_pos {
+        scene.light.position = p;
+    }
     let view = raylab::controls::ViewState {
-        camera_pos: args.camera_pos.unwrap_or(raylab::cornell::CAMERA_POSITION),
+        camera_pos: args.camera_pos.unwrap_or(camera_pos),
+        base,
+        step,
         yaw_deg: args.yaw,
         pitch_deg: args.pitch,
         light_pos: scene.light.position,

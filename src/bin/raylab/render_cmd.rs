@@ -16,10 +16,13 @@ use crate::args::RenderArgs;
 const PROGRESS_DELAY: Duration = Duration::from_millis(300);
 
 pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
-    let output = args
-        .output
-        .clone()
-        .unwrap_or_else(|| PathBuf::from(format!("{}.png", args.scene.scene)));
+    let output = args.output.clone().unwrap_or_else(|| {
+        // SCENE.png in the current folder, also for a mesh given by its path.
+        let stem = std::path::Path::new(&args.scene.scene)
+            .file_stem()
+            .map_or_else(|| "image".into(), |s| s.to_string_lossy().into_owned());
+        PathBuf::from(format!("{stem}.png"))
+    });
     // Refuse an unsupported format before spending time on the render.
     Format::from_path(&output)?;
     let (scene, view) = crate::load(&args.scene)?;
