@@ -32,6 +32,7 @@ pub mod ray;
 pub mod render;
 pub mod sampler;
 pub mod scene;
+pub mod transform;
 pub mod triangle;
 pub mod workload;
 

@@ -374,3 +374,79 @@ fn a_mesh_renders_framed_and_lit_into_its_own_png() {
             .all(|p| p.0 == [225, 225, 225] || p.0 == [0, 0, 0])
     );
 }
+
+#[test]
+fn meshes_can_be_placed_in_the_lab_box() {
+    let dir = tempfile::tempdir().unwrap();
+    write_tetrahedron(dir.path());
+    let place = [
+        "--add",
+        "tet.obj",
+        "--transform",
+        "fit 0.5; rotate x 180; translate 0 1 -0.5",
+    ];
+    let mut args = vec![
+        "render",
+        "--integrator",
+        "flat",
+        "--width",
+        "100",
+        "--height",
+        "100",
+        "-o",
+        "b.png",
+    ];
+    args.extend(place);
+    let out = raylab(&args, dir.path());
+    assert!(out.status.success(), "{}", stderr(&out));
+    let with = image::open(dir.path().join("b.png")).unwrap().to_rgb8();
+    let out = raylab(
+        &args[..9]
+            .iter()
+            .map(|a| if *a == "b.png" { "a.png" } else { a })
+            .collect::<Vec<_>>(),
+        dir.path(),
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    let without = image::open(dir.path().join("a.png")).unwrap().to_rgb8();
+    // The pixels the mesh changed are its grey, below the image centre (on the floor).
+    let changed: Vec<(u32, u32)> = with
+        .enumerate_pixels()
+        .filter(|(x, y, p)| p.0 != without.get_pixel(*x, *y).0)
+        .map(|(x, y, p)| {
+            assert_eq!(p.0, [225, 225, 225], "({x}, {y})");
+            (x, y)
+        })
+        .collect();
+    assert!(changed.len() > 100, "{} pixels changed", changed.len());
+    assert!(changed.iter().all(|&(_, y)| y > 50));
+    // Transforms must pair with meshes; a bad one names itself.
+    for (extra, needle) in [
+        (&["--transform", "fit 1"][..], "--transform"),
+        (&["--add", "tet.obj", "--transform", "spin 3"], "spin 3"),
+        (
+            &[
+                "--add",
+                "tet.obj",
+                "--transform",
+                "fit 1",
+                "--transform",
+                "fit 2",
+                "--add",
+                "tet.obj",
+                "--transform",
+                "fit 3",
+            ],
+            "--transform",
+        ),
+    ] {
+        let mut args = vec!["render"];
+        args.extend(extra);
+        let out = raylab(&args, dir.path());
+        assert_eq!(out.status.code(), Some(2), "{extra:?}: {}", stderr(&out));
+        assert!(stderr(&out).contains(needle), "{}", stderr(&out));
+    }
+    let out = raylab(&["render", "--add", "missing.obj"], dir.path());
+    assert_eq!(out.status.code(), Some(1));
+    assert!(stderr(&out).contains("missing.obj"));
+}

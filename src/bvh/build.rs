@@ -9,7 +9,7 @@ use rayon::prelude::*;
 
 use crate::triangle::Triangle;
 
-const BINS: usize = 16;
+const BINS: usize = 12;
 /// Largest leaf, in triangles: two four-wide packets.
 pub(super) const MAX_LEAF: usize = 8;
 /// Cost of visiting a node relative to testing one packet of four triangles.

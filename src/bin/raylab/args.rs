@@ -93,6 +93,15 @@ pub struct SceneArgs {
     /// enough for a direct light of 0.5 at its centre].
     #[arg(long, value_name = "P", allow_hyphen_values = true, value_parser = parse_non_negative)]
     pub light_power: Option<f32>,
+    /// Add a Wavefront OBJ mesh to the scene (repeatable), e.g. into the lab box.
+    #[arg(long, value_name = "MESH.obj")]
+    pub add: Vec<PathBuf>,
+    /// Place the added meshes: operations in order, separated by ';': `scale S`,
+    /// `scale X Y Z`, `rotate x|y|z DEG`, `translate X Y Z`, `fit HEIGHT` (base at
+    /// y = 0, centred, scaled to the height). One for all meshes, or one per --add.
+    /// The bunny on the lab box's floor: "fit 0.8; rotate x 180; translate 0.3 1 -0.3".
+    #[arg(long, value_name = "OPS", allow_hyphen_values = true)]
+    pub transform: Vec<raylab::transform::Transform>,
     /// Ambient term N added to the direct light (the lab's stand-in for indirect
     /// light) [default: 0.5 in the box, 0.15 for a mesh].
     #[arg(long, value_name = "N", allow_hyphen_values = true, value_parser = parse_non_negative)]
@@ -133,8 +142,16 @@ pub struct ViewArgs {
 }
 
 impl SceneArgs {
-    /// Checks what single arguments cannot: the image's total size.
+    /// Checks what single arguments cannot: the image's total size, and that
+    /// transforms pair with the added meshes.
     pub fn validate(&self) -> Result<(), String> {
+        let (adds, transforms) = (self.add.len(), self.transform.len());
+        if transforms > 1 && transforms != adds || transforms == 1 && adds == 0 {
+            return Err(format!(
+                "error: --transform given {transforms} times for {adds} --add meshes \
+                 (give one for all, or one per mesh)"
+            ));
+        }
         let pixels = self.width as u64 * self.height as u64;
         if pixels > MAX_PIXELS {
             return Err(format!(

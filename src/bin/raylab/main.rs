@@ -73,6 +73,8 @@ fn run_default() -> anyhow::Result<()> {
         pitch: 0.0,
         light_pos: None,
         light_power: None,
+        add: Vec::new(),
+        transform: Vec::new(),
         ambient: None,
     };
     if let Ok(event_loop) = viewer::open_display() {
@@ -101,17 +103,44 @@ const MESH_AMBIENT: f32 = 0.15;
 /// Builds the scene and the initial view from the shared arguments.
 fn load(args: &SceneArgs) -> anyhow::Result<(raylab::Scene, raylab::controls::ViewState)> {
     use glam::{Mat3A, Vec3A};
-    use raylab::cornell;
+    use raylab::{Triangle, cornell};
     let is_obj = std::path::Path::new(&args.scene)
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("obj"));
     let (mut scene, camera_pos, base, step) = if args.scene == "cornell" {
-        let mut scene = cornell::scene();
-        scene.light.power = Vec3A::splat(args.light_power.unwrap_or(cornell::LIGHT_POWER));
+        let (mut tris, mut rho) = cornell::triangles();
+        for (i, path) in args.add.iter().enumerate() {
+            let mut mesh = raylab::obj::load_obj(path)?;
+            for w in &mesh.warnings {
+                eprintln!("warning: {w}");
+            }
+            if let Some(t) = args.transform.get(i).or(args.transform.first()) {
+                t.apply(&mut mesh.triangles);
+            }
+            // OBJ faces are counter-clockwise seen from outside; the lab's one-sided
+            // normal wants the opposite order.
+            tris.extend(
+                mesh.triangles
+                    .iter()
+                    .map(|t| Triangle::new(t.v[0], t.v[2], t.v[1])),
+            );
+            rho.extend(mesh.reflectance);
+        }
+        let light = raylab::PointLight {
+            position: cornell::LIGHT_POSITION,
+            power: Vec3A::splat(args.light_power.unwrap_or(cornell::LIGHT_POWER)),
+        };
+        let mut scene = raylab::Scene::new(tris, rho, light, Vec3A::ZERO)?;
         scene.ambient = Vec3A::splat(args.ambient.unwrap_or(cornell::AMBIENT));
         let step = raylab::controls::LAB_STEP;
         (scene, cornell::CAMERA_POSITION, Mat3A::IDENTITY, step)
     } else if is_obj {
+        if !args.add.is_empty() {
+            anyhow::bail!(
+                "--add places meshes in the cornell scene; {} is a mesh",
+                args.scene
+            );
+        }
         let mesh = raylab::obj::load_obj(std::path::Path::new(&args.scene))?;
         for w in &mesh.warnings {
             eprintln!("warning: {w}");
