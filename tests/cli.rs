@@ -409,9 +409,12 @@ fn meshes_can_be_placed_in_the_lab_box() {
     );
     assert!(out.status.success(), "{}", stderr(&out));
     let without = image::open(dir.path().join("a.png")).unwrap().to_rgb8();
-    // The pixels the mesh changed are its grey, below the image centre (on the floor).
+    // The pixels the mesh changed are its grey, below the image centre (on the
+    // floor). The diagonals are left out: their rays run along the box's edges,
+    // where the two walls tie and a different tree may report the other one.
     let changed: Vec<(u32, u32)> = with
         .enumerate_pixels()
+        .filter(|(x, y, _)| x != y && x + y != 99)
         .filter(|(x, y, p)| p.0 != without.get_pixel(*x, *y).0)
         .map(|(x, y, p)| {
             assert_eq!(p.0, [225, 225, 225], "({x}, {y})");
