@@ -5,27 +5,9 @@
 use std::path::Path;
 
 use glam::Vec3A;
-use raylab::bvh::Bvh;
-use raylab::ray::{Hit, Ray};
-use raylab::triangle::{RayShear, Triangle, intersect};
+use raylab::bvh::{Bvh, brute_force};
+use raylab::ray::Ray;
 use raylab::workload;
-
-fn brute_force(tris: &[Triangle], ray: &Ray) -> Option<Hit> {
-    let s = RayShear::new(ray);
-    let mut best: Option<Hit> = None;
-    for (i, t) in tris.iter().enumerate() {
-        let limit = best.map_or(f32::INFINITY, |b| b.t);
-        if let Some(h) = intersect(&s, &t.v, limit) {
-            best = Some(Hit {
-                t: h.t,
-                prim: i as u32,
-                b1: h.b1,
-                b2: h.b2,
-            });
-        }
-    }
-    best
-}
 
 fn check_mesh(name: &str, stride: usize) {
     let path = Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -52,7 +34,7 @@ fn check_mesh(name: &str, stride: usize) {
         .collect();
     let mut hits = 0;
     for ray in &rays {
-        let want = brute_force(tris, ray);
+        let want = brute_force(tris, ray, f32::INFINITY);
         let got = bvh.intersect(ray, f32::INFINITY);
         assert_eq!(got.is_some(), want.is_some(), "{name}: {ray:?}");
         assert_eq!(
@@ -96,7 +78,10 @@ fn rays_starting_inside_the_box_and_nan_rays() {
     let centre = (lo + hi) / 2.0;
     for dir in [Vec3A::X, -Vec3A::Y, Vec3A::new(0.3, 0.4, -0.5).normalize()] {
         let ray = Ray::new(centre, dir);
-        assert_eq!(bvh.intersect(&ray, f32::INFINITY), brute_force(&tris, &ray));
+        assert_eq!(
+            bvh.intersect(&ray, f32::INFINITY),
+            brute_force(&tris, &ray, f32::INFINITY)
+        );
     }
     for ray in [
         Ray::new(Vec3A::splat(f32::NAN), Vec3A::X),

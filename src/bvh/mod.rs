@@ -285,6 +285,26 @@ impl<T: Copy> Stack<T> {
     }
 }
 
+/// The closest hit by testing every triangle: the reference the BVH is tested
+/// against (and a way to check a suspicious hit by hand). Same answers as
+/// [`Bvh::intersect`] except which triangle is reported at an exact tie.
+pub fn brute_force(triangles: &[Triangle], ray: &Ray, t_max: f32) -> Option<Hit> {
+    let s = crate::triangle::RayShear::new(ray);
+    let mut best: Option<Hit> = None;
+    for (i, t) in triangles.iter().enumerate() {
+        let limit = best.map_or(t_max, |b| b.t);
+        if let Some(h) = crate::triangle::intersect(&s, &t.v, limit) {
+            best = Some(Hit {
+                t: h.t,
+                prim: i as u32,
+                b1: h.b1,
+                b2: h.b2,
+            });
+        }
+    }
+    best
+}
+
 fn is_finite_ray(ray: &Ray) -> bool {
     ray.origin.is_finite() && ray.dir.is_finite()
 }
@@ -343,7 +363,6 @@ impl Query {
 mod tests {
     use super::*;
     use crate::sampler::Rng;
-    use crate::triangle::{self, RayShear};
 
     fn random_triangles(rng: &mut Rng, n: usize) -> Vec<Triangle> {
         let mut p = || Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 2.0 - 1.0;
@@ -353,23 +372,6 @@ mod tests {
                 Triangle::new(c, c + 0.2 * p(), c + 0.2 * p())
             })
             .collect()
-    }
-
-    fn brute_force(tris: &[Triangle], ray: &Ray, t_max: f32) -> Option<Hit> {
-        let s = RayShear::new(ray);
-        let mut best: Option<Hit> = None;
-        for (i, t) in tris.iter().enumerate() {
-            let limit = best.map_or(t_max, |b| b.t);
-            if let Some(h) = triangle::intersect(&s, &t.v, limit) {
-                best = Some(Hit {
-                    t: h.t,
-                    prim: i as u32,
-                    b1: h.b1,
-                    b2: h.b2,
-                });
-            }
-        }
-        best
     }
 
     #[test]
