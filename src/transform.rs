@@ -4,7 +4,7 @@
 
 use std::str::FromStr;
 
-use glam::{Mat3A, Vec3A};
+use glam::{Affine3A, Mat3, Vec3, Vec3A};
 
 use crate::triangle::Triangle;
 
@@ -81,29 +81,30 @@ impl Transform {
     /// Applies the operations to every vertex, in order.
     pub fn apply(&self, triangles: &mut [Triangle]) {
         for op in &self.0 {
-            let map: Box<dyn Fn(Vec3A) -> Vec3A> = match *op {
-                Op::Scale(s) => Box::new(move |p| p * s),
-                Op::Translate(t) => Box::new(move |p| p + t),
+            // Every operation is affine; `fit` depends on the mesh as it is by then.
+            let map = match *op {
+                Op::Scale(s) => Affine3A::from_scale(s.into()),
+                Op::Translate(t) => Affine3A::from_translation(t.into()),
                 Op::Rotate(axis, deg) => {
                     let r = deg.to_radians();
-                    let m = match axis {
-                        0 => Mat3A::from_rotation_x(r),
-                        1 => Mat3A::from_rotation_y(r),
-                        _ => Mat3A::from_rotation_z(r),
-                    };
-                    Box::new(move |p| m * p)
+                    Affine3A::from_mat3(match axis {
+                        0 => Mat3::from_rotation_x(r),
+                        1 => Mat3::from_rotation_y(r),
+                        _ => Mat3::from_rotation_z(r),
+                    })
                 }
                 Op::Fit(height) => {
                     let (lo, hi) = crate::workload::bounds(triangles);
                     let s = height / (hi.y - lo.y).max(f32::MIN_POSITIVE);
                     let base = Vec3A::new((lo.x + hi.x) / 2.0, lo.y, (lo.z + hi.z) / 2.0);
-                    Box::new(move |p| (p - base) * s)
+                    Affine3A::from_scale(Vec3::splat(s))
+                        * Affine3A::from_translation((-base).into())
                 }
             };
-            // A mirroring scale would turn faces inside out: keep the winding.
-            let mirror = matches!(*op, Op::Scale(s) if s.x * s.y * s.z < 0.0);
+            // A mirroring map would turn faces inside out: keep the winding.
+            let mirror = map.matrix3.determinant() < 0.0;
             for t in triangles.iter_mut() {
-                let v = t.v.map(&map);
+                let v = t.v.map(|p| map.transform_point3a(p));
                 t.v = if mirror { [v[0], v[2], v[1]] } else { v };
             }
         }
@@ -136,7 +137,7 @@ mod tests {
             "{v:?}"
         );
         // A rotation keeps the winding: the normal turns with the mesh.
-        let turned = Mat3A::from_rotation_x(std::f32::consts::PI) * normal;
+        let turned = glam::Mat3A::from_rotation_x(std::f32::consts::PI) * normal;
         assert!((tris[0].lab_normal() - turned).length() < 1e-5);
     }
 
