@@ -34,15 +34,10 @@ fn render_with(scene: &Scene, cam: &Camera, settings: RenderSettings, threads: u
 
 /// The blocks' bounding boxes, grown by 0.01.
 fn block_boxes(scene: &Scene) -> Vec<(Vec3A, Vec3A)> {
-    let tris = scene.triangles();
     [cornell::parts::SHORT_BLOCK, cornell::parts::TALL_BLOCK]
         .into_iter()
         .map(|r| {
-            let (mut lo, mut hi) = (Vec3A::splat(f32::MAX), Vec3A::splat(f32::MIN));
-            for t in &tris[r] {
-                lo = lo.min(t.min());
-                hi = hi.max(t.max());
-            }
+            let (lo, hi) = raylab::workload::bounds(&scene.triangles()[r]);
             (lo - 0.01, hi + 0.01)
         })
         .collect()

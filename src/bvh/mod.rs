@@ -305,6 +305,15 @@ pub fn brute_force(triangles: &[Triangle], ray: &Ray, t_max: f32) -> Option<Hit>
     best
 }
 
+/// `1 / dir` with every zero component first made the smallest normal number of
+/// the same sign, so that the inverse is finite and a slab test never computes
+/// 0 · inf = NaN.
+#[inline(always)]
+fn safe_inverse(dir: Vec3A) -> Vec3A {
+    let tiny = Vec3A::splat(f32::MIN_POSITIVE);
+    Vec3A::select(dir.abs().cmplt(tiny), tiny.copysign(dir), dir).recip()
+}
+
 fn is_finite_ray(ray: &Ray) -> bool {
     ray.origin.is_finite() && ray.dir.is_finite()
 }
@@ -322,12 +331,8 @@ struct Query {
 impl Query {
     #[inline(always)]
     fn new(ray: &Ray) -> Self {
-        // A zero component becomes a tiny one of the same sign, so the inverse is
-        // finite and a slab test never computes 0 · inf = NaN; the sign comes from
-        // the inverse so that -0.0 counts as negative.
-        let tiny = Vec3A::splat(f32::MIN_POSITIVE);
-        let safe = Vec3A::select(ray.dir.abs().cmplt(tiny), tiny.copysign(ray.dir), ray.dir);
-        let inv = safe.recip();
+        // The sign comes from the inverse so that -0.0 counts as negative.
+        let inv = safe_inverse(ray.dir);
         let neg = inv.cmplt(Vec3A::ZERO).bitmask();
         let (o, i) = (ray.origin.to_array(), inv.to_array());
         let plane = |a: usize, flip: u32| a + 3 * ((neg >> a & 1) ^ flip) as usize;

@@ -10,7 +10,7 @@
 use glam::{BVec4A, Vec4};
 
 use super::packet::{Packet, candidates};
-use super::{Bvh, ChildRef, EMPTY, LEAF, Stack};
+use super::{Bvh, ChildRef, EMPTY, LEAF, Stack, safe_inverse};
 use crate::ray::{Hit, Ray, gamma};
 use crate::triangle::{self, RayShear, axis_order};
 
@@ -47,15 +47,13 @@ impl<'a> Query4<'a> {
             Vec4::new(a.dir.y, b.dir.y, c.dir.y, d.dir.y),
             Vec4::new(a.dir.z, b.dir.z, c.dir.z, d.dir.z),
         ];
-        // As in the single-ray query: tiny instead of zero components keep the
-        // inverse finite, so slab tests never produce NaN.
-        let tiny = Vec4::splat(f32::MIN_POSITIVE);
-        let safe_inv = |d: Vec4| Vec4::select(d.abs().cmplt(tiny), tiny.copysign(d), d).recip();
+        let inv = rays.each_ref().map(|r| safe_inverse(r.dir));
+        let lanes = |a: usize| Vec4::new(inv[0][a], inv[1][a], inv[2][a], inv[3][a]);
         let inv_z = Vec4::ONE / dir[k[2]];
         Some(Self {
             rays,
             origin,
-            inv_dir: [safe_inv(dir[0]), safe_inv(dir[1]), safe_inv(dir[2])],
+            inv_dir: [lanes(0), lanes(1), lanes(2)],
             k,
             origin_k: [origin[k[0]], origin[k[1]], origin[k[2]]],
             shear: [dir[k[0]] * inv_z, dir[k[1]] * inv_z, inv_z],

@@ -38,10 +38,7 @@ impl Query {
 }
 
 pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
-    let mesh = raylab::obj::load_obj(&args.mesh)?;
-    for w in &mesh.warnings {
-        eprintln!("warning: {w}");
-    }
+    let mesh = crate::load_mesh(&args.mesh)?;
     let tris = &mesh.triangles;
 
     // Build a few times and report the median (the first build also warms up).

@@ -97,6 +97,15 @@ fn run_default() -> anyhow::Result<()> {
     Ok(())
 }
 
+/// Reads a mesh file, telling the user what it had to guess (missing materials).
+fn load_mesh(path: &std::path::Path) -> anyhow::Result<raylab::obj::Mesh> {
+    let mesh = raylab::obj::load_obj(path)?;
+    for w in &mesh.warnings {
+        eprintln!("warning: {w}");
+    }
+    Ok(mesh)
+}
+
 /// Ambient term of mesh scenes unless the user gives one.
 const MESH_AMBIENT: f32 = 0.15;
 
@@ -110,10 +119,7 @@ fn load(args: &SceneArgs) -> anyhow::Result<(raylab::Scene, raylab::controls::Vi
     let (mut scene, camera_pos, base, step) = if args.scene == "cornell" {
         let (mut tris, mut rho) = cornell::triangles();
         for (i, path) in args.add.iter().enumerate() {
-            let mut mesh = raylab::obj::load_obj(path)?;
-            for w in &mesh.warnings {
-                eprintln!("warning: {w}");
-            }
+            let mut mesh = load_mesh(path)?;
             if let Some(t) = args.transform.get(i).or(args.transform.first()) {
                 t.apply(&mut mesh.triangles);
             }
@@ -141,10 +147,7 @@ fn load(args: &SceneArgs) -> anyhow::Result<(raylab::Scene, raylab::controls::Vi
                 args.scene
             );
         }
-        let mesh = raylab::obj::load_obj(std::path::Path::new(&args.scene))?;
-        for w in &mesh.warnings {
-            eprintln!("warning: {w}");
-        }
+        let mesh = load_mesh(std::path::Path::new(&args.scene))?;
         let ambient = args.ambient.unwrap_or(MESH_AMBIENT);
         let (mut scene, framing) = raylab::framing::mesh_scene(mesh, ambient)
             .map_err(|e| anyhow::anyhow!("{}: {e}", args.scene))?;
