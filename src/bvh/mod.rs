@@ -1,71 +1,59 @@
-//! A four-wide bounding volume hierarchy over triangles.
+//! An eight-wide bounding volume hierarchy over triangles.
 //!
 //! Built as a binary binned-SAH tree ([`build`]), then collapsed so that every node
-//! holds up to four children whose boxes are tested together, with leaves of one or
-//! two packets of four triangles in structure-of-arrays layout ([`packet`]).
-//! Closest-hit traversal visits children nearest first and skips any whose box
-//! starts beyond the closest hit so far; any-hit traversal stops at the first hit.
+//! holds up to eight children whose boxes are tested together ([`node`]: AVX2 where
+//! the CPU has it), with leaves of one or two packets of four triangles in
+//! structure-of-arrays layout ([`packet`]). Closest-hit traversal visits children
+//! nearest first and skips any whose box starts beyond the closest hit so far;
+//! any-hit traversal stops at the first hit.
 
 mod build;
+mod node;
 mod packet;
 mod ray4;
 
 use std::mem::MaybeUninit;
 
-use glam::{Vec3A, Vec4};
-
-use crate::ray::{Hit, Ray, gamma};
+use crate::ray::{Hit, Ray};
 use crate::triangle::Triangle;
 use build::{BinNode, build_binary};
+use node::{BoxQuery, ChildRef, Isa, LEAF, Node, WIDTH};
 use packet::{Packet, PacketRay};
 
-/// A reference to a child: an index into `nodes`, or, with [`LEAF`] set, the first
-/// packet (bits 4..31) and packet count (bits 0..4) of a leaf.
-type ChildRef = u32;
-const LEAF: u32 = 1 << 31;
-/// An unused child slot (never a valid leaf: leaves start below packet 2^27).
-const EMPTY: ChildRef = u32::MAX;
-
-/// Four children's boxes, by coordinate: `bounds[0..3]` are the minima in x, y, z
-/// and `bounds[3..6]` the maxima, one lane per child. Empty lanes have min = +inf
-/// and max = -inf, which no ray can hit.
-#[derive(Clone, Copy, Debug)]
-#[repr(C, align(64))]
-struct Node4 {
-    bounds: [Vec4; 6],
-    children: [ChildRef; 4],
-}
-
 /// Traversal stack size: SAH depth plus median splits of up to 2^32 triangles,
-/// three entries per level of a four-wide node.
-const STACK_SIZE: usize = 3 * (build::MAX_SAH_DEPTH + 32);
+/// at most `WIDTH - 1` entries per level.
+const STACK_SIZE: usize = (WIDTH - 1) * (build::MAX_SAH_DEPTH + 32);
 
 /// The hierarchy, owning a copy of the triangles in leaf order.
 #[derive(Clone, Debug)]
 pub struct Bvh {
-    nodes: Vec<Node4>,
+    nodes: Vec<Node>,
     packets: Vec<Packet>,
     root: Option<ChildRef>,
     triangles: usize,
+    isa: Isa,
 }
 
 impl Bvh {
     /// Builds the tree. Triangles with zero area or non-finite vertices can never be
     /// hit and are left out; hits report indices into `triangles`.
     pub fn build(triangles: &[Triangle]) -> Self {
+        let isa = Isa::detect();
         let Some((root, prims)) = build_binary(triangles) else {
             return Bvh {
                 nodes: Vec::new(),
                 packets: Vec::new(),
                 root: None,
                 triangles: 0,
+                isa,
             };
         };
         let mut bvh = Bvh {
-            nodes: Vec::with_capacity(prims.len() / 6 + 1),
+            nodes: Vec::with_capacity(prims.len() / 12 + 1),
             packets: Vec::with_capacity(prims.len() / 3 + 1),
             root: None,
             triangles: prims.len(),
+            isa,
         };
         let order: Vec<(Triangle, u32)> = prims
             .iter()
@@ -76,7 +64,7 @@ impl Bvh {
     }
 
     /// Turns a binary node into a child reference, pulling up grandchildren
-    /// (largest box first) until a node has four children.
+    /// (largest box first) until a node has `WIDTH` children.
     fn collapse(&mut self, node: &BinNode, order: &[(Triangle, u32)]) -> ChildRef {
         match node {
             BinNode::Leaf { first, count, .. } => {
@@ -89,10 +77,10 @@ impl Bvh {
                 LEAF | start << 4 | n
             }
             BinNode::Inner { children, .. } => {
-                let mut kids: [&BinNode; 4] =
-                    [&children[0], &children[1], &children[0], &children[0]];
+                let mut kids: [&BinNode; WIDTH] = [&children[0]; WIDTH];
+                kids[1] = &children[1];
                 let mut n = 2;
-                while n < 4 {
+                while n < WIDTH {
                     // The inner child with the largest box gives up its children.
                     let widest = (0..n)
                         .filter(|&i| matches!(kids[i], BinNode::Inner { .. }))
@@ -111,17 +99,7 @@ impl Bvh {
                     n += 1;
                 }
                 let slot = self.nodes.len();
-                self.nodes.push(Node4 {
-                    bounds: [
-                        Vec4::INFINITY,
-                        Vec4::INFINITY,
-                        Vec4::INFINITY,
-                        Vec4::NEG_INFINITY,
-                        Vec4::NEG_INFINITY,
-                        Vec4::NEG_INFINITY,
-                    ],
-                    children: [EMPTY; 4],
-                });
+                self.nodes.push(Node::EMPTY);
                 for (lane, kid) in kids[..n].iter().enumerate() {
                     let b = *kid.bounds();
                     let child = self.collapse(kid, order);
@@ -139,19 +117,55 @@ impl Bvh {
 
     /// The closest hit with `t` in `(0, t_max]`.
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
+        match self.isa {
+            // SAFETY: `Isa::Avx2` is only chosen when the CPU has AVX2.
+            #[cfg(target_arch = "x86_64")]
+            Isa::Avx2 => unsafe { self.intersect_avx2(ray, t_max) },
+            Isa::Portable => self.intersect_with(Isa::Portable, ray, t_max),
+        }
+    }
+
+    /// Whether anything is hit with `t` in `(0, t_max]`; stops at the first hit found.
+    pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
+        match self.isa {
+            // SAFETY: as above.
+            #[cfg(target_arch = "x86_64")]
+            Isa::Avx2 => unsafe { self.occluded_avx2(ray, t_max) },
+            Isa::Portable => self.occluded_with(Isa::Portable, ray, t_max),
+        }
+    }
+
+    /// The whole traversal compiled for AVX2, so that the box and triangle tests
+    /// inline with VEX encodings.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn intersect_avx2(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
+        self.intersect_with(Isa::Avx2, ray, t_max)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn occluded_avx2(&self, ray: &Ray, t_max: f32) -> bool {
+        self.occluded_with(Isa::Avx2, ray, t_max)
+    }
+
+    #[inline(always)]
+    fn intersect_with(&self, isa: Isa, ray: &Ray, t_max: f32) -> Option<Hit> {
         let root = self.root?;
         if !is_finite_ray(ray) {
             return None;
         }
-        let q = Query::new(ray);
+        let boxes = BoxQuery::new(ray.origin, ray.dir);
+        let tri_ray = PacketRay::new(ray.origin, ray.dir);
         let mut best: Option<Hit> = None;
         let mut t_max = t_max;
         let mut stack = Stack::<(ChildRef, f32)>::new();
+        let mut t_near = [0.0f32; WIDTH];
         let mut cur = root;
         loop {
             if cur & LEAF != 0 {
                 for p in self.leaf(cur) {
-                    if let Some((lane, h)) = packet::intersect(&q.packet, p, t_max) {
+                    if let Some((lane, h)) = packet::intersect(&tri_ray, p, t_max) {
                         t_max = h.t;
                         best = Some(Hit {
                             t: h.t,
@@ -163,19 +177,40 @@ impl Bvh {
                 }
             } else {
                 let node = &self.nodes[cur as usize];
-                let (t_near, mut mask) = q.hit_boxes(node, t_max);
+                let mut mask = boxes.hit(isa, node, t_max, &mut t_near);
                 if mask != 0 {
-                    // Continue with the nearest child; push the others (the pop
-                    // skips any that start beyond the closest hit by then).
-                    let nearest = (t_near.cmpeq(Vec4::splat(t_near.min_element())).bitmask() & mask)
-                        .trailing_zeros() as usize;
-                    mask &= !(1 << nearest);
+                    let first = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    if mask == 0 {
+                        cur = node.children[first];
+                        continue;
+                    }
+                    let second = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    if mask == 0 {
+                        // Two boxes hit, the most common case: no sort.
+                        let (near, far) = if t_near[second] < t_near[first] {
+                            (second, first)
+                        } else {
+                            (first, second)
+                        };
+                        stack.push((node.children[far], t_near[far]));
+                        cur = node.children[near];
+                        continue;
+                    }
+                    // Several boxes hit: push them all, order them far to near and
+                    // continue with the nearest (the pops skip any that start
+                    // beyond the closest hit by then).
+                    let base = stack.len;
+                    stack.push((node.children[first], t_near[first]));
+                    stack.push((node.children[second], t_near[second]));
                     while mask != 0 {
                         let lane = mask.trailing_zeros() as usize;
                         mask &= mask - 1;
                         stack.push((node.children[lane], t_near[lane]));
                     }
-                    cur = node.children[nearest];
+                    stack.sort_far_to_near(base);
+                    cur = stack.pop().map_or(root, |(r, _)| r);
                     continue;
                 }
             }
@@ -192,29 +227,31 @@ impl Bvh {
         }
     }
 
-    /// Whether anything is hit with `t` in `(0, t_max]`; stops at the first hit found.
-    pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
+    #[inline(always)]
+    fn occluded_with(&self, isa: Isa, ray: &Ray, t_max: f32) -> bool {
         let Some(root) = self.root else {
             return false;
         };
         if !is_finite_ray(ray) {
             return false;
         }
-        let q = Query::new(ray);
+        let boxes = BoxQuery::new(ray.origin, ray.dir);
+        let tri_ray = PacketRay::new(ray.origin, ray.dir);
         let mut stack = Stack::<ChildRef>::new();
+        let mut t_near = [0.0f32; WIDTH];
         let mut cur = root;
         loop {
             if cur & LEAF != 0 {
                 if self
                     .leaf(cur)
                     .iter()
-                    .any(|p| packet::occluded(&q.packet, p, t_max))
+                    .any(|p| packet::occluded(&tri_ray, p, t_max))
                 {
                     return true;
                 }
             } else {
                 let node = &self.nodes[cur as usize];
-                let (_, mut mask) = q.hit_boxes(node, t_max);
+                let mut mask = boxes.hit(isa, node, t_max, &mut t_near);
                 while mask != 0 {
                     let lane = mask.trailing_zeros() as usize;
                     mask &= mask - 1;
@@ -234,7 +271,7 @@ impl Bvh {
         &self.packets[start..start + (r & 15) as usize]
     }
 
-    /// Number of four-wide nodes.
+    /// Number of eight-wide nodes.
     pub fn node_count(&self) -> usize {
         self.nodes.len()
     }
@@ -246,7 +283,7 @@ impl Bvh {
 
     /// Bytes used by nodes and triangle packets.
     pub fn memory_bytes(&self) -> usize {
-        self.nodes.len() * std::mem::size_of::<Node4>()
+        self.nodes.len() * std::mem::size_of::<Node>()
             + self.packets.len() * std::mem::size_of::<Packet>()
     }
 }
@@ -285,6 +322,24 @@ impl<T: Copy> Stack<T> {
     }
 }
 
+impl Stack<(ChildRef, f32)> {
+    /// Sorts the entries from `base` up by entry distance, farthest at the bottom,
+    /// so that the nearest pops first (insertion sort: at most eight entries).
+    #[inline(always)]
+    fn sort_far_to_near(&mut self, base: usize) {
+        for i in base + 1..self.len {
+            // SAFETY: every slot below `len` was written by `push`.
+            let item = unsafe { self.items[i].assume_init() };
+            let mut j = i;
+            while j > base && unsafe { self.items[j - 1].assume_init().1 } < item.1 {
+                self.items[j] = self.items[j - 1];
+                j -= 1;
+            }
+            self.items[j] = MaybeUninit::new(item);
+        }
+    }
+}
+
 /// The closest hit by testing every triangle: the reference the BVH is tested
 /// against (and a way to check a suspicious hit by hand). Same answers as
 /// [`Bvh::intersect`] except which triangle is reported at an exact tie.
@@ -305,69 +360,15 @@ pub fn brute_force(triangles: &[Triangle], ray: &Ray, t_max: f32) -> Option<Hit>
     best
 }
 
-/// `1 / dir` with every zero component first made the smallest normal number of
-/// the same sign, so that the inverse is finite and a slab test never computes
-/// 0 · inf = NaN.
-#[inline(always)]
-fn safe_inverse(dir: Vec3A) -> Vec3A {
-    let tiny = Vec3A::splat(f32::MIN_POSITIVE);
-    Vec3A::select(dir.abs().cmplt(tiny), tiny.copysign(dir), dir).recip()
-}
-
 fn is_finite_ray(ray: &Ray) -> bool {
     ray.origin.is_finite() && ray.dir.is_finite()
-}
-
-/// Per-ray constants of traversal.
-struct Query {
-    origin: [Vec4; 3],
-    inv_dir: [Vec4; 3],
-    /// Index into `Node4::bounds` of the near and far plane, per axis.
-    near: [usize; 3],
-    far: [usize; 3],
-    packet: PacketRay,
-}
-
-impl Query {
-    #[inline(always)]
-    fn new(ray: &Ray) -> Self {
-        // The sign comes from the inverse so that -0.0 counts as negative.
-        let inv = safe_inverse(ray.dir);
-        let neg = inv.cmplt(Vec3A::ZERO).bitmask();
-        let (o, i) = (ray.origin.to_array(), inv.to_array());
-        let plane = |a: usize, flip: u32| a + 3 * ((neg >> a & 1) ^ flip) as usize;
-        Self {
-            origin: o.map(Vec4::splat),
-            inv_dir: i.map(Vec4::splat),
-            near: [plane(0, 0), plane(1, 0), plane(2, 0)],
-            far: [plane(0, 1), plane(1, 1), plane(2, 1)],
-            packet: PacketRay::new(ray.origin, ray.dir),
-        }
-    }
-
-    /// Slab test of the four boxes: entry distances (infinite for a miss) and a bit
-    /// mask of the boxes hit within `[0, t_max]`. The exit distance is enlarged by `1 + 2γ(3)` so that
-    /// rounding never culls a box the ray grazes (Ize 2013).
-    #[inline]
-    fn hit_boxes(&self, node: &Node4, t_max: f32) -> (Vec4, u32) {
-        let slab = |plane: usize, a: usize| (node.bounds[plane] - self.origin[a]) * self.inv_dir[a];
-        let t0 = slab(self.near[0], 0)
-            .max(slab(self.near[1], 1))
-            .max(slab(self.near[2], 2))
-            .max(Vec4::ZERO);
-        let t1 = slab(self.far[0], 0)
-            .min(slab(self.far[1], 1))
-            .min(slab(self.far[2], 2))
-            * (1.0 + 2.0 * gamma(3));
-        let hit = t0.cmple(t1.min(Vec4::splat(t_max)));
-        (Vec4::select(hit, t0, Vec4::INFINITY), hit.bitmask())
-    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::sampler::Rng;
+    use glam::Vec3A;
 
     fn random_triangles(rng: &mut Rng, n: usize) -> Vec<Triangle> {
         let mut p = || Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 2.0 - 1.0;

@@ -163,7 +163,7 @@ pub(super) fn candidates(
 }
 
 /// The closest hit among the four triangles: `(lane, hit)`.
-#[inline]
+#[inline(always)]
 pub fn intersect(r: &PacketRay, p: &Packet, t_max: f32) -> Option<(usize, TriangleHit)> {
     let Ok(c) = candidates(&p.v, r.k, &r.origin, &r.shear, Vec4::splat(t_max)) else {
         return scalar_closest(r, p, t_max);
@@ -187,7 +187,7 @@ pub fn intersect(r: &PacketRay, p: &Packet, t_max: f32) -> Option<(usize, Triang
 }
 
 /// Whether any of the four triangles is hit within `(0, t_max]`.
-#[inline]
+#[inline(always)]
 pub fn occluded(r: &PacketRay, p: &Packet, t_max: f32) -> bool {
     match candidates(&p.v, r.k, &r.origin, &r.shear, Vec4::splat(t_max)) {
         Ok(c) => c.valid.any(),

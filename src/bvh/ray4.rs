@@ -9,8 +9,9 @@
 
 use glam::{BVec4A, Vec4};
 
+use super::node::{ChildRef, EMPTY, LEAF, WIDTH, safe_inverse};
 use super::packet::{Packet, candidates};
-use super::{Bvh, ChildRef, EMPTY, LEAF, Stack, safe_inverse};
+use super::{Bvh, Stack};
 use crate::ray::{Hit, Ray, gamma};
 use crate::triangle::{self, RayShear, axis_order};
 
@@ -63,7 +64,7 @@ impl<'a> Query4<'a> {
     /// Slab test of child `c` of `node` for the four rays: entry distances and the
     /// lanes that hit within `[0, t_max]`.
     #[inline(always)]
-    fn hit_box(&self, bounds: &[Vec4; 6], c: usize, t_max: Vec4) -> (Vec4, BVec4A) {
+    fn hit_box(&self, bounds: &[[f32; WIDTH]; 6], c: usize, t_max: Vec4) -> (Vec4, BVec4A) {
         let slab = |a: usize| {
             let t0 = (Vec4::splat(bounds[a][c]) - self.origin[a]) * self.inv_dir[a];
             let t1 = (Vec4::splat(bounds[a + 3][c]) - self.origin[a]) * self.inv_dir[a];
