@@ -4,12 +4,14 @@
 //! once; large nodes bin in parallel, and the two halves of every split larger
 //! than [`PARALLEL_MIN`] are built in parallel (rayon's `join`).
 
-use glam::Vec3A;
+use glam::Vec4;
 use rayon::prelude::*;
 
 use crate::triangle::Triangle;
 
 const BINS: usize = 12;
+/// Triangles per leaf packet.
+const PACKET: usize = 4;
 /// Largest leaf, in triangles: two four-wide packets.
 pub(super) const MAX_LEAF: usize = 8;
 /// Cost of visiting a node relative to testing one packet of four triangles.
@@ -21,39 +23,40 @@ const PARALLEL_MIN: usize = 4096;
 /// Nodes at least this big are binned in parallel.
 const PARALLEL_BINNING_MIN: usize = 65_536;
 
-/// An axis-aligned box.
+/// An axis-aligned box in the first three lanes of two `Vec4`s (the fourth lane is
+/// carried along unused: it holds a triangle's index in a [`BuildPrim`]).
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Aabb {
-    pub(super) min: Vec3A,
-    pub(super) max: Vec3A,
+    pub(super) min: Vec4,
+    pub(super) max: Vec4,
 }
 
 impl Aabb {
     pub(super) const EMPTY: Aabb = Aabb {
-        min: Vec3A::splat(f32::INFINITY),
-        max: Vec3A::splat(f32::NEG_INFINITY),
+        min: Vec4::splat(f32::INFINITY),
+        max: Vec4::splat(f32::NEG_INFINITY),
     };
 
-    #[inline]
+    #[inline(always)]
     fn grow(&mut self, o: &Aabb) {
         self.min = self.min.min(o.min);
         self.max = self.max.max(o.max);
     }
 
-    #[inline]
+    #[inline(always)]
     fn union(mut self, o: &Aabb) -> Aabb {
         self.grow(o);
         self
     }
 
-    #[inline]
-    fn grow_point(&mut self, p: Vec3A) {
+    #[inline(always)]
+    fn grow_point(&mut self, p: Vec4) {
         self.min = self.min.min(p);
         self.max = self.max.max(p);
     }
 
     pub(super) fn half_area(&self) -> f32 {
-        let d = (self.max - self.min).max(Vec3A::ZERO);
+        let d = (self.max - self.min).max(Vec4::ZERO);
         d.x * d.y + d.y * d.z + d.z * d.x
     }
 }
@@ -80,35 +83,56 @@ impl BinNode {
     }
 }
 
-/// A triangle's box and its index in the scene.
+/// A triangle's box, 32 bytes: its scene index rides in the fourth lane of `min`
+/// (as bits; indices below 2^27 are tiny positive floats, never NaN, so the
+/// min/max of bin boxes leave them harmless).
 #[derive(Clone, Copy)]
 pub(super) struct BuildPrim {
     bounds: Aabb,
-    pub(super) id: u32,
 }
 
 impl BuildPrim {
-    #[inline]
-    fn centroid(&self) -> Vec3A {
-        (self.bounds.min + self.bounds.max) * 0.5
+    fn new(t: &Triangle, id: u32) -> Self {
+        let (lo, hi) = (t.min(), t.max());
+        BuildPrim {
+            bounds: Aabb {
+                min: lo.extend(f32::from_bits(id)),
+                max: hi.extend(0.0),
+            },
+        }
+    }
+
+    /// The triangle's index in the scene.
+    pub(super) fn id(&self) -> u32 {
+        self.bounds.min.w.to_bits()
+    }
+
+    /// Twice the centroid (the halving is folded into the bin scale).
+    #[inline(always)]
+    fn centroid2(&self) -> Vec4 {
+        self.bounds.min + self.bounds.max
     }
 }
 
 /// A binary tree over the triangles that can be hit (finite, non-zero area), and
 /// those triangles in leaf order; `None` when there are none.
 pub(super) fn build_binary(triangles: &[Triangle]) -> Option<(BinNode, Vec<BuildPrim>)> {
-    let mut prims: Vec<BuildPrim> = triangles
+    assert!(
+        triangles.len() < 1 << 27,
+        "too many triangles for the BVH (at most 2^27)"
+    );
+    // Mapped in parallel into place, then the few that cannot be hit are dropped
+    // (a parallel filter would gather pieces and copy them together).
+    let mut prims: Vec<BuildPrim> = Vec::new();
+    triangles
         .par_iter()
         .enumerate()
-        .filter(|(_, t)| t.is_finite() && t.area() > 0.0)
-        .map(|(i, t)| BuildPrim {
-            bounds: Aabb {
-                min: t.min(),
-                max: t.max(),
-            },
-            id: i as u32,
-        })
-        .collect();
+        .map(|(i, t)| BuildPrim::new(t, i as u32))
+        .collect_into_vec(&mut prims);
+    prims.retain(|p| {
+        let t = &triangles[p.id() as usize];
+        t.is_finite() && t.area() > 0.0
+    });
     if prims.is_empty() {
         return None;
     }
@@ -117,13 +141,13 @@ pub(super) fn build_binary(triangles: &[Triangle]) -> Option<(BinNode, Vec<Build
     Some((root, prims))
 }
 
-/// Box of the triangles and box of their centroids.
+/// Box of the triangles and box of their (doubled) centroids.
 fn bounds_of(prims: &[BuildPrim]) -> (Aabb, Aabb) {
     let one = |prims: &[BuildPrim]| {
         let (mut b, mut c) = (Aabb::EMPTY, Aabb::EMPTY);
         for p in prims {
             b.grow(&p.bounds);
-            c.grow_point(p.centroid());
+            c.grow_point(p.centroid2());
         }
         (b, c)
     };
@@ -150,7 +174,9 @@ fn build_range(
         first,
         count: prims.len(),
     };
-    if prims.len() == 1 {
+    // One packet tests up to four triangles at the price of one: no split of so
+    // few can beat that leaf.
+    if prims.len() <= PACKET {
         return leaf();
     }
     let split = if depth < MAX_SAH_DEPTH {
@@ -160,8 +186,8 @@ fn build_range(
     };
     let (mid, boxes) = match split {
         Some((axis, bin)) => {
-            let (lo, scale) = bin_scale(&cbounds, axis);
-            partition(prims, |p| bin_of(p.centroid()[axis], lo, scale) <= bin)
+            let grid = BinGrid::new(&cbounds);
+            partition(prims, |p| grid.bins_of(p)[axis] <= bin as u32)
         }
         None if prims.len() <= MAX_LEAF => return leaf(),
         None => {
@@ -170,7 +196,7 @@ fn build_range(
             let axis = (bounds.max - bounds.min).max_position();
             let mid = prims.len() / 2;
             prims.select_nth_unstable_by(mid, |a, b| {
-                a.centroid()[axis].total_cmp(&b.centroid()[axis])
+                a.centroid2()[axis].total_cmp(&b.centroid2()[axis])
             });
             let (l, r) = prims.split_at(mid);
             (mid, [bounds_of(l), bounds_of(r)])
@@ -201,32 +227,88 @@ fn leaf_cost(n: u32) -> f32 {
     n.div_ceil(4) as f32
 }
 
-/// Where the centroid bins of `axis` start and how many bins a unit spans.
-fn bin_scale(cbounds: &Aabb, axis: usize) -> (f32, f32) {
-    let lo = cbounds.min[axis];
-    let extent = cbounds.max[axis] - lo;
-    (lo, BINS as f32 / extent)
+/// The mapping of (doubled) centroids to bins on all three axes at once.
+struct BinGrid {
+    lo: Vec4,
+    scale: Vec4,
 }
 
-#[inline]
-fn bin_of(c: f32, lo: f32, scale: f32) -> usize {
-    (((c - lo) * scale) as usize).min(BINS - 1)
+impl BinGrid {
+    fn new(cbounds: &Aabb) -> Self {
+        // A flat axis gets scale inf or NaN; its indices are clamped into range all
+        // the same, and no split is ever chosen on it.
+        BinGrid {
+            lo: cbounds.min,
+            scale: Vec4::splat(BINS as f32) / (cbounds.max - cbounds.min),
+        }
+    }
+
+    /// Bin indices on x, y, z (and an unused fourth lane), each in `0..BINS`.
+    #[inline(always)]
+    fn bins_of(&self, p: &BuildPrim) -> [u32; 4] {
+        // `min` and `max` return their second operand for NaN: the result is in range.
+        let f = ((p.centroid2() - self.lo) * self.scale)
+            .min(Vec4::splat((BINS - 1) as f32))
+            .max(Vec4::ZERO);
+        truncate(f)
+    }
+}
+
+/// Lane-wise truncation of floats known to lie in `[0, BINS)`.
+#[inline(always)]
+fn truncate(f: Vec4) -> [u32; 4] {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{__m128, __m128i, _mm_cvttps_epi32};
+        // SAFETY: SSE2 is part of x86-64; both types are 16 bytes of plain integers.
+        unsafe {
+            let i: __m128i = _mm_cvttps_epi32(__m128::from(f));
+            std::mem::transmute::<__m128i, [u32; 4]>(i)
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        f.to_array().map(|x| x as u32)
+    }
 }
 
 /// Triangle boxes and counts per bin, for the three axes.
 #[derive(Clone, Copy)]
-struct Bins([[(Aabb, u32); BINS]; 3]);
+struct Bins {
+    boxes: [[Aabb; BIN_SLOTS]; 3],
+    counts: [[u32; BIN_SLOTS]; 3],
+}
+
+/// Bins allocated per axis: a power of two at least [`BINS`].
+const BIN_SLOTS: usize = BINS.next_power_of_two();
 
 impl Bins {
     fn empty() -> Self {
-        Bins([[(Aabb::EMPTY, 0); BINS]; 3])
+        Bins {
+            boxes: [[Aabb::EMPTY; BIN_SLOTS]; 3],
+            counts: [[0; BIN_SLOTS]; 3],
+        }
+    }
+
+    /// Adds `prims` to the bins (in place: a `Bins` is 1.3 KB, and moving it
+    /// around cost more than filling it for small nodes).
+    fn fill(&mut self, grid: &BinGrid, prims: &[BuildPrim]) {
+        for p in prims {
+            let index = grid.bins_of(p);
+            for (axis, &i) in index[..3].iter().enumerate() {
+                // The mask lets the compiler drop the bounds check (indices < BINS).
+                let i = i as usize & (BIN_SLOTS - 1);
+                self.boxes[axis][i].grow(&p.bounds);
+                self.counts[axis][i] += 1;
+            }
+        }
     }
 
     fn merge(mut self, o: &Bins) -> Self {
-        for (a, b) in self.0.iter_mut().zip(&o.0) {
-            for (x, y) in a.iter_mut().zip(b) {
-                x.0.grow(&y.0);
-                x.1 += y.1;
+        for axis in 0..3 {
+            for i in 0..BINS {
+                self.boxes[axis][i].grow(&o.boxes[axis][i]);
+                self.counts[axis][i] += o.counts[axis][i];
             }
         }
         self
@@ -236,62 +318,51 @@ impl Bins {
 /// The SAH-best split as `(axis, last bin of the left side)`, or `None` when a leaf is
 /// cheaper (and small enough) or all centroids coincide.
 fn best_split(prims: &[BuildPrim], cbounds: &Aabb, bounds: &Aabb) -> Option<(usize, usize)> {
-    // Bin indices on all three axes at once (a flat axis gets scale inf or NaN and
-    // is skipped below; its indices are clamped into range all the same).
-    let lo = cbounds.min;
-    let scale = Vec3A::splat(BINS as f32) / (cbounds.max - cbounds.min);
-    let last = Vec3A::splat((BINS - 1) as f32);
-    let fill = |prims: &[BuildPrim]| {
-        let mut bins = Bins::empty();
-        for p in prims {
-            let index = ((p.centroid() - lo) * scale)
-                .min(last)
-                .max(Vec3A::ZERO)
-                .to_array();
-            for (axis, &i) in index.iter().enumerate() {
-                let b = &mut bins.0[axis][i as usize];
-                b.0.grow(&p.bounds);
-                b.1 += 1;
-            }
-        }
-        bins
-    };
+    let grid = BinGrid::new(cbounds);
     let bins = if prims.len() < PARALLEL_BINNING_MIN {
-        fill(prims)
+        let mut bins = Bins::empty();
+        bins.fill(&grid, prims);
+        bins
     } else {
         prims
             .par_chunks(8192)
-            .map(fill)
+            .map(|chunk| {
+                let mut bins = Bins::empty();
+                bins.fill(&grid, chunk);
+                bins
+            })
             .reduce(Bins::empty, |a, b| a.merge(&b))
     };
     let mut best: Option<(usize, usize)> = None;
+    // Costs are compared multiplied by the parent's area (no division per bin).
+    let parent_area = bounds.half_area();
     let mut best_cost = if prims.len() <= MAX_LEAF {
-        leaf_cost(prims.len() as u32)
+        leaf_cost(prims.len() as u32) * parent_area
     } else {
         f32::INFINITY
     };
-    let parent_area = bounds.half_area();
-    for (axis, bins) in bins.0.iter().enumerate() {
+    let split_cost = TRAVERSAL_COST * parent_area;
+    for axis in 0..3 {
         if cbounds.max[axis] - cbounds.min[axis] <= 0.0 {
             continue;
         }
+        let (boxes, counts) = (&bins.boxes[axis][..BINS], &bins.counts[axis][..BINS]);
         // Sweep from the right for every right side's cost, then from the left.
         let mut right_cost = [0.0f32; BINS];
         let (mut acc, mut count) = (Aabb::EMPTY, 0);
         for i in (1..BINS).rev() {
-            acc.grow(&bins[i].0);
-            count += bins[i].1;
+            acc.grow(&boxes[i]);
+            count += counts[i];
             right_cost[i] = acc.half_area() * leaf_cost(count);
         }
         let (mut acc, mut count) = (Aabb::EMPTY, 0);
         for i in 0..BINS - 1 {
-            acc.grow(&bins[i].0);
-            count += bins[i].1;
+            acc.grow(&boxes[i]);
+            count += counts[i];
             if count == 0 || count as usize == prims.len() {
                 continue;
             }
-            let cost = TRAVERSAL_COST
-                + (acc.half_area() * leaf_cost(count) + right_cost[i + 1]) / parent_area;
+            let cost = split_cost + acc.half_area() * leaf_cost(count) + right_cost[i + 1];
             if cost < best_cost {
                 best_cost = cost;
                 best = Some((axis, i));
@@ -301,25 +372,35 @@ fn best_split(prims: &[BuildPrim], cbounds: &Aabb, bounds: &Aabb) -> Option<(usi
     best
 }
 
-/// Moves the triangles for which `left` holds to the front; returns how many
-/// there are, and the triangle and centroid boxes of both sides.
+/// Moves the triangles for which `left` holds to the front, swapping only the
+/// misplaced pairs (Hoare); returns how many there are, and the triangle and
+/// centroid boxes of both sides.
 fn partition(
     prims: &mut [BuildPrim],
     left: impl Fn(&BuildPrim) -> bool,
 ) -> (usize, [(Aabb, Aabb); 2]) {
     let mut boxes = [(Aabb::EMPTY, Aabb::EMPTY); 2];
-    let mut mid = 0;
-    for i in 0..prims.len() {
-        let p = prims[i];
-        let side = if left(&p) {
-            prims.swap(i, mid);
-            mid += 1;
-            0
-        } else {
-            1
-        };
-        boxes[side].0.grow(&p.bounds);
-        boxes[side].1.grow_point(p.centroid());
+    let add = |side: &mut (Aabb, Aabb), p: &BuildPrim| {
+        side.0.grow(&p.bounds);
+        side.1.grow_point(p.centroid2());
+    };
+    let (mut i, mut j) = (0, prims.len());
+    loop {
+        while i < j && left(&prims[i]) {
+            add(&mut boxes[0], &prims[i]);
+            i += 1;
+        }
+        while i < j && !left(&prims[j - 1]) {
+            add(&mut boxes[1], &prims[j - 1]);
+            j -= 1;
+        }
+        if i == j {
+            return (i, boxes);
+        }
+        prims.swap(i, j - 1);
+        add(&mut boxes[0], &prims[i]);
+        add(&mut boxes[1], &prims[j - 1]);
+        i += 1;
+        j -= 1;
     }
-    (mid, boxes)
 }

@@ -19,6 +19,7 @@ use crate::triangle::Triangle;
 use build::{BinNode, build_binary};
 use node::{BoxQuery, ChildRef, Isa, LEAF, Node, WIDTH};
 use packet::{Packet, PacketRay};
+use rayon::prelude::*;
 
 /// Traversal stack size: SAH depth plus median splits of up to 2^32 triangles,
 /// at most `WIDTH - 1` entries per level.
@@ -48,70 +49,30 @@ impl Bvh {
                 isa,
             };
         };
-        let mut bvh = Bvh {
-            nodes: Vec::with_capacity(prims.len() / 12 + 1),
-            packets: Vec::with_capacity(prims.len() / 3 + 1),
-            root: None,
+        let mut nodes = Vec::with_capacity(prims.len() / 8 + 1);
+        let mut chunks = Vec::with_capacity(prims.len() / 3 + 1);
+        let root = collapse(&root, &mut nodes, &mut chunks);
+        // The packets, in the order the leaves took them, gathered in parallel
+        // (the triangles are read by scattered index: the slow part of a big build).
+        let mut packets = Vec::new();
+        chunks
+            .par_iter()
+            .map(|&(first, len)| {
+                let chunk = &prims[first as usize..(first + len) as usize];
+                let lane = |i: usize| {
+                    let id = chunk[i.min(chunk.len() - 1)].id();
+                    (triangles[id as usize], id)
+                };
+                let four: [(Triangle, u32); 4] = std::array::from_fn(lane);
+                Packet::new(&four[..chunk.len()])
+            })
+            .collect_into_vec(&mut packets);
+        Bvh {
+            nodes,
+            packets,
+            root: Some(root),
             triangles: prims.len(),
             isa,
-        };
-        let order: Vec<(Triangle, u32)> = prims
-            .iter()
-            .map(|p| (triangles[p.id as usize], p.id))
-            .collect();
-        bvh.root = Some(bvh.collapse(&root, &order));
-        bvh
-    }
-
-    /// Turns a binary node into a child reference, pulling up grandchildren
-    /// (largest box first) until a node has `WIDTH` children.
-    fn collapse(&mut self, node: &BinNode, order: &[(Triangle, u32)]) -> ChildRef {
-        match node {
-            BinNode::Leaf { first, count, .. } => {
-                let start = self.packets.len() as u32;
-                for chunk in order[*first..first + count].chunks(4) {
-                    self.packets.push(Packet::new(chunk));
-                }
-                let n = self.packets.len() as u32 - start;
-                assert!(start < 1 << 27, "too many triangles for the BVH");
-                LEAF | start << 4 | n
-            }
-            BinNode::Inner { children, .. } => {
-                let mut kids: [&BinNode; WIDTH] = [&children[0]; WIDTH];
-                kids[1] = &children[1];
-                let mut n = 2;
-                while n < WIDTH {
-                    // The inner child with the largest box gives up its children.
-                    let widest = (0..n)
-                        .filter(|&i| matches!(kids[i], BinNode::Inner { .. }))
-                        .max_by(|&a, &b| {
-                            kids[a]
-                                .bounds()
-                                .half_area()
-                                .total_cmp(&kids[b].bounds().half_area())
-                        });
-                    let Some(i) = widest else { break };
-                    let BinNode::Inner { children, .. } = kids[i] else {
-                        unreachable!()
-                    };
-                    kids[i] = &children[0];
-                    kids[n] = &children[1];
-                    n += 1;
-                }
-                let slot = self.nodes.len();
-                self.nodes.push(Node::EMPTY);
-                for (lane, kid) in kids[..n].iter().enumerate() {
-                    let b = *kid.bounds();
-                    let child = self.collapse(kid, order);
-                    let node = &mut self.nodes[slot];
-                    for axis in 0..3 {
-                        node.bounds[axis][lane] = b.min[axis];
-                        node.bounds[axis + 3][lane] = b.max[axis];
-                    }
-                    node.children[lane] = child;
-                }
-                slot as u32
-            }
         }
     }
 
@@ -285,6 +246,58 @@ impl Bvh {
     pub fn memory_bytes(&self) -> usize {
         self.nodes.len() * std::mem::size_of::<Node>()
             + self.packets.len() * std::mem::size_of::<Packet>()
+    }
+}
+
+/// Turns a binary node into a child reference, pulling up grandchildren
+/// (largest box first) until a node has `WIDTH` children.
+fn collapse(node: &BinNode, nodes: &mut Vec<Node>, chunks: &mut Vec<(u32, u32)>) -> ChildRef {
+    match node {
+        BinNode::Leaf { first, count, .. } => {
+            let start = chunks.len() as u32;
+            for offset in (0..*count).step_by(4) {
+                chunks.push(((first + offset) as u32, (count - offset).min(4) as u32));
+            }
+            let n = chunks.len() as u32 - start;
+            assert!(start < 1 << 27, "too many triangles for the BVH");
+            LEAF | start << 4 | n
+        }
+        BinNode::Inner { children, .. } => {
+            let mut kids: [&BinNode; WIDTH] = [&children[0]; WIDTH];
+            kids[1] = &children[1];
+            let mut n = 2;
+            while n < WIDTH {
+                // The inner child with the largest box gives up its children.
+                let widest = (0..n)
+                    .filter(|&i| matches!(kids[i], BinNode::Inner { .. }))
+                    .max_by(|&a, &b| {
+                        kids[a]
+                            .bounds()
+                            .half_area()
+                            .total_cmp(&kids[b].bounds().half_area())
+                    });
+                let Some(i) = widest else { break };
+                let BinNode::Inner { children, .. } = kids[i] else {
+                    unreachable!()
+                };
+                kids[i] = &children[0];
+                kids[n] = &children[1];
+                n += 1;
+            }
+            let slot = nodes.len();
+            nodes.push(Node::EMPTY);
+            for (lane, kid) in kids[..n].iter().enumerate() {
+                let b = *kid.bounds();
+                let child = collapse(kid, nodes, chunks);
+                let node = &mut nodes[slot];
+                for axis in 0..3 {
+                    node.bounds[axis][lane] = b.min[axis];
+                    node.bounds[axis + 3][lane] = b.max[axis];
+                }
+                node.children[lane] = child;
+            }
+            slot as u32
+        }
     }
 }
 

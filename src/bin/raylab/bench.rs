@@ -1,5 +1,6 @@
 //! `raylab bench`: ray-casting throughput on a mesh, as `key=value` lines on stdout.
 
+use std::io::Write;
 use std::time::Instant;
 
 use anyhow::{Context, anyhow};
@@ -39,6 +40,7 @@ impl Query {
 
 pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     let mesh = crate::load_mesh(&args.mesh)?;
+    let mut out = std::io::stdout().lock();
     let tris = &mesh.triangles;
 
     // Build a few times and report the median (the first build also warms up).
@@ -50,13 +52,14 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         times.push(start.elapsed().as_secs_f64() * 1e3);
     }
     times.sort_by(f64::total_cmp);
-    println!(
+    writeln!(
+        out,
         "build triangles={} build_ms={:.1} bytes_per_triangle={:.1} nodes={}",
         tris.len(),
         times[1],
         bvh.memory_bytes() as f64 / tris.len() as f64,
         bvh.node_count()
-    );
+    )?;
 
     let workloads = match &args.rays {
         Some(path) => {
@@ -140,14 +143,15 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             });
             times.sort_by(f64::total_cmp);
             let median = times[times.len() / 2];
-            println!(
+            writeln!(
+                out,
                 "workload={} threads={n} rays={} mrays_per_s={:.2} median_ms={:.1} api={}",
                 w.name,
                 w.rays.len(),
                 w.rays.len() as f64 / median / 1e6,
                 median * 1e3,
                 w.query.api()
-            );
+            )?;
         }
     }
     if let (Some(path), Some(w)) = (&args.hits, workloads.first()) {
