@@ -169,15 +169,30 @@ fn build_range(
     bounds: Aabb,
     cbounds: Aabb,
 ) -> BinNode {
+    let count = prims.len();
     let leaf = || BinNode::Leaf {
         bounds,
         first,
-        count: prims.len(),
+        count,
     };
-    // One packet tests up to four triangles at the price of one: no split of so
-    // few can beat that leaf.
+    // Up to four triangles fit one packet: binning is not worth it; try the few
+    // possible splits exactly (large triangles, as the lab box's walls, still
+    // gain from being split apart).
     if prims.len() <= PACKET {
-        return leaf();
+        return match small_split(prims, &bounds) {
+            None => leaf(),
+            Some(mid) => {
+                let (l, r) = prims.split_at_mut(mid);
+                let ((lb, lc), (rb, rc)) = (bounds_of(l), bounds_of(r));
+                BinNode::Inner {
+                    bounds,
+                    children: Box::new([
+                        build_range(l, first, depth + 1, lb, lc),
+                        build_range(r, first + mid, depth + 1, rb, rc),
+                    ]),
+                }
+            }
+        };
     }
     let split = if depth < MAX_SAH_DEPTH {
         best_split(prims, &cbounds, &bounds)
@@ -193,7 +208,7 @@ fn build_range(
         None => {
             // SAH prefers a leaf (or centroids coincide) but the leaf would be too
             // big: split in the middle of the longest axis by object count.
-            let axis = (bounds.max - bounds.min).max_position();
+            let axis = (bounds.max - bounds.min).truncate().max_position();
             let mid = prims.len() / 2;
             prims.select_nth_unstable_by(mid, |a, b| {
                 a.centroid2()[axis].total_cmp(&b.centroid2()[axis])
@@ -220,6 +235,30 @@ fn build_range(
         bounds,
         children: Box::new(children),
     }
+}
+
+/// For at most one packet of triangles: the exact SAH-best split (sorting them by
+/// centroid along the best axis and returning the left count), or `None` when one
+/// leaf is cheaper.
+fn small_split(prims: &mut [BuildPrim], bounds: &Aabb) -> Option<usize> {
+    let area = bounds.half_area();
+    // A leaf costs one packet test; a split at least a traversal step plus one
+    // packet test in each child the ray enters.
+    let mut best = (area, None);
+    for axis in 0..3 {
+        prims.sort_unstable_by(|a, b| a.centroid2()[axis].total_cmp(&b.centroid2()[axis]));
+        for mid in 1..prims.len() {
+            let (l, r) = prims.split_at(mid);
+            let cost =
+                TRAVERSAL_COST * area + bounds_of(l).0.half_area() + bounds_of(r).0.half_area();
+            if cost < best.0 {
+                best = (cost, Some((axis, mid)));
+            }
+        }
+    }
+    let (axis, mid) = best.1?;
+    prims.sort_unstable_by(|a, b| a.centroid2()[axis].total_cmp(&b.centroid2()[axis]));
+    Some(mid)
 }
 
 /// SAH cost of a leaf of `n` triangles: one test per packet of four.
