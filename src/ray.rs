@@ -96,18 +96,23 @@ impl SurfacePoint {
         )
     }
 
-    /// A ray from this point to `target` and the `t_max` that stops just short of it
-    /// (for shadow rays towards a point light).
+    /// A ray towards `target` for a shadow test, with the `t_max` that stops just
+    /// short of it. Both ends are trimmed by [`SHADOW_EPSILON`] of the distance: at
+    /// the far end a light lying on a surface is not shadowed by that surface; at
+    /// the near end, in a concave corner (a floor meeting a wall), a point computed
+    /// on one face may lie a rounding error behind the other face, which the offset
+    /// along its own normal cannot clear.
     pub fn ray_to(&self, target: Vec3A) -> (Ray, f32) {
         let origin = self.offset_origin(target - self.p);
         let to = target - origin;
         let dist = to.length();
-        (Ray::new(origin, to / dist), dist * (1.0 - SHADOW_EPSILON))
+        let dir = to / dist;
+        let skip = dist * SHADOW_EPSILON;
+        (Ray::new(origin + dir * skip, dir), dist - 2.0 * skip)
     }
 }
 
-/// Relative shortening of shadow rays so that a light lying on a surface is not
-/// shadowed by that surface.
+/// Relative trim of both ends of shadow rays (see [`SurfacePoint::ray_to`]).
 pub const SHADOW_EPSILON: f32 = 1e-4;
 
 #[cfg(test)]
