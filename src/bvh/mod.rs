@@ -40,7 +40,7 @@ impl Bvh {
     /// hit and are left out; hits report indices into `triangles`.
     pub fn build(triangles: &[Triangle]) -> Self {
         let isa = Isa::detect();
-        let Some((root, prims)) = build_binary(triangles) else {
+        let Some((binary, prims)) = build_binary(triangles) else {
             return Bvh {
                 nodes: Vec::new(),
                 packets: Vec::new(),
@@ -51,22 +51,26 @@ impl Bvh {
         };
         let mut nodes = Vec::with_capacity(prims.len() / 8 + 1);
         let mut chunks = Vec::with_capacity(prims.len() / 3 + 1);
-        let root = collapse(&root, &mut nodes, &mut chunks);
+        let root = collapse(&binary, &mut nodes, &mut chunks);
         // The packets, in the order the leaves took them, gathered in parallel
-        // (the triangles are read by scattered index: the slow part of a big build).
+        // (the triangles are read by scattered index: the slow part of a big build)
+        // while the binary tree is freed.
         let mut packets = Vec::new();
-        chunks
-            .par_iter()
-            .map(|&(first, len)| {
-                let chunk = &prims[first as usize..(first + len) as usize];
-                let lane = |i: usize| {
-                    let id = chunk[i.min(chunk.len() - 1)].id();
-                    (triangles[id as usize], id)
-                };
-                let four: [(Triangle, u32); 4] = std::array::from_fn(lane);
-                Packet::new(&four[..chunk.len()])
-            })
-            .collect_into_vec(&mut packets);
+        let gather = || {
+            chunks
+                .par_iter()
+                .map(|&(first, len)| {
+                    let chunk = &prims[first as usize..(first + len) as usize];
+                    let lane = |i: usize| {
+                        let id = chunk[i.min(chunk.len() - 1)].id();
+                        (triangles[id as usize], id)
+                    };
+                    let four: [(Triangle, u32); 4] = std::array::from_fn(lane);
+                    Packet::new(&four[..chunk.len()])
+                })
+                .collect_into_vec(&mut packets)
+        };
+        rayon::join(gather, || drop(binary));
         Bvh {
             nodes,
             packets,
