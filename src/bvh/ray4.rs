@@ -33,7 +33,11 @@ impl<'a> Query4<'a> {
     fn new(rays: &'a [Ray; 4]) -> Option<Self> {
         let k = axis_order(rays[0].dir);
         for r in rays {
-            if axis_order(r.dir) != k || !r.origin.is_finite() || !r.dir.is_finite() {
+            // Element by element: comparing the arrays whole loaded 16 bytes just
+            // written as two 8-byte stores, a store-forwarding stall per ray.
+            let kr = axis_order(r.dir);
+            let same = kr[0] == k[0] && kr[1] == k[1] && kr[2] == k[2];
+            if !same || !r.origin.is_finite() || !r.dir.is_finite() {
                 return None;
             }
         }
