@@ -201,8 +201,11 @@ fn build_range(
     };
     let (mid, boxes) = match split {
         Some((axis, bin)) => {
+            // `bins_of(p)[axis] <= bin` on one axis: the bin index truncates the
+            // same float, clamped to [0, BINS - 1], and `bin + 1 <= BINS - 1`.
             let grid = BinGrid::new(&cbounds);
-            partition(prims, |p| grid.bins_of(p)[axis] <= bin as u32)
+            let (lo, scale, limit) = (grid.lo[axis], grid.scale[axis], (bin + 1) as f32);
+            partition(prims, |p| (p.centroid2()[axis] - lo) * scale < limit)
         }
         None if prims.len() <= MAX_LEAF => return leaf(),
         None => {
