@@ -37,9 +37,32 @@ pub const AMBIENT: f32 = 0.5;
 /// The lab's camera position.
 pub const CAMERA_POSITION: Vec3A = Vec3A::new(0.0, 0.0, -3.0);
 
+/// Corners of `cornell-area`'s ceiling light, just below the ceiling, in the
+/// order that makes its lab normal point down into the box (+y).
+pub const AREA_LIGHT_CORNERS: [Vec3A; 4] = [
+    Vec3A::new(-0.24, -0.999, -0.19),
+    Vec3A::new(0.24, -0.999, -0.19),
+    Vec3A::new(0.24, -0.999, 0.19),
+    Vec3A::new(-0.24, -0.999, 0.19),
+];
+/// Radiance of `cornell-area`'s ceiling light.
+pub const AREA_LIGHT_RADIANCE: Vec3A = Vec3A::new(17.0, 12.0, 4.0);
+
 /// Triangle index ranges of the named parts, in scene order.
 pub mod parts {
     use std::ops::Range;
+    /// The floor.
+    pub const FLOOR: Range<usize> = 0..2;
+    /// The left wall (purple, at x = −1).
+    pub const LEFT_WALL: Range<usize> = 2..4;
+    /// The right wall (yellow, at x = +1).
+    pub const RIGHT_WALL: Range<usize> = 4..6;
+    /// The ceiling.
+    pub const CEILING: Range<usize> = 6..8;
+    /// The back wall.
+    pub const BACK_WALL: Range<usize> = 8..10;
+    /// `cornell-area`'s ceiling light (after the box's 30 triangles).
+    pub const AREA_LIGHT: Range<usize> = 30..32;
     /// The room: floor, walls, ceiling.
     pub const ROOM: Range<usize> = 0..10;
     /// The short (red) block.
@@ -125,14 +148,71 @@ pub fn scene() -> Scene {
     .expect("the built-in box is valid")
 }
 
+/// `cornell-area`: the lab box with the point light replaced by the classic
+/// ceiling patch ([`AREA_LIGHT_CORNERS`], triangles [`parts::AREA_LIGHT`]), which
+/// emits [`AREA_LIGHT_RADIANCE`] from its lower side only and reflects nothing.
+/// The point light is off (power 0); no ambient term.
+pub fn area_scene() -> Scene {
+    let (mut tris, mut rho) = triangles();
+    push_area_light(&mut tris, &mut rho);
+    let mut scene = Scene::new(
+        tris,
+        rho,
+        PointLight {
+            position: LIGHT_POSITION,
+            power: Vec3A::ZERO,
+        },
+        Vec3A::ZERO,
+    )
+    .expect("the built-in box is valid");
+    light_area_patch(&mut scene);
+    scene
+}
+
+/// Appends the ceiling patch's two triangles (black) to a box's triangles.
+pub fn push_area_light(tris: &mut Vec<Triangle>, rho: &mut Vec<Vec3A>) {
+    let [a, b, c, d] = AREA_LIGHT_CORNERS;
+    tris.extend([Triangle::new(a, b, c), Triangle::new(a, c, d)]);
+    rho.extend([Vec3A::ZERO; 2]);
+}
+
+/// Makes the ceiling patch pushed by [`push_area_light`] emit.
+pub fn light_area_patch(scene: &mut Scene) {
+    for prim in parts::AREA_LIGHT {
+        scene
+            .set_emission(prim, AREA_LIGHT_RADIANCE)
+            .expect("a valid radiance");
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     #[test]
+    fn the_area_light_faces_down_and_covers_the_patch() {
+        let scene = area_scene();
+        assert_eq!(scene.triangles().len(), 32);
+        let area: f32 = parts::AREA_LIGHT.map(|i| scene.triangles()[i].area()).sum();
+        assert!((area - 0.48 * 0.38).abs() < 1e-6);
+        for i in parts::AREA_LIGHT {
+            assert!((scene.normal(i as u32) - Vec3A::Y).length() < 1e-6);
+            assert_eq!(scene.emission(i as u32), AREA_LIGHT_RADIANCE);
+            assert_eq!(scene.reflectance(i as u32), Vec3A::ZERO);
+        }
+        assert!(scene.has_lights());
+        assert_eq!(scene.light.power, Vec3A::ZERO);
+    }
+
+    #[test]
     fn fills_the_unit_cube_with_outward_facing_surfaces_towards_the_camera() {
         let (tris, _) = triangles();
         assert_eq!(tris.len(), 30);
+        // The named parts cover the room in order.
+        assert_eq!(parts::FLOOR.start, parts::ROOM.start);
+        assert_eq!(parts::BACK_WALL.end, parts::ROOM.end);
+        assert!((tris[parts::CEILING.start].lab_normal() - Vec3A::Y).length() < 1e-6);
+        assert!((tris[parts::RIGHT_WALL.start].lab_normal() + Vec3A::X).length() < 1e-6);
         let (mut lo, mut hi) = (Vec3A::splat(9.0), Vec3A::splat(-9.0));
         for t in &tris {
             lo = lo.min(t.min());

@@ -23,7 +23,16 @@ fn stderr(o: &Output) -> String {
 fn bad_arguments_exit_2_with_one_line_naming_the_argument() {
     let dir = tempfile::tempdir().unwrap();
     let cases: &[(&[&str], &str)] = &[
-        (&["render", "--integrator", "path"], "--integrator"),
+        (&["render", "--integrator", "bogus"], "--integrator"),
+        (
+            &["render", "--integrator", "path", "--max-depth", "0"],
+            "--max-depth",
+        ),
+        (&["render", "--max-depth", "-1"], "--max-depth"),
+        (&["render", "--max-depth", "nan"], "--max-depth"),
+        (&["render", "--time", "0"], "--time"),
+        (&["render", "--time", "-2"], "--time"),
+        (&["render", "--exposure", "nan"], "--exposure"),
         (&["render", "--width", "0"], "--width"),
         (&["render", "--height", "-5"], "--height"),
         (&["render", "--width", "100000"], "--width"),

@@ -1,0 +1,135 @@
+//! The `path` integrator against Mitsuba 3, and the properties of its renders:
+//! determinism on any thread count, dropped non-finite samples, area lights.
+
+use std::path::Path;
+
+use glam::Vec3A;
+use raylab::cornell;
+use raylab::film::{Film, read_exr, rel_mse};
+use raylab::render::{RenderSettings, Rendered, render};
+use raylab::{Camera, Integrator, Scene};
+
+fn lab_camera(w: u32, h: u32) -> Camera {
+    Camera::lab(cornell::CAMERA_POSITION, 0.0, 0.0, w, h)
+}
+
+fn path_render(scene: &Scene, cam: &Camera, spp: u32, seed: u64, threads: usize) -> Rendered {
+    let settings = RenderSettings {
+        integrator: Integrator::path(),
+        spp,
+        seed,
+    };
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap()
+        .install(|| render(scene, cam, &settings, &|_| {}))
+}
+
+fn mean(film: &Film) -> Vec3A {
+    film.pixels
+        .iter()
+        .map(|p| p.as_dvec3())
+        .sum::<glam::DVec3>()
+        .as_vec3a()
+        / film.pixels.len() as f32
+}
+
+/// relMSE of an unbiased render falls as c/spp; c measured for this sampler on the
+/// lab box at 16 to 1024 spp (docs/path-tracing.md).
+const C_RELMSE: f64 = 0.68;
+/// The reference's own noise (its README: about 3e-5).
+const REFERENCE_NOISE: f64 = 3e-5;
+
+/// The lab box under the lab light, 256×256, against Mitsuba 3's converged
+/// `path` render (../shared/refs/cornell-path-mitsuba-256.exr, 16,384 spp). An
+/// unbiased render's relMSE is about c/spp; a bias adds to it whatever the spp. The
+/// mean colour over the image is a much finer test of bias: its noise is about
+/// 0.1 % here, while a missing bounce or a wrong factor moves it by several %.
+#[test]
+fn path_converges_to_mitsuba() {
+    let path =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/refs/cornell-path-mitsuba-256.exr");
+    let reference = read_exr(&path).unwrap_or_else(|e| {
+        panic!("{e}: the shared folder must sit beside the project (see README)")
+    });
+    let spp = 64;
+    let ours = path_render(&cornell::scene(), &lab_camera(256, 256), spp, 7, 2);
+    let e = rel_mse(&ours.film, &reference);
+    let bound = 1.5 * C_RELMSE / spp as f64 + REFERENCE_NOISE;
+    let (m, r) = (mean(&ours.film), mean(&reference));
+    eprintln!("relMSE {e:.3e} at {spp} spp (bound {bound:.3e}); mean {m} vs {r}");
+    assert_eq!(ours.dropped, 0);
+    assert!(
+        e <= bound,
+        "relMSE {e:.3e} above {bound:.3e}: biased or noisier than measured"
+    );
+    assert!(
+        e >= 0.5 * C_RELMSE / spp as f64,
+        "relMSE {e:.3e}: suspiciously low"
+    );
+    let rel = ((m - r) / r).abs().max_element();
+    assert!(
+        rel < 0.01,
+        "mean colour {m} vs Mitsuba's {r}: {:.2} % off",
+        rel * 100.0
+    );
+}
+
+#[test]
+fn same_seed_gives_identical_path_images_on_any_thread_count() {
+    let scene = cornell::scene();
+    let cam = lab_camera(48, 40);
+    let one = path_render(&scene, &cam, 3, 11, 1).film;
+    for threads in [2, 3] {
+        let other = path_render(&scene, &cam, 3, 11, threads).film;
+        assert!(
+            one.pixels
+                .iter()
+                .zip(&other.pixels)
+                .all(|(a, b)| a.to_array().map(f32::to_bits) == b.to_array().map(f32::to_bits)),
+            "{threads} threads differ from 1"
+        );
+    }
+    assert_ne!(one, path_render(&scene, &cam, 3, 12, 2).film);
+}
+
+#[test]
+fn non_finite_samples_are_dropped_and_counted() {
+    // A point light of enormous power just above the floor: the floor right under
+    // it gets infinite values (and NaN where they meet zero).
+    let mut scene = cornell::scene();
+    scene.light.position = Vec3A::new(0.0, 1.0 - 1e-4, 0.0);
+    scene.light.power = Vec3A::new(f32::MAX, 0.0, 0.0);
+    let out = path_render(&scene, &lab_camera(32, 32), 4, 0, 2);
+    assert!(out.dropped > 0, "no sample dropped");
+    assert!(out.film.pixels.iter().all(|p| p.is_finite()));
+}
+
+#[test]
+fn the_area_light_box_is_lit_and_the_patch_seen_at_its_radiance() {
+    let scene = cornell::area_scene();
+    let cam = lab_camera(64, 64);
+    let out = path_render(&scene, &cam, 8, 0, 2);
+    assert_eq!(out.dropped, 0);
+    // Looking straight up at the patch from below it: exactly its radiance.
+    let up = Camera::lab(Vec3A::new(0.0, -0.8, 0.0), 0.0, 89.0, 4, 4);
+    let seen = path_render(&scene, &up, 2, 0, 1).film;
+    for p in &seen.pixels {
+        assert!(
+            (*p - cornell::AREA_LIGHT_RADIANCE).abs().max_element() < 1e-4,
+            "{p}"
+        );
+    }
+    // The floor under the light is lit, warm like the light.
+    let floor = out.film.get(32, 60);
+    assert!(floor.x > floor.z && floor.min_element() > 0.0, "{floor}");
+    // With the light off, a path render is black.
+    let mut dark = cornell::area_scene();
+    for prim in cornell::parts::AREA_LIGHT {
+        dark.set_emission(prim, Vec3A::ZERO).unwrap();
+    }
+    assert!(!dark.has_lights());
+    let black = path_render(&dark, &cam, 2, 0, 2).film;
+    assert!(black.pixels.iter().all(|p| *p == Vec3A::ZERO));
+}
