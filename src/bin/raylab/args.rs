@@ -156,6 +156,15 @@ pub struct ViewArgs {
 }
 
 impl SceneArgs {
+    /// The `path` integrator with the options given (for the viewer's key 3).
+    pub fn integrator_for_path(&self) -> Integrator {
+        Self {
+            integrator: Integrator::path(),
+            ..self.clone()
+        }
+        .integrator()
+    }
+
     /// The integrator with its options from the other arguments.
     pub fn integrator(&self) -> Integrator {
         match self.integrator {
