@@ -27,6 +27,7 @@ pub mod cornell;
 pub mod film;
 pub mod framing;
 pub mod integrator;
+pub mod material;
 pub mod obj;
 pub mod ray;
 pub mod render;
