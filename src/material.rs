@@ -280,6 +280,12 @@ fn concentric_disk(u: Vec2) -> Vec2 {
     r * Vec2::new(c, s)
 }
 
+/// Whether `w` is strictly above the local horizon (false for NaN).
+#[inline]
+fn above(w: Vec3A) -> bool {
+    w.z > 0.0
+}
+
 /// Returns `v` if every component is finite, else zero.
 #[inline]
 fn finite_or_zero(v: Vec3A) -> Vec3A {
@@ -357,14 +363,14 @@ impl Material {
     pub fn eval(&self, wo: Vec3A, wi: Vec3A) -> Vec3A {
         match *self {
             Material::Diffuse { reflectance } => {
-                if wo.z <= 0.0 || wi.z <= 0.0 {
+                if !above(wo) || !above(wi) {
                     return Vec3A::ZERO;
                 }
                 reflectance * (FRAC_1_PI * wi.z)
             }
             Material::Mirror { .. } | Material::Dielectric { .. } => Vec3A::ZERO,
             Material::RoughConductor { alpha, eta, k } => {
-                if Self::is_smooth(alpha) || wo.z <= 0.0 || wi.z <= 0.0 {
+                if Self::is_smooth(alpha) || !above(wo) || !above(wi) {
                     return Vec3A::ZERO;
                 }
                 let h = wo + wi;
@@ -387,14 +393,14 @@ impl Material {
     pub fn pdf(&self, wo: Vec3A, wi: Vec3A) -> f32 {
         match *self {
             Material::Diffuse { .. } => {
-                if wo.z <= 0.0 || wi.z <= 0.0 {
+                if !above(wo) || !above(wi) {
                     return 0.0;
                 }
                 FRAC_1_PI * wi.z
             }
             Material::Mirror { .. } | Material::Dielectric { .. } => 0.0,
             Material::RoughConductor { alpha, .. } => {
-                if Self::is_smooth(alpha) || wo.z <= 0.0 || wi.z <= 0.0 {
+                if Self::is_smooth(alpha) || !above(wo) || !above(wi) {
                     return 0.0;
                 }
                 let h = wo + wi;
@@ -418,7 +424,7 @@ impl Material {
     pub fn sample(&self, wo: Vec3A, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
         match *self {
             Material::Diffuse { reflectance } => {
-                if wo.z <= 0.0 {
+                if !above(wo) {
                     return None;
                 }
                 let d = concentric_disk(u);
@@ -434,7 +440,7 @@ impl Material {
                 })
             }
             Material::Mirror { reflectance } => {
-                if wo.z <= 0.0 {
+                if !above(wo) {
                     return None;
                 }
                 Some(BsdfSample {
@@ -446,7 +452,7 @@ impl Material {
             }
             Material::Dielectric { ior } => Self::sample_dielectric(ior, wo, u_lobe),
             Material::RoughConductor { alpha, eta, k } => {
-                if wo.z <= 0.0 {
+                if !above(wo) {
                     return None;
                 }
                 if Self::is_smooth(alpha) {
@@ -464,7 +470,7 @@ impl Material {
                     return None;
                 }
                 let wi = (2.0 * wo_m * m - wo).normalize();
-                if wi.z.is_nan() || wi.z <= 0.0 {
+                if !above(wi) {
                     return None;
                 }
                 // The half vector exactly as pdf() and eval() recompute it, so that
@@ -574,7 +580,8 @@ mod tests {
                 normals.push(Vec3A::new(0.0, -e, s).normalize());
             }
         }
-        normals.push(Vec3A::new(0.0, 0.0, -0.0).normalize_or(Vec3A::NEG_Z));
+        // z = −0.0 picks the −z branch of the frame.
+        normals.push(Vec3A::new(1.0, 0.0, -0.0));
         let mut worst = 0.0f32;
         for n in normals {
             let f = Frame::from_normal(n);
@@ -1215,6 +1222,7 @@ mod tests {
                 Vec3A::new(1.0, 0.0, 1e-30).normalize(),
                 Vec3A::new(1.0, 0.0, 1e-7).normalize(),
                 Vec3A::new(0.0, 0.0, 0.0),
+                Vec3A::NAN,
             ] {
                 for u in [
                     Vec2::ZERO,
