@@ -117,8 +117,9 @@ pub enum Material {
     /// A rough metal: GGX microfacets, height-correlated Smith masking, exact
     /// conductor Fresnel. `alpha < ALPHA_SMOOTH` is a smooth (delta) conductor.
     RoughConductor {
-        /// GGX width α: the tangent of the angle at which D falls to a quarter of
-        /// its peak (glTF/Disney `roughness²`); 0.1 is glossy, 1 is very rough.
+        /// GGX width α: the microfacet slope at which the slope distribution
+        /// falls to a quarter of its peak (glTF/Disney `roughness²`); 0.1 is
+        /// glossy, 1 is very rough.
         alpha: f32,
         /// Real part of the complex index of refraction, per RGB channel.
         eta: Vec3A,
