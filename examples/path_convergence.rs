@@ -76,7 +76,7 @@ fn main() {
             );
             targets.remove(0);
         }
-        if targets.is_empty() && spp >= 1024 {
+        if targets.is_empty() && spp >= 1024 || std::env::var_os("QUICK").is_some() && spp >= 64 {
             break;
         }
     }

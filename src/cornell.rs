@@ -3,6 +3,7 @@
 
 use glam::Vec3A;
 
+use crate::material::Material;
 use crate::scene::{PointLight, Scene};
 use crate::triangle::Triangle;
 
@@ -69,6 +70,102 @@ pub mod parts {
     pub const SHORT_BLOCK: Range<usize> = 10..20;
     /// The tall (blue) block.
     pub const TALL_BLOCK: Range<usize> = 20..30;
+}
+
+/// The parts of the box that `--material` can name, with their triangles.
+pub const PART_NAMES: [(&str, std::ops::Range<usize>); 7] = [
+    ("floor", parts::FLOOR),
+    ("ceiling", parts::CEILING),
+    ("back", parts::BACK_WALL),
+    ("left", parts::LEFT_WALL),
+    ("right", parts::RIGHT_WALL),
+    ("short", parts::SHORT_BLOCK),
+    ("tall", parts::TALL_BLOCK),
+];
+
+/// The triangles of the part called `name` (see [`PART_NAMES`]).
+pub fn part(name: &str) -> Option<std::ops::Range<usize>> {
+    PART_NAMES
+        .iter()
+        .find(|(n, _)| *n == name)
+        .map(|(_, r)| r.clone())
+}
+
+/// A material for a part of the box, by name: `diffuse` (the part's own
+/// reflectance), `mirror`, `glass[:IOR]` (1.5 unless given), and the
+/// conductors `gold`, `copper`, `silver`, `aluminium` and `conductor` (a perfect
+/// one, Fresnel 1), each with an optional GGX width `:ALPHA` in `[0, 1]` (0, the
+/// default, is polished: a delta lobe).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum MaterialChoice {
+    /// Lambertian with the part's reflectance.
+    Diffuse,
+    /// Anything else.
+    Other(Material),
+}
+
+impl MaterialChoice {
+    /// The names `parse` accepts.
+    pub const NAMES: &str = "diffuse, mirror, glass[:IOR], gold, copper, silver, aluminium, conductor (metals take :ALPHA)";
+
+    /// Reads a material name with its optional parameter.
+    pub fn parse(spec: &str) -> Result<Self, String> {
+        let (name, param) = match spec.split_once(':') {
+            Some((n, p)) => (n, Some(p)),
+            None => (spec, None),
+        };
+        let number = |lo: f32, hi: f32, what: &str| -> Result<Option<f32>, String> {
+            param
+                .map(|p| match p.trim().parse::<f32>() {
+                    Ok(v) if v >= lo && v <= hi => Ok(v),
+                    _ => Err(format!(
+                        "{name}: expected {what} from {lo} to {hi}, got '{p}'"
+                    )),
+                })
+                .transpose()
+        };
+        let metal = |make: fn(f32) -> Material| -> Result<Self, String> {
+            Ok(Self::Other(make(
+                number(0.0, 1.0, "a GGX width")?.unwrap_or(0.0),
+            )))
+        };
+        let no_param = |m: Self| match param {
+            Some(p) => Err(format!("{name} takes no parameter, got '{p}'")),
+            None => Ok(m),
+        };
+        match name {
+            "diffuse" => no_param(Self::Diffuse),
+            "mirror" => no_param(Self::Other(Material::Mirror {
+                reflectance: Vec3A::ONE,
+            })),
+            "glass" => Ok(Self::Other(Material::Dielectric {
+                ior: number(1.0, 4.0, "an index of refraction")?.unwrap_or(1.5),
+            })),
+            "gold" => metal(Material::gold),
+            "copper" => metal(Material::copper),
+            "silver" => metal(Material::silver),
+            "aluminium" | "aluminum" => metal(Material::aluminium),
+            "conductor" => metal(Material::perfect_conductor),
+            _ => Err(format!(
+                "unknown material '{name}' (expected {})",
+                Self::NAMES
+            )),
+        }
+    }
+
+    /// Gives the part's triangles this material (`path` only; `flat` and `direct`
+    /// keep the lab's reflectances).
+    pub fn apply(self, scene: &mut Scene, part: std::ops::Range<usize>) {
+        for prim in part {
+            let m = match self {
+                Self::Diffuse => Material::Diffuse {
+                    reflectance: scene.reflectance(prim as u32),
+                },
+                Self::Other(m) => m,
+            };
+            scene.set_material(prim, m);
+        }
+    }
 }
 
 /// The box's triangles and their reflectances, in the lab's order.
@@ -188,6 +285,52 @@ pub fn light_area_patch(scene: &mut Scene) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn materials_and_parts_by_name() {
+        assert_eq!(part("tall"), Some(parts::TALL_BLOCK));
+        assert_eq!(part("wall"), None);
+        let all: usize = PART_NAMES.iter().map(|(_, r)| r.len()).sum();
+        assert_eq!(all, 30, "the parts cover the box once");
+        assert_eq!(
+            MaterialChoice::parse("glass"),
+            Ok(MaterialChoice::Other(Material::Dielectric { ior: 1.5 }))
+        );
+        assert_eq!(
+            MaterialChoice::parse("glass:1.33"),
+            Ok(MaterialChoice::Other(Material::Dielectric { ior: 1.33 }))
+        );
+        assert_eq!(
+            MaterialChoice::parse("gold:0.2"),
+            Ok(MaterialChoice::Other(Material::gold(0.2)))
+        );
+        assert_eq!(
+            MaterialChoice::parse("conductor"),
+            Ok(MaterialChoice::Other(Material::perfect_conductor(0.0)))
+        );
+        for bad in [
+            "plastic",
+            "gold:2",
+            "gold:x",
+            "mirror:1",
+            "glass:nan",
+            "",
+            "diffuse:0.5",
+        ] {
+            assert!(MaterialChoice::parse(bad).is_err(), "{bad}");
+        }
+        let mut scene = scene();
+        MaterialChoice::parse("mirror")
+            .unwrap()
+            .apply(&mut scene, part("tall").unwrap());
+        assert!(scene.material(25).is_specular());
+        assert_eq!(
+            *scene.material(0),
+            Material::Diffuse {
+                reflectance: colors::GREEN
+            }
+        );
+    }
 
     #[test]
     fn the_area_light_faces_down_and_covers_the_patch() {

@@ -36,6 +36,7 @@ pub mod ray;
 pub mod render;
 pub mod sampler;
 pub mod scene;
+pub mod sobol;
 pub mod transform;
 pub mod triangle;
 pub mod workload;

@@ -22,27 +22,26 @@ use crate::scene::{LightSample, Scene};
 /// Bounces after which Russian roulette may end a path.
 pub const RR_DEPTH: u32 = 3;
 
-/// Random numbers used per bounce: light choice (1), point on the light (2), BSDF
-/// lobe (1), BSDF direction (2), Russian roulette (1).
-pub const DIMENSIONS_PER_BOUNCE: u32 = 7;
-
 /// Which sample points the path tracer uses.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum SamplerKind {
+    /// Owen-scrambled Sobol' points ([`crate::sobol`]), a 2D pair per decision.
+    Sobol,
     /// Independent uniform random numbers (PCG32 keyed by seed, pixel, sample).
     Independent,
 }
 
 impl SamplerKind {
     /// Every kind, for the command line.
-    pub const ALL: [SamplerKind; 1] = [SamplerKind::Independent];
+    pub const ALL: [SamplerKind; 2] = [SamplerKind::Sobol, SamplerKind::Independent];
 
     /// The default, usable in constants.
-    pub const DEFAULT: SamplerKind = SamplerKind::Independent;
+    pub const DEFAULT: SamplerKind = SamplerKind::Sobol;
 
     /// The name used on the command line.
     pub fn name(self) -> &'static str {
         match self {
+            SamplerKind::Sobol => "sobol",
             SamplerKind::Independent => "independent",
         }
     }
@@ -67,7 +66,10 @@ impl Default for PathOptions {
     }
 }
 
-/// A stream of sample values for one path (one pixel sample).
+/// A stream of sample values for one path (one pixel sample). The path tracer
+/// asks for a 2D pair for the pixel position, then per bounce a pair for the
+/// point on the light, a pair for the BSDF direction, a pair for the light and
+/// lobe choices, and one number for Russian roulette.
 pub trait PathSampler {
     /// The next value in `[0, 1)`.
     fn next_1d(&mut self) -> f32;
@@ -83,6 +85,52 @@ impl PathSampler for Rng {
     #[inline]
     fn next_1d(&mut self) -> f32 {
         self.next_f32()
+    }
+}
+
+/// Pairs taken from Sobol' before [`SobolSampler`] goes on with independent
+/// numbers: the pixel position and the first [`SOBOL_BOUNCES`] bounces' light,
+/// BSDF and choice pairs, where stratification pays; later bounces carry little
+/// of the image and are not worth the scrambled points' cost.
+pub const SOBOL_PAIRS: u32 = 1 + 3 * SOBOL_BOUNCES;
+/// Bounces whose 2D decisions use Sobol' points.
+pub const SOBOL_BOUNCES: u32 = 2;
+
+/// Owen-scrambled Sobol' pairs ([`crate::sobol::PixelSampler`]) for the first
+/// [`SOBOL_PAIRS`] 2D decisions, then independent numbers from the sample's own
+/// PCG stream; single numbers (Russian roulette) are always independent.
+#[derive(Clone, Debug)]
+pub struct SobolSampler {
+    sobol: crate::sobol::PixelSampler,
+    rng: Rng,
+    pairs_left: u32,
+}
+
+impl SobolSampler {
+    /// The sampler of sample `index` of pixel `pixel` in a render seeded `seed`.
+    #[inline]
+    pub fn new(pixel: u64, index: u32, seed: u64) -> Self {
+        Self {
+            sobol: crate::sobol::PixelSampler::new(pixel, index, seed),
+            rng: Rng::for_sample(seed, pixel, index),
+            pairs_left: SOBOL_PAIRS,
+        }
+    }
+}
+
+impl PathSampler for SobolSampler {
+    #[inline]
+    fn next_1d(&mut self) -> f32 {
+        self.rng.next_f32()
+    }
+    #[inline]
+    fn next_2d(&mut self) -> Vec2 {
+        if self.pairs_left > 0 {
+            self.pairs_left -= 1;
+            self.sobol.next_2d()
+        } else {
+            Vec2::new(self.rng.next_f32(), self.rng.next_f32())
+        }
     }
 }
 
@@ -144,10 +192,10 @@ pub fn radiance(
         let wo_world = -ray.dir;
         let wo = frame.to_local(wo_world);
 
-        let u_light = sampler.next_1d();
         let u_light_pos = sampler.next_2d();
-        let u_lobe = sampler.next_1d();
         let u_bsdf = sampler.next_2d();
+        let u_choice = sampler.next_2d();
+        let (u_light, u_lobe) = (u_choice.x, u_choice.y);
         let u_rr = sampler.next_1d();
 
         // Next-event estimation (nothing to gain on a delta lobe).
@@ -238,6 +286,6 @@ pub fn power_heuristic(a: f32, b: f32) -> f32 {
 /// Whether a material scatters light arriving at either side (glass); the others
 /// are one-sided and face the side their normal points to.
 #[inline]
-fn two_sided(_material: &Material) -> bool {
-    false
+fn two_sided(material: &Material) -> bool {
+    matches!(material, Material::Dielectric { .. })
 }

@@ -10,7 +10,7 @@ use rayon::prelude::*;
 use crate::camera::Camera;
 use crate::film::Film;
 use crate::integrator::Integrator;
-use crate::path::{self, PathOptions, SamplerKind};
+use crate::path::{self, PathOptions, PathSampler, SamplerKind};
 use crate::ray::Ray;
 use crate::sampler::Rng;
 use crate::scene::Scene;
@@ -284,6 +284,12 @@ fn path_sample(
         (pixel / camera.width as u64) as f32,
     );
     match options.sampler {
+        SamplerKind::Sobol => {
+            let mut sampler = path::SobolSampler::new(pixel, s, seed);
+            let d = sampler.next_2d();
+            let ray = camera.ray(x + d.x, y + d.y);
+            path::radiance(scene, &ray, options, &mut sampler, rays)
+        }
         SamplerKind::Independent => {
             let mut rng = Rng::for_sample(seed, pixel, s);
             let (dx, dy) = (rng.next_f32(), rng.next_f32());

@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use clap::{Args, Parser, Subcommand};
 use glam::Vec3A;
 use raylab::Integrator;
+use raylab::cornell::{self, MaterialChoice};
 
 /// Largest accepted image side, in pixels.
 pub const MAX_SIDE: u32 = 16_384;
@@ -83,6 +84,12 @@ pub struct SceneArgs {
     /// direct light, ...) [default: unbounded; Russian roulette ends paths].
     #[arg(long, value_name = "N", allow_hyphen_values = true, value_parser = parse_max_depth)]
     pub max_depth: Option<u32>,
+    /// Materials of the built-in box's parts for `path`, e.g.
+    /// `tall=mirror,short=glass,floor=gold:0.2`. Parts: floor, ceiling, back, left,
+    /// right, short, tall. Materials: diffuse, mirror, glass[:IOR], gold, copper,
+    /// silver, aluminium, conductor (metals take :ALPHA, the GGX width; 0 polished).
+    #[arg(long, value_name = "PART=MATERIAL,...", value_delimiter = ',', value_parser = parse_assignment)]
+    pub material: Vec<(String, MaterialChoice)>,
     /// PNG exposure in stops: PNG values are multiplied by 2^E (and by π for
     /// `path`, see README) before the sRGB encoding; EXR is never scaled.
     #[arg(long, default_value_t = 0.0, value_name = "E", allow_hyphen_values = true, value_parser = parse_exposure)]
@@ -188,6 +195,12 @@ impl SceneArgs {
                  (give one for all, or one per mesh)"
             ));
         }
+        if !self.material.is_empty() && !self.scene.starts_with("cornell") {
+            return Err(format!(
+                "error: --material names parts of the built-in box, not of {}",
+                self.scene
+            ));
+        }
         let pixels = self.width as u64 * self.height as u64;
         if pixels > MAX_PIXELS {
             return Err(format!(
@@ -215,6 +228,21 @@ fn parse_spp(s: &str) -> Result<u32, String> {
             "expected a whole number of samples from 1 to {MAX_SPP}"
         )),
     }
+}
+
+fn parse_assignment(s: &str) -> Result<(String, MaterialChoice), String> {
+    let Some((part, material)) = s.split_once('=') else {
+        return Err(format!("expected PART=MATERIAL, got '{s}'"));
+    };
+    let part = part.trim();
+    if cornell::part(part).is_none() {
+        let names: Vec<&str> = cornell::PART_NAMES.iter().map(|(n, _)| *n).collect();
+        return Err(format!(
+            "unknown part '{part}' (expected {})",
+            names.join(", ")
+        ));
+    }
+    Ok((part.to_string(), MaterialChoice::parse(material.trim())?))
 }
 
 fn parse_max_depth(s: &str) -> Result<u32, String> {
@@ -335,6 +363,16 @@ mod tests {
         assert_eq!(parse_pitch("-89"), Ok(-89.0));
         assert!(parse_non_negative("-1").is_err());
         assert!(parse_angle("nan").is_err());
+        assert_eq!(
+            parse_assignment("tall=glass:1.4"),
+            Ok((
+                "tall".into(),
+                MaterialChoice::Other(raylab::material::Material::Dielectric { ior: 1.4 })
+            ))
+        );
+        for bad in ["tall", "wall=mirror", "tall=plastic", "tall=gold:7"] {
+            assert!(parse_assignment(bad).is_err(), "{bad}");
+        }
         assert_eq!(parse_max_depth("1"), Ok(1));
         for bad in ["0", "-1", "nan", "1.5", ""] {
             assert!(parse_max_depth(bad).is_err(), "{bad}");

@@ -69,6 +69,7 @@ fn run_default() -> anyhow::Result<()> {
         height: 500,
         integrator: raylab::Integrator::Direct,
         max_depth: None,
+        material: Vec::new(),
         exposure: 0.0,
         camera_pos: None,
         yaw: 0.0,
@@ -162,6 +163,10 @@ fn load(args: &SceneArgs) -> anyhow::Result<(raylab::Scene, raylab::controls::Vi
         scene.ambient = Vec3A::splat(args.ambient.unwrap_or(default_ambient));
         if area {
             cornell::light_area_patch(&mut scene);
+        }
+        for (part, material) in &args.material {
+            let range = cornell::part(part).expect("validated by the argument parser");
+            material.apply(&mut scene, range);
         }
         let step = raylab::controls::LAB_STEP;
         (scene, cornell::CAMERA_POSITION, Mat3A::IDENTITY, step)
