@@ -134,3 +134,144 @@ fn the_area_light_box_is_lit_and_the_patch_seen_at_its_radiance() {
     let black = path_render(&dark, &cam, 2, 0, 2).film;
     assert!(black.pixels.iter().all(|p| *p == Vec3A::ZERO));
 }
+
+/// A closed cube around the origin whose twelve triangles face inwards, all with
+/// `material` and emitting `le` towards the inside.
+fn furnace(material: raylab::material::Material, le: Vec3A) -> Scene {
+    use raylab::Triangle;
+    let c = |i: usize| {
+        Vec3A::new(
+            if i & 1 == 0 { -1.0 } else { 1.0 },
+            if i & 2 == 0 { -1.0 } else { 1.0 },
+            if i & 4 == 0 { -1.0 } else { 1.0 },
+        )
+    };
+    let quads = [
+        [0, 1, 3, 2],
+        [4, 5, 7, 6],
+        [0, 1, 5, 4],
+        [2, 3, 7, 6],
+        [0, 2, 6, 4],
+        [1, 3, 7, 5],
+    ];
+    let mut tris = Vec::new();
+    for q in quads {
+        for [a, b, d] in [[q[0], q[1], q[2]], [q[0], q[2], q[3]]] {
+            let t = Triangle::new(c(a), c(b), c(d));
+            let centre = (t.v[0] + t.v[1] + t.v[2]) / 3.0;
+            // Inwards: the lab normal points at the cube's centre.
+            tris.push(if t.lab_normal().dot(-centre) > 0.0 {
+                t
+            } else {
+                Triangle::new(t.v[0], t.v[2], t.v[1])
+            });
+        }
+    }
+    let n = tris.len();
+    let light = raylab::PointLight {
+        position: Vec3A::ZERO,
+        power: Vec3A::ZERO,
+    };
+    let mut scene = Scene::new(tris, vec![Vec3A::ONE; n], light, Vec3A::ZERO).unwrap();
+    for prim in 0..n {
+        scene.set_material(prim, material);
+        scene.set_emission(prim, le).unwrap();
+    }
+    scene
+}
+
+fn furnace_mean(scene: &Scene, max_depth: u32, spp: u32) -> (Vec3A, Rendered) {
+    let cam = Camera::lab(Vec3A::new(0.1, -0.2, 0.05), 20.0, 10.0, 24, 24);
+    let settings = RenderSettings {
+        integrator: Integrator::Path(raylab::path::PathOptions {
+            max_depth,
+            ..Default::default()
+        }),
+        spp,
+        seed: 1,
+    };
+    let out = render(scene, &cam, &settings, &|_| {});
+    (mean(&out.film), out)
+}
+
+/// White furnace: inside a closed box of albedo-1 diffuse walls that all emit
+/// `Le`, a path of at most N segments gathers exactly `N·Le` on average (each
+/// bounce returns all the energy); with albedo ρ and no limit, `Le/(1 − ρ)`.
+/// Anything else means the estimator gains or loses energy.
+#[test]
+fn white_furnace_diffuse() {
+    use raylab::material::Material;
+    let le = Vec3A::new(1.0, 0.5, 0.25);
+    let white = furnace(
+        Material::Diffuse {
+            reflectance: Vec3A::ONE,
+        },
+        le,
+    );
+    for n in [1, 2, 5] {
+        let (m, out) = furnace_mean(&white, n, 16);
+        let want = le * n as f32;
+        eprintln!("albedo 1, max depth {n}: {m} (want {want})");
+        assert!(
+            ((m - want) / want).abs().max_element() < 0.01,
+            "{m} vs {want}"
+        );
+        // No pixel anywhere gains energy beyond noise.
+        assert!(
+            out.film.pixels.iter().all(|p| p.x <= 1.2 * want.x),
+            "max depth {n}"
+        );
+    }
+    let grey = furnace(
+        Material::Diffuse {
+            reflectance: Vec3A::splat(0.5),
+        },
+        le,
+    );
+    let (m, _) = furnace_mean(&grey, u32::MAX, 32);
+    let want = le * 2.0;
+    eprintln!("albedo 0.5, unbounded: {m} (want {want})");
+    assert!(
+        ((m - want) / want).abs().max_element() < 0.02,
+        "{m} vs {want}"
+    );
+}
+
+/// The same furnace with conductors of Fresnel reflectance 1: a polished one
+/// returns exactly `N·Le` on every path short enough to escape Russian roulette
+/// (3 segments), and on average beyond; a rough one (single-scattering GGX) may
+/// lose energy at grazing angles but never gains any.
+#[test]
+fn white_furnace_perfect_conductor() {
+    use raylab::material::Material;
+    let le = Vec3A::new(1.0, 0.5, 0.25);
+    let polished = furnace(Material::perfect_conductor(0.0), le);
+    let (_, out) = furnace_mean(&polished, 3, 2);
+    for p in &out.film.pixels {
+        assert!((*p - le * 3.0).abs().max_element() < 1e-4, "{p}");
+    }
+    let (m, _) = furnace_mean(&polished, 8, 16);
+    eprintln!("polished conductor, max depth 8: {m} (want {})", le * 8.0);
+    assert!(
+        ((m - le * 8.0) / (le * 8.0)).abs().max_element() < 0.01,
+        "{m}"
+    );
+    // Single-scattering GGX keeps 99 % (α = 0.1) to 69 % (α = 0.5) per bounce at
+    // normal incidence (numerical quadrature): less than N·Le, more with every
+    // segment allowed.
+    for alpha in [0.1, 0.5] {
+        let rough = furnace(Material::perfect_conductor(alpha), le);
+        let mut last = Vec3A::ONE;
+        for n in [2, 6] {
+            let (m, _) = furnace_mean(&rough, n, 16);
+            let most = le * n as f32;
+            eprintln!("rough conductor {alpha}, max depth {n}: {m} (at most {most})");
+            assert!(
+                (m / most).max_element() < 1.01,
+                "energy grew: {m} vs {most}"
+            );
+            assert!((m / le / last).min_element() > 1.1, "{m} after {last}");
+            last = m / le;
+        }
+    }
+}
