@@ -15,7 +15,7 @@
 use glam::{Vec2, Vec3A};
 
 use crate::material::{Frame, Material};
-use crate::ray::{Ray, SurfacePoint};
+use crate::ray::{Hit, Ray, SurfacePoint};
 use crate::sampler::Rng;
 use crate::scene::{LightSample, Scene};
 
@@ -94,7 +94,7 @@ impl PathSampler for Rng {
 /// of the image and are not worth the scrambled points' cost.
 pub const SOBOL_PAIRS: u32 = 1 + 3 * SOBOL_BOUNCES;
 /// Bounces whose 2D decisions use Sobol' points.
-pub const SOBOL_BOUNCES: u32 = 2;
+pub const SOBOL_BOUNCES: u32 = 1;
 
 /// Owen-scrambled Sobol' pairs ([`crate::sobol::PixelSampler`]) for the first
 /// [`SOBOL_PAIRS`] 2D decisions, then independent numbers from the sample's own
@@ -144,6 +144,22 @@ pub fn radiance(
     sampler: &mut impl PathSampler,
     rays: &mut u64,
 ) -> Vec3A {
+    *rays += 1;
+    let hit = scene.intersect(ray, f32::INFINITY);
+    radiance_from(scene, ray, hit, options, sampler, rays)
+}
+
+/// [`radiance`] for a ray whose closest hit `first` is already known (camera
+/// rays traced four at a time); does not count that ray.
+pub fn radiance_from(
+    scene: &Scene,
+    ray: &Ray,
+    first: Option<Hit>,
+    options: &PathOptions,
+    sampler: &mut impl PathSampler,
+    rays: &mut u64,
+) -> Vec3A {
+    let mut next_hit = first;
     let mut l = Vec3A::ZERO;
     let mut beta = Vec3A::ONE;
     let mut ray = *ray;
@@ -152,11 +168,7 @@ pub fn radiance(
     let mut specular = true;
     let mut bsdf_pdf = 0.0f32;
     let mut depth = 0u32;
-    loop {
-        *rays += 1;
-        let Some(hit) = scene.intersect(&ray, f32::INFINITY) else {
-            break;
-        };
+    while let Some(hit) = next_hit {
         let prim = hit.prim;
         let n = scene.normal(prim);
         let cos_out = -n.dot(ray.dir);
@@ -265,6 +277,8 @@ pub fn radiance(
             }
             beta /= survive;
         }
+        *rays += 1;
+        next_hit = scene.intersect(&ray, f32::INFINITY);
     }
     l
 }

@@ -11,7 +11,7 @@ use crate::camera::Camera;
 use crate::film::Film;
 use crate::integrator::Integrator;
 use crate::path::{self, PathOptions, PathSampler, SamplerKind};
-use crate::ray::Ray;
+use crate::ray::{Hit, Ray};
 use crate::sampler::Rng;
 use crate::scene::Scene;
 
@@ -221,11 +221,37 @@ pub fn accumulate(
             };
             if let Integrator::Path(options) = integrator {
                 for s in samples.clone() {
-                    for y in 0..n_rows {
-                        for x in 0..width {
-                            let pixel = ((y0 + y) * width + x) as u64;
-                            let v = path_sample(scene, camera, &options, seed, pixel, s, &mut rays);
-                            add(y * width + x, v);
+                    // Camera rays of 2×2 pixel quads traced together, then each
+                    // path on its own; a last odd row or column alone.
+                    for qy in (0..n_rows).step_by(2) {
+                        for qx in (0..width).step_by(2) {
+                            let pixel = |x: usize, y: usize| ((y0 + y) * width + x) as u64;
+                            if qy + 1 < n_rows && qx + 1 < width {
+                                let quad = [(qx, qy), (qx + 1, qy), (qx, qy + 1), (qx + 1, qy + 1)];
+                                let mut starts = quad.map(|(x, y)| {
+                                    PathStart::new(camera, &options, seed, pixel(x, y), s)
+                                });
+                                let primary = starts.each_ref().map(|p| p.ray);
+                                rays += 4;
+                                let hits = scene.intersect4(&primary, f32::INFINITY);
+                                for (((x, y), start), hit) in
+                                    quad.into_iter().zip(&mut starts).zip(hits)
+                                {
+                                    let v = start.trace(scene, hit, &options, &mut rays);
+                                    add(y * width + x, v);
+                                }
+                            } else {
+                                for y in qy..(qy + 2).min(n_rows) {
+                                    for x in qx..(qx + 2).min(width) {
+                                        let mut start =
+                                            PathStart::new(camera, &options, seed, pixel(x, y), s);
+                                        rays += 1;
+                                        let hit = scene.intersect(&start.ray, f32::INFINITY);
+                                        let v = start.trace(scene, hit, &options, &mut rays);
+                                        add(y * width + x, v);
+                                    }
+                                }
+                            }
                         }
                     }
                 }
@@ -267,34 +293,54 @@ pub fn accumulate(
         .sum()
 }
 
-/// One sample of the `path` integrator for pixel number `pixel`: a camera ray
-/// through a uniformly chosen point of the pixel, then a path.
-#[inline]
-fn path_sample(
-    scene: &Scene,
-    camera: &Camera,
-    options: &PathOptions,
-    seed: u64,
-    pixel: u64,
-    s: u32,
-    rays: &mut u64,
-) -> Vec3A {
-    let (x, y) = (
-        (pixel % camera.width as u64) as f32,
-        (pixel / camera.width as u64) as f32,
-    );
-    match options.sampler {
-        SamplerKind::Sobol => {
-            let mut sampler = path::SobolSampler::new(pixel, s, seed);
-            let d = sampler.next_2d();
-            let ray = camera.ray(x + d.x, y + d.y);
-            path::radiance(scene, &ray, options, &mut sampler, rays)
-        }
-        SamplerKind::Independent => {
-            let mut rng = Rng::for_sample(seed, pixel, s);
-            let (dx, dy) = (rng.next_f32(), rng.next_f32());
-            let ray = camera.ray(x + dx, y + dy);
-            path::radiance(scene, &ray, options, &mut rng, rays)
+/// The sampler of one `path` sample.
+enum AnySampler {
+    Sobol(path::SobolSampler),
+    Independent(Rng),
+}
+
+/// One sample of the `path` integrator for pixel number `pixel`: its sampler and
+/// its camera ray, through a uniformly chosen point of the pixel.
+struct PathStart {
+    sampler: AnySampler,
+    ray: Ray,
+}
+
+impl PathStart {
+    #[inline]
+    fn new(camera: &Camera, options: &PathOptions, seed: u64, pixel: u64, s: u32) -> Self {
+        let (x, y) = (
+            (pixel % camera.width as u64) as f32,
+            (pixel / camera.width as u64) as f32,
+        );
+        let mut sampler = match options.sampler {
+            SamplerKind::Sobol => AnySampler::Sobol(path::SobolSampler::new(pixel, s, seed)),
+            SamplerKind::Independent => AnySampler::Independent(Rng::for_sample(seed, pixel, s)),
+        };
+        let d = match &mut sampler {
+            AnySampler::Sobol(smp) => smp.next_2d(),
+            AnySampler::Independent(rng) => rng.next_2d(),
+        };
+        let ray = camera.ray(x + d.x, y + d.y);
+        Self { sampler, ray }
+    }
+
+    /// The path's radiance given the camera ray's closest hit.
+    #[inline]
+    fn trace(
+        &mut self,
+        scene: &Scene,
+        hit: Option<Hit>,
+        options: &PathOptions,
+        rays: &mut u64,
+    ) -> Vec3A {
+        match &mut self.sampler {
+            AnySampler::Sobol(smp) => {
+                path::radiance_from(scene, &self.ray, hit, options, smp, rays)
+            }
+            AnySampler::Independent(rng) => {
+                path::radiance_from(scene, &self.ray, hit, options, rng, rays)
+            }
         }
     }
 }
