@@ -45,9 +45,10 @@ fn main() {
     let mut spent = Duration::ZERO;
     let mut targets = vec![1e-2, 1e-3];
     let mut avg = Film::new(256, 256);
+    let mut rays = 0u64;
     for pass in [1u32, 1, 2, 4, 8, 16, 32, 64, 128, 256, 512, 1024, 2048] {
         let start = Instant::now();
-        pool.install(|| {
+        rays += pool.install(|| {
             accumulate(
                 &scene,
                 &camera,
@@ -57,16 +58,22 @@ fn main() {
                 &mut sums,
                 &|_| {},
             )
+            .rays
         });
         spent += start.elapsed();
         spp += pass;
         avg.pixels.clone_from(&sums.pixels);
         avg.scale(1.0 / spp as f32);
         let e = rel_mse(&avg, &reference);
+        // The time the same rate would need for 1e-2 and 1e-3 (relMSE ≈ c/spp).
+        let per_spp = spent.as_secs_f64() / spp as f64;
         println!(
-            "spp={spp} rel_mse={e:.3e} spp_x_rel_mse={:.3} seconds={:.2}",
+            "spp={spp} rel_mse={e:.3e} spp_x_rel_mse={:.3} seconds={:.2} est_seconds_1e-2={:.2} est_seconds_1e-3={:.2} rays_per_path={:.2}",
             e * spp as f64,
-            spent.as_secs_f64()
+            spent.as_secs_f64(),
+            e * spp as f64 / 1e-2 * per_spp,
+            e * spp as f64 / 1e-3 * per_spp,
+            rays as f64 / (spp as f64 * 65536.0),
         );
         while targets.first().is_some_and(|&t| e <= t) {
             println!(
@@ -76,7 +83,10 @@ fn main() {
             );
             targets.remove(0);
         }
-        if targets.is_empty() && spp >= 1024 || std::env::var_os("QUICK").is_some() && spp >= 64 {
+        let quick = std::env::var("QUICK")
+            .ok()
+            .and_then(|q| q.parse::<u32>().ok());
+        if targets.is_empty() && spp >= 1024 || quick.is_some_and(|q| spp >= q) {
             break;
         }
     }

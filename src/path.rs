@@ -68,9 +68,15 @@ impl Default for PathOptions {
 
 /// A stream of sample values for one path (one pixel sample). The path tracer
 /// asks for a 2D pair for the pixel position, then per bounce a pair for the
-/// point on the light, a pair for the BSDF direction, a pair for the light and
-/// lobe choices, and one number for Russian roulette.
+/// point on the light, a pair for the BSDF direction, a "minor" pair for the
+/// light and lobe choices, and one number for Russian roulette.
 pub trait PathSampler {
+    /// The next two values in `[0, 1)` for a decision that gains little from
+    /// stratification (which light, which lobe).
+    #[inline]
+    fn next_2d_minor(&mut self) -> Vec2 {
+        self.next_2d()
+    }
     /// The next value in `[0, 1)`.
     fn next_1d(&mut self) -> f32;
     /// The next two values in `[0, 1)`.
@@ -89,16 +95,17 @@ impl PathSampler for Rng {
 }
 
 /// Pairs taken from Sobol' before [`SobolSampler`] goes on with independent
-/// numbers: the pixel position and the first [`SOBOL_BOUNCES`] bounces' light,
-/// BSDF and choice pairs, where stratification pays; later bounces carry little
-/// of the image and are not worth the scrambled points' cost.
-pub const SOBOL_PAIRS: u32 = 1 + 3 * SOBOL_BOUNCES;
+/// numbers: the pixel position and the first [`SOBOL_BOUNCES`] bounces' light
+/// and BSDF pairs, where stratification pays; later bounces carry little of the
+/// image and are not worth the scrambled points' cost.
+pub const SOBOL_PAIRS: u32 = 1 + 2 * SOBOL_BOUNCES;
 /// Bounces whose 2D decisions use Sobol' points.
 pub const SOBOL_BOUNCES: u32 = 1;
 
 /// Owen-scrambled Sobol' pairs ([`crate::sobol::PixelSampler`]) for the first
 /// [`SOBOL_PAIRS`] 2D decisions, then independent numbers from the sample's own
-/// PCG stream; single numbers (Russian roulette) are always independent.
+/// PCG stream; single numbers (Russian roulette) and minor pairs (light and lobe
+/// choices) are always independent.
 #[derive(Clone, Debug)]
 pub struct SobolSampler {
     sobol: crate::sobol::PixelSampler,
@@ -122,6 +129,10 @@ impl PathSampler for SobolSampler {
     #[inline]
     fn next_1d(&mut self) -> f32 {
         self.rng.next_f32()
+    }
+    #[inline]
+    fn next_2d_minor(&mut self) -> Vec2 {
+        Vec2::new(self.rng.next_f32(), self.rng.next_f32())
     }
     #[inline]
     fn next_2d(&mut self) -> Vec2 {
@@ -206,7 +217,7 @@ pub fn radiance_from(
 
         let u_light_pos = sampler.next_2d();
         let u_bsdf = sampler.next_2d();
-        let u_choice = sampler.next_2d();
+        let u_choice = sampler.next_2d_minor();
         let (u_light, u_lobe) = (u_choice.x, u_choice.y);
         let u_rr = sampler.next_1d();
 
