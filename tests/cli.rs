@@ -37,6 +37,7 @@ fn bad_arguments_exit_2_with_one_line_naming_the_argument() {
         (&["render", "--material", "tall=plastic"], "--material"),
         (&["render", "--material", "floor=gold:2"], "--material"),
         (&["render", "--material", "tall"], "--material"),
+        (&["render", "--sampler", "halton"], "--sampler"),
         (&["render", "--width", "0"], "--width"),
         (&["render", "--height", "-5"], "--height"),
         (&["render", "--width", "100000"], "--width"),

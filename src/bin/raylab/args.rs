@@ -84,6 +84,10 @@ pub struct SceneArgs {
     /// direct light, ...) [default: unbounded; Russian roulette ends paths].
     #[arg(long, value_name = "N", allow_hyphen_values = true, value_parser = parse_max_depth)]
     pub max_depth: Option<u32>,
+    /// Sample points of `path`: `sobol` (Owen-scrambled Sobol' for the pixel and
+    /// the first bounce) or `independent` (PCG32 only).
+    #[arg(long, default_value = "sobol", value_parser = parse_sampler)]
+    pub sampler: raylab::path::SamplerKind,
     /// Materials of the built-in box's parts for `path`, e.g.
     /// `tall=mirror,short=glass,floor=gold:0.2`. Parts: floor, ceiling, back, left,
     /// right, short, tall. Materials: diffuse, mirror, glass[:IOR], gold, copper,
@@ -179,6 +183,7 @@ impl SceneArgs {
                 if let Some(d) = self.max_depth {
                     options.max_depth = d;
                 }
+                options.sampler = self.sampler;
                 Integrator::Path(options)
             }
             other => other,
@@ -243,6 +248,13 @@ fn parse_assignment(s: &str) -> Result<(String, MaterialChoice), String> {
         ));
     }
     Ok((part.to_string(), MaterialChoice::parse(material.trim())?))
+}
+
+fn parse_sampler(s: &str) -> Result<raylab::path::SamplerKind, String> {
+    raylab::path::SamplerKind::ALL
+        .into_iter()
+        .find(|k| k.name() == s)
+        .ok_or_else(|| format!("unknown sampler '{s}' (expected sobol or independent)"))
 }
 
 fn parse_max_depth(s: &str) -> Result<u32, String> {

@@ -69,6 +69,7 @@ fn run_default() -> anyhow::Result<()> {
         height: 500,
         integrator: raylab::Integrator::Direct,
         max_depth: None,
+        sampler: raylab::path::SamplerKind::DEFAULT,
         material: Vec::new(),
         exposure: 0.0,
         camera_pos: None,
