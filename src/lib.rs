@@ -15,6 +15,8 @@
 //! * [`integrator`]: `flat`, `direct` (the lab's lighting model) and `path`;
 //! * [`path`]: the path tracer (next-event estimation, MIS, Russian roulette);
 //! * [`material`]: BSDFs (diffuse, mirror, glass, rough conductor);
+//! * [`sampler`]: PCG32 streams keyed by (seed, pixel, sample), and [`sobol`]:
+//!   Owen-scrambled Sobol' points;
 //! * [`render`]: tiles on rayon, deterministic per-pixel sampling;
 //! * [`film`]: the image buffer and atomic PNG/EXR output;
 //! * [`controls`]: the viewer's camera/light state and how input changes it;

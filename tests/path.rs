@@ -275,3 +275,93 @@ fn white_furnace_perfect_conductor() {
         }
     }
 }
+
+/// Next-event estimation and BSDF sampling, weighted by MIS, must add up to the
+/// exact direct light of an area light: a floor point under the ceiling patch
+/// alone, against Lambert's formula for the irradiance from a uniformly emitting
+/// polygon, E = Le/2 · Σ θᵢ (n · normalize(uᵢ × uᵢ₊₁)).
+#[test]
+fn area_light_direct_light_matches_lamberts_formula() {
+    use raylab::Triangle;
+    use raylab::path::{PathOptions, SamplerKind, SobolSampler, radiance};
+    let (lo, hi) = (-3.0, 3.0);
+    let floor = [
+        Vec3A::new(lo, 1.0, lo),
+        Vec3A::new(hi, 1.0, lo),
+        Vec3A::new(hi, 1.0, hi),
+        Vec3A::new(lo, 1.0, hi),
+    ];
+    let up = |a, b, c| {
+        let t = Triangle::new(a, b, c);
+        if t.lab_normal().y < 0.0 {
+            t
+        } else {
+            Triangle::new(a, c, b)
+        }
+    };
+    let mut tris = vec![
+        up(floor[0], floor[1], floor[2]),
+        up(floor[0], floor[2], floor[3]),
+    ];
+    let mut rho = vec![Vec3A::splat(0.5); 2];
+    cornell::push_area_light(&mut tris, &mut rho);
+    let light = raylab::PointLight {
+        position: Vec3A::ZERO,
+        power: Vec3A::ZERO,
+    };
+    let mut scene = Scene::new(tris, rho, light, Vec3A::ZERO).unwrap();
+    for prim in 2..4 {
+        scene.set_emission(prim, Vec3A::ONE).unwrap();
+    }
+    let p = Vec3A::new(0.3, 1.0, 0.2);
+    let n = Vec3A::NEG_Y;
+    let corners = cornell::AREA_LIGHT_CORNERS;
+    let mut sum = 0.0f32;
+    for i in 0..4 {
+        let (a, b) = (
+            (corners[i] - p).normalize(),
+            (corners[(i + 1) % 4] - p).normalize(),
+        );
+        sum += a.dot(b).clamp(-1.0, 1.0).acos() * n.dot(a.cross(b).normalize());
+    }
+    let irradiance = 0.5 * sum.abs();
+    let want = 0.5 * irradiance / std::f32::consts::PI;
+
+    let eye = Vec3A::new(0.3, -0.5, -1.0);
+    let ray = raylab::Ray::new(eye, (p - eye).normalize());
+    for kind in SamplerKind::ALL {
+        let options = PathOptions {
+            max_depth: 2,
+            sampler: kind,
+        };
+        let n = 40_000u32;
+        let mut rays = 0;
+        let mut total = 0.0f64;
+        for i in 0..n {
+            let v = match kind {
+                SamplerKind::Sobol => radiance(
+                    &scene,
+                    &ray,
+                    &options,
+                    &mut SobolSampler::new(7, i, 3),
+                    &mut rays,
+                ),
+                SamplerKind::Independent => radiance(
+                    &scene,
+                    &ray,
+                    &options,
+                    &mut raylab::sampler::Rng::for_sample(3, 7, i),
+                    &mut rays,
+                ),
+            };
+            total += v.x as f64;
+        }
+        let got = (total / n as f64) as f32;
+        eprintln!("{}: {got} vs Lambert {want}", kind.name());
+        assert!(
+            (got / want - 1.0).abs() < 0.01,
+            "{}: {got} vs {want}",
+            kind.name()
+        );
+    }
+}
