@@ -40,6 +40,25 @@ const SOBOL_DIM1: [u32; 32] = {
     v
 };
 
+/// `SOBOL_DIM1_BYTES[b][v]`: the XOR of the columns `8b + j` of [`SOBOL_DIM1`] for
+/// the bits `j` set in `v`, so that a 32-bit index needs four lookups, not a loop
+/// over its bits (the shuffled indices use all 32).
+const SOBOL_DIM1_BYTES: [[u32; 256]; 4] = {
+    let mut t = [[0u32; 256]; 4];
+    let mut b = 0;
+    while b < 4 {
+        let mut v: usize = 1;
+        while v < 256 {
+            // v with its lowest set bit cleared has been filled already.
+            let low = v & v.wrapping_neg();
+            t[b][v] = t[b][v & (v - 1)] ^ SOBOL_DIM1[8 * b + low.trailing_zeros() as usize];
+            v += 1;
+        }
+        b += 1;
+    }
+    t
+};
+
 /// Unscrambled Sobol' dimension 0 (van der Corput) or 1 of `index`, as 32 bits
 /// of a binary fraction.
 #[inline]
@@ -47,17 +66,11 @@ fn sobol_u32(index: u32, component: u32) -> u32 {
     if component == 0 {
         return index.reverse_bits();
     }
-    let mut x = 0u32;
-    let mut i = index;
-    let mut bit = 0;
-    while i != 0 {
-        if i & 1 != 0 {
-            x ^= SOBOL_DIM1[bit];
-        }
-        i >>= 1;
-        bit += 1;
-    }
-    x
+    let t = &SOBOL_DIM1_BYTES;
+    t[0][(index & 0xff) as usize]
+        ^ t[1][(index >> 8 & 0xff) as usize]
+        ^ t[2][(index >> 16 & 0xff) as usize]
+        ^ t[3][(index >> 24) as usize]
 }
 
 /// Owen-style nested uniform scramble of a 32-bit binary fraction: each bit is
@@ -190,6 +203,23 @@ impl PixelSampler {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The byte tables give the same bits as the matrix applied bit by bit.
+    #[test]
+    fn table_lookup_equals_the_generator_matrix() {
+        let by_bits = |index: u32| {
+            (0..32)
+                .filter(|&b| index >> b & 1 != 0)
+                .fold(0, |x, b| x ^ SOBOL_DIM1[b])
+        };
+        let mut rng = crate::sampler::Rng::new(1, 1);
+        for i in (0..4096)
+            .chain((0..4096).map(|_| rng.next_u32()))
+            .chain([u32::MAX])
+        {
+            assert_eq!(sobol_u32(i, 1), by_bits(i), "index {i}");
+        }
+    }
     use crate::sampler::Rng;
 
     #[test]
