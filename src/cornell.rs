@@ -3,6 +3,7 @@
 
 use glam::Vec3A;
 
+use crate::material::Material;
 use crate::scene::{PointLight, Scene};
 use crate::triangle::Triangle;
 
@@ -37,15 +38,134 @@ pub const AMBIENT: f32 = 0.5;
 /// The lab's camera position.
 pub const CAMERA_POSITION: Vec3A = Vec3A::new(0.0, 0.0, -3.0);
 
+/// Corners of `cornell-area`'s ceiling light, just below the ceiling, in the
+/// order that makes its lab normal point down into the box (+y).
+pub const AREA_LIGHT_CORNERS: [Vec3A; 4] = [
+    Vec3A::new(-0.24, -0.999, -0.19),
+    Vec3A::new(0.24, -0.999, -0.19),
+    Vec3A::new(0.24, -0.999, 0.19),
+    Vec3A::new(-0.24, -0.999, 0.19),
+];
+/// Radiance of `cornell-area`'s ceiling light.
+pub const AREA_LIGHT_RADIANCE: Vec3A = Vec3A::new(17.0, 12.0, 4.0);
+
 /// Triangle index ranges of the named parts, in scene order.
 pub mod parts {
     use std::ops::Range;
+    /// The floor.
+    pub const FLOOR: Range<usize> = 0..2;
+    /// The left wall (purple, at x = −1).
+    pub const LEFT_WALL: Range<usize> = 2..4;
+    /// The right wall (yellow, at x = +1).
+    pub const RIGHT_WALL: Range<usize> = 4..6;
+    /// The ceiling.
+    pub const CEILING: Range<usize> = 6..8;
+    /// The back wall.
+    pub const BACK_WALL: Range<usize> = 8..10;
+    /// `cornell-area`'s ceiling light (after the box's 30 triangles).
+    pub const AREA_LIGHT: Range<usize> = 30..32;
     /// The room: floor, walls, ceiling.
     pub const ROOM: Range<usize> = 0..10;
     /// The short (red) block.
     pub const SHORT_BLOCK: Range<usize> = 10..20;
     /// The tall (blue) block.
     pub const TALL_BLOCK: Range<usize> = 20..30;
+}
+
+/// The parts of the box that `--material` can name, with their triangles.
+pub const PART_NAMES: [(&str, std::ops::Range<usize>); 7] = [
+    ("floor", parts::FLOOR),
+    ("ceiling", parts::CEILING),
+    ("back", parts::BACK_WALL),
+    ("left", parts::LEFT_WALL),
+    ("right", parts::RIGHT_WALL),
+    ("short", parts::SHORT_BLOCK),
+    ("tall", parts::TALL_BLOCK),
+];
+
+/// The triangles of the part called `name` (see [`PART_NAMES`]).
+pub fn part(name: &str) -> Option<std::ops::Range<usize>> {
+    PART_NAMES
+        .iter()
+        .find(|(n, _)| *n == name)
+        .map(|(_, r)| r.clone())
+}
+
+/// A material for a part of the box, by name: `diffuse` (the part's own
+/// reflectance), `mirror`, `glass[:IOR]` (1.5 unless given), and the
+/// conductors `gold`, `copper`, `silver`, `aluminium` and `conductor` (a perfect
+/// one, Fresnel 1), each with an optional GGX width `:ALPHA` in `[0, 1]` (0, the
+/// default, is polished: a delta lobe).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum MaterialChoice {
+    /// Lambertian with the part's reflectance.
+    Diffuse,
+    /// Anything else.
+    Other(Material),
+}
+
+impl MaterialChoice {
+    /// The names `parse` accepts.
+    pub const NAMES: &str = "diffuse, mirror, glass[:IOR], gold, copper, silver, aluminium, conductor (metals take :ALPHA)";
+
+    /// Reads a material name with its optional parameter.
+    pub fn parse(spec: &str) -> Result<Self, String> {
+        let (name, param) = match spec.split_once(':') {
+            Some((n, p)) => (n, Some(p)),
+            None => (spec, None),
+        };
+        let number = |lo: f32, hi: f32, what: &str| -> Result<Option<f32>, String> {
+            param
+                .map(|p| match p.trim().parse::<f32>() {
+                    Ok(v) if v >= lo && v <= hi => Ok(v),
+                    _ => Err(format!(
+                        "{name}: expected {what} from {lo} to {hi}, got '{p}'"
+                    )),
+                })
+                .transpose()
+        };
+        let metal = |make: fn(f32) -> Material| -> Result<Self, String> {
+            Ok(Self::Other(make(
+                number(0.0, 1.0, "a GGX width")?.unwrap_or(0.0),
+            )))
+        };
+        let no_param = |m: Self| match param {
+            Some(p) => Err(format!("{name} takes no parameter, got '{p}'")),
+            None => Ok(m),
+        };
+        match name {
+            "diffuse" => no_param(Self::Diffuse),
+            "mirror" => no_param(Self::Other(Material::Mirror {
+                reflectance: Vec3A::ONE,
+            })),
+            "glass" => Ok(Self::Other(Material::Dielectric {
+                ior: number(1.0, 4.0, "an index of refraction")?.unwrap_or(1.5),
+            })),
+            "gold" => metal(Material::gold),
+            "copper" => metal(Material::copper),
+            "silver" => metal(Material::silver),
+            "aluminium" | "aluminum" => metal(Material::aluminium),
+            "conductor" => metal(Material::perfect_conductor),
+            _ => Err(format!(
+                "unknown material '{name}' (expected {})",
+                Self::NAMES
+            )),
+        }
+    }
+
+    /// Gives the part's triangles this material (`path` only; `flat` and `direct`
+    /// keep the lab's reflectances).
+    pub fn apply(self, scene: &mut Scene, part: std::ops::Range<usize>) {
+        for prim in part {
+            let m = match self {
+                Self::Diffuse => Material::Diffuse {
+                    reflectance: scene.reflectance(prim as u32),
+                },
+                Self::Other(m) => m,
+            };
+            scene.set_material(prim, m);
+        }
+    }
 }
 
 /// The box's triangles and their reflectances, in the lab's order.
@@ -125,14 +245,117 @@ pub fn scene() -> Scene {
     .expect("the built-in box is valid")
 }
 
+/// `cornell-area`: the lab box with the point light replaced by the classic
+/// ceiling patch ([`AREA_LIGHT_CORNERS`], triangles [`parts::AREA_LIGHT`]), which
+/// emits [`AREA_LIGHT_RADIANCE`] from its lower side only and reflects nothing.
+/// The point light is off (power 0); no ambient term.
+pub fn area_scene() -> Scene {
+    let (mut tris, mut rho) = triangles();
+    push_area_light(&mut tris, &mut rho);
+    let mut scene = Scene::new(
+        tris,
+        rho,
+        PointLight {
+            position: LIGHT_POSITION,
+            power: Vec3A::ZERO,
+        },
+        Vec3A::ZERO,
+    )
+    .expect("the built-in box is valid");
+    light_area_patch(&mut scene);
+    scene
+}
+
+/// Appends the ceiling patch's two triangles (black) to a box's triangles.
+pub fn push_area_light(tris: &mut Vec<Triangle>, rho: &mut Vec<Vec3A>) {
+    let [a, b, c, d] = AREA_LIGHT_CORNERS;
+    tris.extend([Triangle::new(a, b, c), Triangle::new(a, c, d)]);
+    rho.extend([Vec3A::ZERO; 2]);
+}
+
+/// Makes the ceiling patch pushed by [`push_area_light`] emit.
+pub fn light_area_patch(scene: &mut Scene) {
+    for prim in parts::AREA_LIGHT {
+        scene
+            .set_emission(prim, AREA_LIGHT_RADIANCE)
+            .expect("a valid radiance");
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     #[test]
+    fn materials_and_parts_by_name() {
+        assert_eq!(part("tall"), Some(parts::TALL_BLOCK));
+        assert_eq!(part("wall"), None);
+        let all: usize = PART_NAMES.iter().map(|(_, r)| r.len()).sum();
+        assert_eq!(all, 30, "the parts cover the box once");
+        assert_eq!(
+            MaterialChoice::parse("glass"),
+            Ok(MaterialChoice::Other(Material::Dielectric { ior: 1.5 }))
+        );
+        assert_eq!(
+            MaterialChoice::parse("glass:1.33"),
+            Ok(MaterialChoice::Other(Material::Dielectric { ior: 1.33 }))
+        );
+        assert_eq!(
+            MaterialChoice::parse("gold:0.2"),
+            Ok(MaterialChoice::Other(Material::gold(0.2)))
+        );
+        assert_eq!(
+            MaterialChoice::parse("conductor"),
+            Ok(MaterialChoice::Other(Material::perfect_conductor(0.0)))
+        );
+        for bad in [
+            "plastic",
+            "gold:2",
+            "gold:x",
+            "mirror:1",
+            "glass:nan",
+            "",
+            "diffuse:0.5",
+        ] {
+            assert!(MaterialChoice::parse(bad).is_err(), "{bad}");
+        }
+        let mut scene = scene();
+        MaterialChoice::parse("mirror")
+            .unwrap()
+            .apply(&mut scene, part("tall").unwrap());
+        assert!(scene.material(25).is_specular());
+        assert_eq!(
+            *scene.material(0),
+            Material::Diffuse {
+                reflectance: colors::GREEN
+            }
+        );
+    }
+
+    #[test]
+    fn the_area_light_faces_down_and_covers_the_patch() {
+        let scene = area_scene();
+        assert_eq!(scene.triangles().len(), 32);
+        let area: f32 = parts::AREA_LIGHT.map(|i| scene.triangles()[i].area()).sum();
+        assert!((area - 0.48 * 0.38).abs() < 1e-6);
+        for i in parts::AREA_LIGHT {
+            assert!((scene.normal(i as u32) - Vec3A::Y).length() < 1e-6);
+            assert_eq!(scene.emission(i as u32), AREA_LIGHT_RADIANCE);
+            assert_eq!(scene.reflectance(i as u32), Vec3A::ZERO);
+        }
+        assert!(scene.has_lights());
+        assert_eq!(scene.light.power, Vec3A::ZERO);
+    }
+
+    #[test]
     fn fills_the_unit_cube_with_outward_facing_surfaces_towards_the_camera() {
         let (tris, _) = triangles();
         assert_eq!(tris.len(), 30);
+        // The named parts cover the room in order.
+        assert_eq!(parts::FLOOR.start, parts::ROOM.start);
+        assert_eq!(parts::BACK_WALL.end, parts::ROOM.end);
+        assert!((tris[parts::CEILING.start].lab_normal() - Vec3A::Y).length() < 1e-6);
+        assert!((tris[parts::RIGHT_WALL.start].lab_normal() + Vec3A::X).length() < 1e-6);
         let (mut lo, mut hi) = (Vec3A::splat(9.0), Vec3A::splat(-9.0));
         for t in &tris {
             lo = lo.min(t.min());

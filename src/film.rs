@@ -58,6 +58,35 @@ impl Film {
     }
 }
 
+/// Relative mean squared error of `image` against `reference`, as
+/// `../shared/refs/README.md` defines it: the mean over pixels and channels of
+/// `(c − r)² / (r² + ε)` with `ε = 0.01 · mean(r)²`.
+pub fn rel_mse(image: &Film, reference: &Film) -> f64 {
+    assert_eq!(
+        (image.width, image.height),
+        (reference.width, reference.height),
+        "images of different sizes"
+    );
+    let n = reference.pixels.len() as f64 * 3.0;
+    let mean = reference
+        .pixels
+        .iter()
+        .map(|p| p.as_dvec3().element_sum())
+        .sum::<f64>()
+        / n;
+    let eps = 0.01 * mean * mean;
+    image
+        .pixels
+        .iter()
+        .zip(&reference.pixels)
+        .map(|(c, r)| {
+            let (c, r) = (c.as_dvec3(), r.as_dvec3());
+            ((c - r) * (c - r) / (r * r + eps)).element_sum()
+        })
+        .sum::<f64>()
+        / n
+}
+
 /// The sRGB transfer function of a linear value in `[0, 1]`.
 pub fn srgb_encode(x: f32) -> f32 {
     if x <= 0.003_130_8 {
@@ -143,8 +172,14 @@ impl Format {
 /// flushed to disk, then renamed over `path`. On failure `path` is untouched and
 /// the temporary file removed.
 pub fn write_image(film: &Film, path: &Path) -> Result<(), OutputError> {
+    write_image_scaled(film, path, 1.0)
+}
+
+/// [`write_image`] with PNG values multiplied by `png_scale` before clamping and
+/// sRGB encoding (the exposure); EXR always holds the values unchanged.
+pub fn write_image_scaled(film: &Film, path: &Path, png_scale: f32) -> Result<(), OutputError> {
     let format = Format::from_path(path)?;
-    write_atomic(path, |tmp| write_format(film, format, path, tmp))
+    write_atomic(path, |tmp| write_format(film, format, path, tmp, png_scale))
 }
 
 /// Writes `bytes` to `path` atomically (as [`write_image`] does).
@@ -187,7 +222,13 @@ fn write_atomic(
     result
 }
 
-fn write_format(film: &Film, format: Format, path: &Path, tmp: &Path) -> Result<(), OutputError> {
+fn write_format(
+    film: &Film,
+    format: Format,
+    path: &Path,
+    tmp: &Path,
+    png_scale: f32,
+) -> Result<(), OutputError> {
     let io_err = |source| OutputError::Io {
         path: path.to_owned(),
         source,
@@ -201,7 +242,7 @@ fn write_format(film: &Film, format: Format, path: &Path, tmp: &Path) -> Result<
             let mut out = BufWriter::new(File::create(tmp).map_err(io_err)?);
             image::codecs::png::PngEncoder::new(&mut out)
                 .write_image(
-                    &film.to_srgb8(1.0),
+                    &film.to_srgb8(png_scale),
                     film.width,
                     film.height,
                     image::ExtendedColorType::Rgb8,

@@ -6,7 +6,9 @@ use std::str::FromStr;
 
 use glam::Vec3A;
 
+use crate::path::{self, PathOptions};
 use crate::ray::{Hit, Ray};
+use crate::sampler::Rng;
 use crate::scene::Scene;
 
 /// The light transport algorithm used for each camera ray.
@@ -18,23 +20,50 @@ pub enum Integrator {
     /// `D = P·max(r̂·n̂, 0) / (4πr²)`, zero in shadow, and the ambient term `N`.
     #[default]
     Direct,
+    /// Global illumination in physical units: an unbiased path tracer with
+    /// next-event estimation and multiple importance sampling (see [`path`]).
+    Path(PathOptions),
 }
 
 impl Integrator {
-    /// All integrators, in the viewer's key order.
-    pub const ALL: [Integrator; 2] = [Integrator::Flat, Integrator::Direct];
+    /// All integrators with default options, in the viewer's key order.
+    pub const ALL: [Integrator; 3] = [
+        Integrator::Flat,
+        Integrator::Direct,
+        Integrator::Path(PathOptions {
+            max_depth: u32::MAX,
+            sampler: path::SamplerKind::DEFAULT,
+        }),
+    ];
+
+    /// The `path` integrator with default options.
+    pub fn path() -> Self {
+        Integrator::Path(PathOptions::default())
+    }
 
     /// The name used on the command line.
     pub fn name(self) -> &'static str {
         match self {
             Integrator::Flat => "flat",
             Integrator::Direct => "direct",
+            Integrator::Path(_) => "path",
         }
     }
 
+    /// Whether the integrator computes radiance in physical units (`path`), as
+    /// opposed to the lab's units (`flat`, `direct`).
+    pub fn is_physical(self) -> bool {
+        matches!(self, Integrator::Path(_))
+    }
+
     /// The value carried back by `ray`; adds the number of rays cast to `rays`.
+    /// `path` draws its random numbers from a fixed stream here; renders seed it
+    /// per pixel sample instead (see [`crate::render`]).
     #[inline]
     pub fn radiance(self, scene: &Scene, ray: &Ray, rays: &mut u64) -> Vec3A {
+        if let Integrator::Path(options) = self {
+            return path::radiance(scene, ray, &options, &mut Rng::new(0, 0), rays);
+        }
         *rays += 1;
         let Some(hit) = scene.intersect(ray, f32::INFINITY) else {
             return Vec3A::ZERO;
@@ -42,7 +71,7 @@ impl Integrator {
         let rho = scene.reflectance(hit.prim);
         match self {
             Integrator::Flat => rho,
-            Integrator::Direct => rho * (direct_light(scene, &hit, ray.dir, rays) + scene.ambient),
+            _ => rho * (direct_light(scene, &hit, ray.dir, rays) + scene.ambient),
         }
     }
 
@@ -50,6 +79,9 @@ impl Integrator {
     /// together. Gives the same values as four single calls, except at exact ties.
     #[inline]
     pub fn radiance4(self, scene: &Scene, rays: &[Ray; 4], count: &mut u64) -> [Vec3A; 4] {
+        if let Integrator::Path(_) = self {
+            return rays.map(|r| self.radiance(scene, &r, count));
+        }
         *count += 4;
         let hits = scene.intersect4(rays, f32::INFINITY);
         let rho = hits.map(|h| h.map_or(Vec3A::ZERO, |h| scene.reflectance(h.prim)));
@@ -134,7 +166,7 @@ impl FromStr for Integrator {
         Integrator::ALL
             .into_iter()
             .find(|i| i.name() == s)
-            .ok_or_else(|| format!("unknown integrator '{s}' (expected flat or direct)"))
+            .ok_or_else(|| format!("unknown integrator '{s}' (expected flat, direct or path)"))
     }
 }
 
@@ -244,6 +276,7 @@ mod tests {
         for i in Integrator::ALL {
             assert_eq!(i.name().parse::<Integrator>(), Ok(i));
         }
-        assert!("path".parse::<Integrator>().is_err());
+        assert_eq!("path".parse::<Integrator>(), Ok(Integrator::path()));
+        assert!("bogus".parse::<Integrator>().is_err());
     }
 }

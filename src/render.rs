@@ -2,6 +2,7 @@
 //! sample) so the result is bit-identical for any number of threads.
 
 use std::ops::Range;
+use std::time::{Duration, Instant};
 
 use glam::{DVec3, Vec3A};
 use rayon::prelude::*;
@@ -9,7 +10,8 @@ use rayon::prelude::*;
 use crate::camera::Camera;
 use crate::film::Film;
 use crate::integrator::Integrator;
-use crate::ray::Ray;
+use crate::path::{self, PathOptions, PathSampler, SamplerKind};
+use crate::ray::{Hit, Ray};
 use crate::sampler::Rng;
 use crate::scene::Scene;
 
@@ -45,6 +47,34 @@ pub struct Rendered {
     pub film: Film,
     /// Rays cast (camera and shadow rays).
     pub rays: u64,
+    /// Samples that came out NaN or infinite and were dropped (counted as black).
+    pub dropped: u64,
+}
+
+/// What a call of [`accumulate`] cost and found.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Tally {
+    /// Rays cast (closest-hit and shadow rays).
+    pub rays: u64,
+    /// Samples that came out NaN or infinite: counted here and left out of the
+    /// sums (so they count as black).
+    pub dropped: u64,
+}
+
+impl std::ops::Add for Tally {
+    type Output = Tally;
+    fn add(self, o: Tally) -> Tally {
+        Tally {
+            rays: self.rays + o.rays,
+            dropped: self.dropped + o.dropped,
+        }
+    }
+}
+
+impl std::iter::Sum for Tally {
+    fn sum<I: Iterator<Item = Tally>>(iter: I) -> Tally {
+        iter.fold(Tally::default(), |a, b| a + b)
+    }
 }
 
 /// Renders `settings.spp` samples per pixel and averages them. `progress` is called
@@ -56,7 +86,7 @@ pub fn render(
     progress: &(dyn Fn(u64) + Sync),
 ) -> Rendered {
     let mut film = Film::new(camera.width, camera.height);
-    let rays = accumulate(
+    let tally = accumulate(
         scene,
         camera,
         settings.integrator,
@@ -66,13 +96,92 @@ pub fn render(
         progress,
     );
     film.scale(1.0 / settings.spp.max(1) as f32);
-    Rendered { film, rays }
+    Rendered {
+        film,
+        rays: tally.rays,
+        dropped: tally.dropped,
+    }
+}
+
+/// A render that took as many samples per pixel as fitted a time budget.
+#[derive(Clone, Debug)]
+pub struct Progressive {
+    /// The image, its rays and dropped samples.
+    pub rendered: Rendered,
+    /// Samples per pixel taken.
+    pub spp: u32,
+}
+
+/// Longest pass of a progressive render: short enough to stop close to the
+/// budget and to report progress.
+const MAX_PASS: Duration = Duration::from_millis(250);
+
+/// Renders in passes of whole samples per pixel (sample `k` is the same as in a
+/// render with `--spp` above `k`) until `budget` is spent or `max_spp` reached,
+/// always at least one sample. A pass is only started when about half its
+/// expected time still fits in the budget. `progress` is called with the time
+/// spent so far after every tile.
+pub fn render_for(
+    scene: &Scene,
+    camera: &Camera,
+    integrator: Integrator,
+    seed: u64,
+    budget: Duration,
+    max_spp: u32,
+    progress: &(dyn Fn(Duration) + Sync),
+) -> Progressive {
+    let start = Instant::now();
+    let mut film = Film::new(camera.width, camera.height);
+    let mut tally = Tally::default();
+    let mut spp = 0u32;
+    let max_spp = max_spp.max(1);
+    while spp < max_spp {
+        let elapsed = start.elapsed();
+        let remaining = budget.saturating_sub(elapsed);
+        let per_sample = if spp == 0 {
+            Duration::ZERO
+        } else {
+            elapsed / spp
+        };
+        let n = if spp == 0 {
+            1
+        } else if remaining < per_sample / 2 {
+            break;
+        } else {
+            let fit = remaining.min(MAX_PASS).as_secs_f64() / per_sample.as_secs_f64().max(1e-9);
+            (fit.round() as u32).clamp(1, max_spp - spp)
+        };
+        tally = tally
+            + accumulate(
+                scene,
+                camera,
+                integrator,
+                seed,
+                spp..spp + n,
+                &mut film,
+                &|_| progress(start.elapsed()),
+            );
+        spp += n;
+    }
+    film.scale(1.0 / spp as f32);
+    Progressive {
+        rendered: Rendered {
+            film,
+            rays: tally.rays,
+            dropped: tally.dropped,
+        },
+        spp,
+    }
 }
 
 /// Adds samples `samples` of every pixel to `sums`, in sample order, and returns
-/// the number of rays cast. Sample 0 goes through the pixel centre; the others are
-/// uniformly jittered over the pixel. The viewer refines by calls for `0..1`,
-/// `1..2`, ...; one call for `0..n` gives the same sums up to f32 rounding.
+/// the number of rays cast and of samples dropped. For `flat` and `direct`, sample
+/// 0 goes through the pixel centre and the others are uniformly jittered over the
+/// pixel; `path` jitters every sample (a box filter, the pixel-area average, as
+/// Mitsuba's `box`), its random numbers keyed by (seed, pixel, sample,
+/// dimension). A sample that is NaN or infinite is dropped and counted. The viewer
+/// refines by calls for `0..1`, `1..2`, ...; one call for `0..n` gives the same
+/// sums up to f32 rounding.
 pub fn accumulate(
     scene: &Scene,
     camera: &Camera,
@@ -81,7 +190,7 @@ pub fn accumulate(
     samples: Range<u32>,
     sums: &mut Film,
     progress: &(dyn Fn(u64) + Sync),
-) -> u64 {
+) -> Tally {
     let width = camera.width as usize;
     assert_eq!((sums.width, sums.height), (camera.width, camera.height));
     sums.pixels
@@ -91,6 +200,7 @@ pub fn accumulate(
             let y0 = tile * TILE_ROWS;
             let n_rows = rows.len() / width;
             let mut rays = 0u64;
+            let mut dropped = 0u64;
             // Many samples are summed in f64 (one buffer per tile), so that even
             // 2^20 of them lose nothing to f32 rounding; one sample goes straight
             // into `sums`, which keeps progressive refinement exact.
@@ -99,11 +209,59 @@ pub fn accumulate(
             } else {
                 Vec::new()
             };
-            let mut add = |i: usize, v: Vec3A| match wide.get_mut(i) {
-                Some(w) => *w += v.as_dvec3(),
-                None => rows[i] += v,
+            let mut add = |i: usize, v: Vec3A| {
+                if !v.is_finite() {
+                    dropped += 1;
+                    return;
+                }
+                match wide.get_mut(i) {
+                    Some(w) => *w += v.as_dvec3(),
+                    None => rows[i] += v,
+                }
             };
-            for s in samples.clone() {
+            if let Integrator::Path(options) = integrator {
+                for s in samples.clone() {
+                    // Camera rays of 2×2 pixel quads traced together, then each
+                    // path on its own; a last odd row or column alone.
+                    for qy in (0..n_rows).step_by(2) {
+                        for qx in (0..width).step_by(2) {
+                            let pixel = |x: usize, y: usize| ((y0 + y) * width + x) as u64;
+                            if qy + 1 < n_rows && qx + 1 < width {
+                                let quad = [(qx, qy), (qx + 1, qy), (qx, qy + 1), (qx + 1, qy + 1)];
+                                let mut starts = quad.map(|(x, y)| {
+                                    PathStart::new(camera, &options, seed, pixel(x, y), s)
+                                });
+                                let primary = starts.each_ref().map(|p| p.ray);
+                                rays += 4;
+                                let hits = scene.intersect4(&primary, f32::INFINITY);
+                                for (((x, y), start), hit) in
+                                    quad.into_iter().zip(&mut starts).zip(hits)
+                                {
+                                    let v = start.trace(scene, hit, &options, &mut rays);
+                                    add(y * width + x, v);
+                                }
+                            } else {
+                                for y in qy..(qy + 2).min(n_rows) {
+                                    for x in qx..(qx + 2).min(width) {
+                                        let mut start =
+                                            PathStart::new(camera, &options, seed, pixel(x, y), s);
+                                        rays += 1;
+                                        let hit = scene.intersect(&start.ray, f32::INFINITY);
+                                        let v = start.trace(scene, hit, &options, &mut rays);
+                                        add(y * width + x, v);
+                                    }
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+            let lab_samples = if integrator.is_physical() {
+                0..0
+            } else {
+                samples.clone()
+            };
+            for s in lab_samples {
                 // 2×2 pixel quads traced together; a last odd row or column alone.
                 for qy in (0..n_rows).step_by(2) {
                     for qx in (0..width).step_by(2) {
@@ -130,9 +288,61 @@ pub fn accumulate(
                 *sum += w.as_vec3a();
             }
             progress(n_rows as u64);
-            rays
+            Tally { rays, dropped }
         })
         .sum()
+}
+
+/// The sampler of one `path` sample.
+enum AnySampler {
+    Sobol(path::SobolSampler),
+    Independent(Rng),
+}
+
+/// One sample of the `path` integrator for pixel number `pixel`: its sampler and
+/// its camera ray, through a uniformly chosen point of the pixel.
+struct PathStart {
+    sampler: AnySampler,
+    ray: Ray,
+}
+
+impl PathStart {
+    #[inline]
+    fn new(camera: &Camera, options: &PathOptions, seed: u64, pixel: u64, s: u32) -> Self {
+        let (x, y) = (
+            (pixel % camera.width as u64) as f32,
+            (pixel / camera.width as u64) as f32,
+        );
+        let mut sampler = match options.sampler {
+            SamplerKind::Sobol => AnySampler::Sobol(path::SobolSampler::new(pixel, s, seed)),
+            SamplerKind::Independent => AnySampler::Independent(Rng::for_sample(seed, pixel, s)),
+        };
+        let d = match &mut sampler {
+            AnySampler::Sobol(smp) => smp.next_2d(),
+            AnySampler::Independent(rng) => rng.next_2d(),
+        };
+        let ray = camera.ray(x + d.x, y + d.y);
+        Self { sampler, ray }
+    }
+
+    /// The path's radiance given the camera ray's closest hit.
+    #[inline]
+    fn trace(
+        &mut self,
+        scene: &Scene,
+        hit: Option<Hit>,
+        options: &PathOptions,
+        rays: &mut u64,
+    ) -> Vec3A {
+        match &mut self.sampler {
+            AnySampler::Sobol(smp) => {
+                path::radiance_from(scene, &self.ray, hit, options, smp, rays)
+            }
+            AnySampler::Independent(rng) => {
+                path::radiance_from(scene, &self.ray, hit, options, rng, rays)
+            }
+        }
+    }
 }
 
 /// The camera ray of sample `s` of pixel `(x, y)`: through the centre for sample

@@ -1,10 +1,14 @@
-//! The scene: triangles with their reflectance, a point light and the ambient
-//! term, behind one query seam ([`Scene::intersect`], [`Scene::occluded`]).
+//! The scene: triangles with their reflectance, materials and emission, a point
+//! light and the ambient term, behind one query seam ([`Scene::intersect`],
+//! [`Scene::occluded`]).
 
-use glam::Vec3A;
+use std::f32::consts::PI;
+
+use glam::{Vec2, Vec3A};
 use thiserror::Error;
 
 use crate::bvh::Bvh;
+use crate::material::Material;
 use crate::ray::{Hit, Ray, SurfacePoint};
 use crate::triangle::Triangle;
 
@@ -34,6 +38,14 @@ pub enum SceneError {
         /// The offending value.
         value: [f32; 3],
     },
+    /// An emitted radiance is negative or not finite.
+    #[error("triangle {index} has emitted radiance {value:?} (must be finite and >= 0)")]
+    BadEmission {
+        /// Index of the triangle.
+        index: usize,
+        /// The offending value.
+        value: [f32; 3],
+    },
     /// Triangle and reflectance lists differ in length.
     #[error("{triangles} triangles but {reflectances} reflectances")]
     LengthMismatch {
@@ -50,6 +62,9 @@ pub struct Scene {
     triangles: Vec<Triangle>,
     normals: Vec<Vec3A>,
     reflectance: Vec<Vec3A>,
+    materials: Vec<Material>,
+    emission: Vec<Vec3A>,
+    area_lights: AreaLights,
     bvh: Bvh,
     /// The point light.
     pub light: PointLight,
@@ -88,10 +103,18 @@ impl Scene {
         }
         let normals = triangles.iter().map(Triangle::lab_normal).collect();
         let bvh = Bvh::build(&triangles);
+        let materials = reflectance
+            .iter()
+            .map(|&reflectance| Material::Diffuse { reflectance })
+            .collect();
+        let emission = vec![Vec3A::ZERO; triangles.len()];
         Ok(Self {
             triangles,
             normals,
             reflectance,
+            materials,
+            emission,
+            area_lights: AreaLights::default(),
             bvh,
             light,
             ambient,
@@ -143,6 +166,104 @@ impl Scene {
         self.reflectance[prim as usize]
     }
 
+    /// Material of triangle `prim` (used by the `path` integrator; `flat` and
+    /// `direct` keep using the reflectance). A diffuse one with the triangle's
+    /// reflectance unless [`Scene::set_material`] changed it.
+    #[inline]
+    pub fn material(&self, prim: u32) -> &Material {
+        &self.materials[prim as usize]
+    }
+
+    /// Gives triangle `prim` another material (for the `path` integrator).
+    pub fn set_material(&mut self, prim: usize, material: Material) {
+        self.materials[prim] = material;
+    }
+
+    /// Radiance `Le` emitted by triangle `prim` from its front side (the side its
+    /// lab normal points to); zero for a triangle that is not a light.
+    #[inline]
+    pub fn emission(&self, prim: u32) -> Vec3A {
+        self.emission[prim as usize]
+    }
+
+    /// Makes triangle `prim` an area light emitting radiance `le` from its front
+    /// side (zero turns it off), and updates the light list.
+    pub fn set_emission(&mut self, prim: usize, le: Vec3A) -> Result<(), SceneError> {
+        if !(le.is_finite() && le.min_element() >= 0.0) {
+            return Err(SceneError::BadEmission {
+                index: prim,
+                value: le.into(),
+            });
+        }
+        self.emission[prim] = le;
+        self.area_lights = AreaLights::build(&self.triangles, &self.emission);
+        Ok(())
+    }
+
+    /// Total emitted power of the point light, averaged over the colour
+    /// channels (`P`, since its intensity is `P/(4π)` in every direction).
+    #[inline]
+    fn point_power(&self) -> f32 {
+        let p = self.light.power.element_sum() / 3.0;
+        if p.is_finite() && p > 0.0 { p } else { 0.0 }
+    }
+
+    /// Whether anything emits light: the point light has power or a triangle
+    /// emits.
+    pub fn has_lights(&self) -> bool {
+        self.point_power() > 0.0 || self.area_lights.total > 0.0
+    }
+
+    /// Picks a light in proportion to its power (area lights: `π·A·Le`, one
+    /// triangle at a time, a point uniformly by area on it) with `u_light`, and a
+    /// point on it with `u`. `None` when the scene has no light.
+    #[inline]
+    pub fn sample_light(&self, u_light: f32, u: Vec2) -> Option<LightSample> {
+        let point = self.point_power();
+        let total = point + self.area_lights.total;
+        if total <= 0.0 {
+            return None;
+        }
+        let x = u_light * total;
+        if x < point || self.area_lights.prims.is_empty() {
+            let pmf = point / total;
+            return Some(LightSample::Point {
+                position: self.light.position,
+                intensity: self.light.power * (1.0 / (4.0 * PI * pmf)),
+            });
+        }
+        let lights = &self.area_lights;
+        let i = lights
+            .cdf
+            .partition_point(|&c| c <= x - point)
+            .min(lights.prims.len() - 1);
+        let prim = lights.prims[i];
+        let v = &self.triangles[prim as usize].v;
+        let su = u.x.sqrt();
+        let (b1, b2) = (1.0 - su, u.y * su);
+        let position = (1.0 - b1 - b2) * v[0] + b1 * v[1] + b2 * v[2];
+        Some(LightSample::Area {
+            position,
+            normal: self.normals[prim as usize],
+            radiance: self.emission[prim as usize],
+            pdf_area: self.light_pdf_area(prim),
+        })
+    }
+
+    /// The density per unit area with which [`Scene::sample_light`] picks a point
+    /// on emitting triangle `prim`: its selection probability over its area.
+    #[inline]
+    pub fn light_pdf_area(&self, prim: u32) -> f32 {
+        let total = self.point_power() + self.area_lights.total;
+        let Some(&(power, area)) = self.area_lights.per_prim.get(prim as usize) else {
+            return 0.0;
+        };
+        if total <= 0.0 || area <= 0.0 {
+            return 0.0;
+        }
+        power / (total * area)
+    }
+
     /// The hit point of a ray along `dir` with its error bound, for spawning rays
     /// off the surface. Its normal is the face normal, turned towards the ray's
     /// origin in a two-sided scene.
@@ -154,6 +275,67 @@ impl Scene {
             n = -n;
         }
         SurfacePoint::on_triangle(&self.triangles[prim].v, hit.b1, hit.b2, n)
+    }
+}
+
+/// A light chosen by [`Scene::sample_light`], with its selection probability
+/// already divided out.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LightSample {
+    /// The point light.
+    Point {
+        /// Where it is.
+        position: Vec3A,
+        /// Its intensity `P/(4π)` (W/sr) divided by the probability of choosing it.
+        intensity: Vec3A,
+    },
+    /// A point on an emitting triangle.
+    Area {
+        /// The point.
+        position: Vec3A,
+        /// The triangle's front-side normal (light leaves along it).
+        normal: Vec3A,
+        /// Its emitted radiance `Le`.
+        radiance: Vec3A,
+        /// Probability density of this point per unit area (selection included).
+        pdf_area: f32,
+    },
+}
+
+/// The emitting triangles and their power, for power-proportional selection.
+#[derive(Clone, Debug, Default)]
+struct AreaLights {
+    /// Emitting triangles.
+    prims: Vec<u32>,
+    /// Running sums of their powers.
+    cdf: Vec<f32>,
+    /// Sum of their powers.
+    total: f32,
+    /// Power and area of every triangle (zero power for non-emitters); empty
+    /// when none emits.
+    per_prim: Vec<(f32, f32)>,
+}
+
+impl AreaLights {
+    fn build(triangles: &[Triangle], emission: &[Vec3A]) -> Self {
+        let mut lights = Self {
+            per_prim: vec![(0.0, 0.0); triangles.len()],
+            ..Self::default()
+        };
+        for (i, (t, le)) in triangles.iter().zip(emission).enumerate() {
+            let area = t.area();
+            let power = PI * area * le.element_sum() / 3.0;
+            if power > 0.0 {
+                lights.total += power;
+                lights.prims.push(i as u32);
+                lights.cdf.push(lights.total);
+                lights.per_prim[i] = (power, area);
+            }
+        }
+        if lights.prims.is_empty() {
+            lights.per_prim.clear();
+        }
+        lights
     }
 }
 

@@ -23,7 +23,21 @@ fn stderr(o: &Output) -> String {
 fn bad_arguments_exit_2_with_one_line_naming_the_argument() {
     let dir = tempfile::tempdir().unwrap();
     let cases: &[(&[&str], &str)] = &[
-        (&["render", "--integrator", "path"], "--integrator"),
+        (&["render", "--integrator", "bogus"], "--integrator"),
+        (
+            &["render", "--integrator", "path", "--max-depth", "0"],
+            "--max-depth",
+        ),
+        (&["render", "--max-depth", "-1"], "--max-depth"),
+        (&["render", "--max-depth", "nan"], "--max-depth"),
+        (&["render", "--time", "0"], "--time"),
+        (&["render", "--time", "-2"], "--time"),
+        (&["render", "--exposure", "nan"], "--exposure"),
+        (&["render", "--material", "wall=mirror"], "--material"),
+        (&["render", "--material", "tall=plastic"], "--material"),
+        (&["render", "--material", "floor=gold:2"], "--material"),
+        (&["render", "--material", "tall"], "--material"),
+        (&["render", "--sampler", "halton"], "--sampler"),
         (&["render", "--width", "0"], "--width"),
         (&["render", "--height", "-5"], "--height"),
         (&["render", "--width", "100000"], "--width"),
@@ -452,4 +466,132 @@ fn meshes_can_be_placed_in_the_lab_box() {
     let out = raylab(&["render", "--add", "missing.obj"], dir.path());
     assert_eq!(out.status.code(), Some(1));
     assert!(stderr(&out).contains("missing.obj"));
+}
+
+#[test]
+fn path_renders_for_a_time_budget_and_reports_dropped_samples() {
+    let dir = tempfile::tempdir().unwrap();
+    let start = std::time::Instant::now();
+    let args = [
+        "render",
+        "--integrator",
+        "path",
+        "--time",
+        "0.5",
+        "--width",
+        "32",
+        "--height",
+        "24",
+        "-o",
+        "p.exr",
+    ];
+    let out = raylab(&args, dir.path());
+    let took = start.elapsed();
+    let err = stderr(&out);
+    assert!(out.status.success(), "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    for needle in [
+        "p.exr",
+        "32x24",
+        "path",
+        " spp",
+        "0 NaN/Inf samples dropped",
+    ] {
+        assert!(err.contains(needle), "{needle} missing from {err}");
+    }
+    // Whole samples per pixel until the budget is spent: many of them, on time.
+    let spp: u32 = err
+        .split(" spp")
+        .next()
+        .unwrap()
+        .rsplit(' ')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!(spp > 4, "{err}");
+    assert!(
+        took > Duration::from_millis(400) && took < Duration::from_secs(5),
+        "{took:?}"
+    );
+    let film = raylab::film::read_exr(&dir.path().join("p.exr")).unwrap();
+    assert!(film.pixels.iter().all(|p| p.is_finite()) && film.get(16, 12).max_element() > 0.0);
+
+    // The area-light box with a glass block, and a scene without light: black
+    // image, with a warning.
+    let out = raylab(
+        &[
+            "render",
+            "cornell-area",
+            "--integrator",
+            "path",
+            "--material",
+            "short=glass",
+            "--spp",
+            "2",
+            "--width",
+            "16",
+            "--height",
+            "16",
+            "-o",
+            "a.png",
+        ],
+        dir.path(),
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    let out = raylab(
+        &[
+            "render",
+            "--integrator",
+            "path",
+            "--light-power",
+            "0",
+            "--width",
+            "8",
+            "--height",
+            "8",
+            "-o",
+            "dark.exr",
+        ],
+        dir.path(),
+    );
+    let err = stderr(&out);
+    assert!(
+        out.status.success() && err.starts_with("warning: ") && err.contains("no light"),
+        "{err}"
+    );
+    let dark = raylab::film::read_exr(&dir.path().join("dark.exr")).unwrap();
+    assert!(dark.pixels.iter().all(|p| *p == glam::Vec3A::ZERO));
+}
+
+#[test]
+fn path_png_exposure_is_pi_times_two_to_the_e() {
+    // The same render as EXR and as PNG at two exposures: PNG = sRGB(π·2^E·EXR).
+    let dir = tempfile::tempdir().unwrap();
+    let base = [
+        "render",
+        "--integrator",
+        "path",
+        "--spp",
+        "2",
+        "--width",
+        "8",
+        "--height",
+        "8",
+    ];
+    for (file, exposure) in [("e.exr", "0"), ("e0.png", "0"), ("e1.png", "-1")] {
+        let mut args = base.to_vec();
+        args.extend(["--exposure", exposure, "-o", file]);
+        let out = raylab(&args, dir.path());
+        assert!(out.status.success(), "{}", stderr(&out));
+    }
+    let exr = raylab::film::read_exr(&dir.path().join("e.exr")).unwrap();
+    for (file, scale) in [("e0.png", 1.0f32), ("e1.png", 0.5)] {
+        let png = image::open(dir.path().join(file)).unwrap().to_rgb8();
+        for (p, e) in png.pixels().zip(&exr.pixels) {
+            let want = *e * (std::f32::consts::PI * scale);
+            let want = [want.x, want.y, want.z].map(raylab::film::srgb8);
+            assert_eq!(p.0, want, "{file}");
+        }
+    }
 }

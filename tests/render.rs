@@ -221,7 +221,8 @@ fn same_seed_gives_identical_images_on_any_thread_count() {
 fn one_sample_goes_through_the_pixel_centre_and_flat_shows_reflectance() {
     let scene = cornell::scene();
     let cam = lab_camera(64, 48);
-    for integrator in Integrator::ALL {
+    // The lab's integrators (`path` jitters every sample, see tests/path.rs).
+    for integrator in [Integrator::Flat, Integrator::Direct] {
         let settings = RenderSettings {
             integrator,
             ..RenderSettings::default()

@@ -245,6 +245,37 @@ fn viewer_under_xvfb_responds_to_keys_and_mouse() {
         "block centroid x {x0} -> {x2} after dragging"
     );
 
+    // 3: path, exposed like direct (the same walls, about as bright); it keeps
+    // accumulating while nothing moves, and a light move starts it again.
+    s.keys(&["r", "3"]);
+    // Samples so far, once the title shows path.
+    let spp = |s: &Session| -> u32 {
+        let title = s.xdotool(&["getwindowname", &s.window]);
+        let n = title.rsplit(" · ").next().unwrap().trim_end_matches(" spp");
+        match n.parse() {
+            Ok(n) if title.contains("path") => n,
+            _ => 0,
+        }
+    };
+    wait_for("100 path samples", Duration::from_secs(60), || {
+        spp(&s) >= 100
+    });
+    let path = s.screenshot();
+    let (p, d) = (
+        mean(&path, 0, 200, 0, 200, 1),
+        mean(&base, 0, 200, 0, 200, 1),
+    );
+    assert!(p > 0.6 * d && p < 1.4 * d, "path {p} vs direct {d}");
+    assert!(left(&path) > 20.0 && right(&path) > 20.0);
+    s.keys(&["a"]);
+    wait_for(
+        "a restart after moving the light",
+        Duration::from_secs(10),
+        || spp(&s) < 100,
+    );
+    assert!(s.xdotool(&["getwindowname", &s.window]).contains("path"));
+    s.keys(&["r", "2"]);
+
     // Resizing the window changes the render size.
     s.xdotool(&["windowsize", "--sync", &s.window, "240", "160"]);
     let resized = s.screenshot();

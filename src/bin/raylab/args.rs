@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use clap::{Args, Parser, Subcommand};
 use glam::Vec3A;
 use raylab::Integrator;
+use raylab::cornell::{self, MaterialChoice};
 
 /// Largest accepted image side, in pixels.
 pub const MAX_SIDE: u32 = 16_384;
@@ -65,7 +66,8 @@ pub struct BenchArgs {
 /// Scene, image size, camera and light: shared by `render` and `view`.
 #[derive(Debug, Clone, Args)]
 pub struct SceneArgs {
-    /// Scene to load: `cornell` (the lab's box, built in) or a Wavefront OBJ file.
+    /// Scene to load: `cornell` (the lab's box, built in), `cornell-area` (the box
+    /// lit by a ceiling area light instead of the point light) or a Wavefront OBJ file.
     #[arg(default_value = "cornell")]
     pub scene: String,
     /// Image width in pixels.
@@ -74,9 +76,28 @@ pub struct SceneArgs {
     /// Image height in pixels (also the focal length in pixels).
     #[arg(long, default_value_t = 500, value_name = "H", allow_hyphen_values = true, value_parser = parse_side)]
     pub height: u32,
-    /// How to light the image: `flat` (surface colour) or `direct` (the lab's model).
+    /// How to light the image: `flat` (surface colour), `direct` (the lab's model)
+    /// or `path` (global illumination in physical units).
     #[arg(long, default_value = "direct", value_parser = parse_integrator)]
     pub integrator: Integrator,
+    /// Longest path for `path`, in segments as in Mitsuba (1: emitters only, 2:
+    /// direct light, ...) [default: unbounded; Russian roulette ends paths].
+    #[arg(long, value_name = "N", allow_hyphen_values = true, value_parser = parse_max_depth)]
+    pub max_depth: Option<u32>,
+    /// Sample points of `path`: `sobol` (Owen-scrambled Sobol' for the pixel and
+    /// the first bounce) or `independent` (PCG32 only).
+    #[arg(long, default_value = "sobol", value_parser = parse_sampler)]
+    pub sampler: raylab::path::SamplerKind,
+    /// Materials of the built-in box's parts for `path`, e.g.
+    /// `tall=mirror,short=glass,floor=gold:0.2`. Parts: floor, ceiling, back, left,
+    /// right, short, tall. Materials: diffuse, mirror, glass[:IOR], gold, copper,
+    /// silver, aluminium, conductor (metals take :ALPHA, the GGX width; 0 polished).
+    #[arg(long, value_name = "PART=MATERIAL,...", value_delimiter = ',', value_parser = parse_assignment)]
+    pub material: Vec<(String, MaterialChoice)>,
+    /// PNG exposure in stops: PNG values are multiplied by 2^E (and by π for
+    /// `path`, see README) before the sRGB encoding; EXR is never scaled.
+    #[arg(long, default_value_t = 0.0, value_name = "E", allow_hyphen_values = true, value_parser = parse_exposure)]
+    pub exposure: f32,
     /// Camera position [default: 0,0,-3 in the box; framing the mesh otherwise].
     #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true, value_parser = parse_vec3)]
     pub camera_pos: Option<Vec3A>,
@@ -115,9 +136,13 @@ pub struct RenderArgs {
     /// Output file; `.png` (8-bit sRGB) or `.exr` (linear float32) [default: SCENE.png].
     #[arg(short, long, value_name = "FILE")]
     pub output: Option<PathBuf>,
-    /// Samples per pixel: sample 0 goes through the pixel centre, others are jittered.
-    #[arg(long, default_value_t = 1, value_name = "N", allow_hyphen_values = true, value_parser = parse_spp)]
-    pub spp: u32,
+    /// Samples per pixel: sample 0 goes through the pixel centre, others are
+    /// jittered (`path` jitters all). With --time: at most this many [default: no limit].
+    #[arg(long, value_name = "N", allow_hyphen_values = true, value_parser = parse_spp)]
+    pub spp: Option<u32>,
+    /// Render progressively until this many seconds are spent, then write.
+    #[arg(long, value_name = "SECONDS", allow_hyphen_values = true, value_parser = parse_time)]
+    pub time: Option<f64>,
     /// Seed of the sample positions; the same seed gives the same image on any
     /// number of threads.
     #[arg(
@@ -142,6 +167,29 @@ pub struct ViewArgs {
 }
 
 impl SceneArgs {
+    /// The `path` integrator with the options given (for the viewer's key 3).
+    pub fn integrator_for_path(&self) -> Integrator {
+        Self {
+            integrator: Integrator::path(),
+            ..self.clone()
+        }
+        .integrator()
+    }
+
+    /// The integrator with its options from the other arguments.
+    pub fn integrator(&self) -> Integrator {
+        match self.integrator {
+            Integrator::Path(mut options) => {
+                if let Some(d) = self.max_depth {
+                    options.max_depth = d;
+                }
+                options.sampler = self.sampler;
+                Integrator::Path(options)
+            }
+            other => other,
+        }
+    }
+
     /// Checks what single arguments cannot: the image's total size, and that
     /// transforms pair with the added meshes.
     pub fn validate(&self) -> Result<(), String> {
@@ -150,6 +198,12 @@ impl SceneArgs {
             return Err(format!(
                 "error: --transform given {transforms} times for {adds} --add meshes \
                  (give one for all, or one per mesh)"
+            ));
+        }
+        if !self.material.is_empty() && !self.scene.starts_with("cornell") {
+            return Err(format!(
+                "error: --material names parts of the built-in box, not of {}",
+                self.scene
             ));
         }
         let pixels = self.width as u64 * self.height as u64;
@@ -178,6 +232,54 @@ fn parse_spp(s: &str) -> Result<u32, String> {
         _ => Err(format!(
             "expected a whole number of samples from 1 to {MAX_SPP}"
         )),
+    }
+}
+
+fn parse_assignment(s: &str) -> Result<(String, MaterialChoice), String> {
+    let Some((part, material)) = s.split_once('=') else {
+        return Err(format!("expected PART=MATERIAL, got '{s}'"));
+    };
+    let part = part.trim();
+    if cornell::part(part).is_none() {
+        let names: Vec<&str> = cornell::PART_NAMES.iter().map(|(n, _)| *n).collect();
+        return Err(format!(
+            "unknown part '{part}' (expected {})",
+            names.join(", ")
+        ));
+    }
+    Ok((part.to_string(), MaterialChoice::parse(material.trim())?))
+}
+
+fn parse_sampler(s: &str) -> Result<raylab::path::SamplerKind, String> {
+    raylab::path::SamplerKind::ALL
+        .into_iter()
+        .find(|k| k.name() == s)
+        .ok_or_else(|| format!("unknown sampler '{s}' (expected sobol or independent)"))
+}
+
+fn parse_max_depth(s: &str) -> Result<u32, String> {
+    match s.parse::<u32>() {
+        Ok(v) if v >= 1 => Ok(v),
+        _ => Err("expected a whole number of path segments >= 1".into()),
+    }
+}
+
+/// Longest accepted --time, in seconds (a week).
+pub const MAX_TIME: f64 = 7.0 * 24.0 * 3600.0;
+
+fn parse_time(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v > 0.0 && v <= MAX_TIME => Ok(v),
+        _ => Err(format!(
+            "expected a time in seconds > 0 and at most {MAX_TIME}"
+        )),
+    }
+}
+
+fn parse_exposure(s: &str) -> Result<f32, String> {
+    match parse_finite(s) {
+        Ok(v) if v.abs() <= 64.0 => Ok(v),
+        _ => Err("expected a finite number of stops from -64 to 64".into()),
     }
 }
 
@@ -273,5 +375,25 @@ mod tests {
         assert_eq!(parse_pitch("-89"), Ok(-89.0));
         assert!(parse_non_negative("-1").is_err());
         assert!(parse_angle("nan").is_err());
+        assert_eq!(
+            parse_assignment("tall=glass:1.4"),
+            Ok((
+                "tall".into(),
+                MaterialChoice::Other(raylab::material::Material::Dielectric { ior: 1.4 })
+            ))
+        );
+        for bad in ["tall", "wall=mirror", "tall=plastic", "tall=gold:7"] {
+            assert!(parse_assignment(bad).is_err(), "{bad}");
+        }
+        assert_eq!(parse_max_depth("1"), Ok(1));
+        for bad in ["0", "-1", "nan", "1.5", ""] {
+            assert!(parse_max_depth(bad).is_err(), "{bad}");
+        }
+        assert_eq!(parse_time("0.5"), Ok(0.5));
+        for bad in ["0", "-1", "nan", "inf", "1e9"] {
+            assert!(parse_time(bad).is_err(), "{bad}");
+        }
+        assert!(parse_exposure("nan").is_err());
+        assert_eq!(parse_exposure("-1.5"), Ok(-1.5));
     }
 }

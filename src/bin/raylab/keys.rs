@@ -20,6 +20,7 @@ pub fn action_for_key(key: KeyCode) -> Option<Action> {
         KeyCode::KeyR => Action::Reset,
         KeyCode::Digit1 | KeyCode::Numpad1 => Action::Use(Integrator::Flat),
         KeyCode::Digit2 | KeyCode::Numpad2 => Action::Use(Integrator::Direct),
+        KeyCode::Digit3 | KeyCode::Numpad3 => Action::Use(Integrator::path()),
         KeyCode::KeyP => Action::Screenshot,
         KeyCode::Escape => Action::Quit,
         _ => return None,
@@ -46,6 +47,8 @@ mod tests {
             (KeyCode::KeyR, Action::Reset),
             (KeyCode::Digit1, Action::Use(Integrator::Flat)),
             (KeyCode::Digit2, Action::Use(Integrator::Direct)),
+            (KeyCode::Digit3, Action::Use(Integrator::path())),
+            (KeyCode::Numpad3, Action::Use(Integrator::path())),
             (KeyCode::KeyP, Action::Screenshot),
             (KeyCode::Escape, Action::Quit),
         ];

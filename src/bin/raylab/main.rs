@@ -76,6 +76,10 @@ fn run_default() -> anyhow::Result<()> {
         width: 500,
         height: 500,
         integrator: raylab::Integrator::Direct,
+        max_depth: None,
+        sampler: raylab::path::SamplerKind::DEFAULT,
+        material: Vec::new(),
+        exposure: 0.0,
         camera_pos: None,
         yaw: 0.0,
         pitch: 0.0,
@@ -92,7 +96,8 @@ fn run_default() -> anyhow::Result<()> {
     let args = RenderArgs {
         scene,
         output: None,
-        spp: 1,
+        spp: None,
+        time: None,
         seed: 0,
         threads: None,
         quiet: false,
@@ -103,6 +108,18 @@ fn run_default() -> anyhow::Result<()> {
          run `raylab view` where an X display is available"
     );
     Ok(())
+}
+
+/// Factor applied to PNG values (not EXR) for `exposure` stops: `2^E`, and `π`
+/// more for `path`, so that a diffuse surface lit by the point light alone shows
+/// the lab's `ρ·D` (radiance is `ρ·E/π`, the lab's `D` is the irradiance `E`).
+pub fn png_scale(integrator: raylab::Integrator, exposure: f32) -> f32 {
+    let physical = if integrator.is_physical() {
+        std::f32::consts::PI
+    } else {
+        1.0
+    };
+    physical * exposure.exp2()
 }
 
 /// Reads a mesh file, telling the user what it had to guess (missing materials).
@@ -124,8 +141,12 @@ fn load(args: &SceneArgs) -> anyhow::Result<(raylab::Scene, raylab::controls::Vi
     let is_obj = std::path::Path::new(&args.scene)
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("obj"));
-    let (mut scene, camera_pos, base, step) = if args.scene == "cornell" {
+    let area = args.scene == "cornell-area";
+    let (mut scene, camera_pos, base, step) = if args.scene == "cornell" || area {
         let (mut tris, mut rho) = cornell::triangles();
+        if area {
+            cornell::push_area_light(&mut tris, &mut rho);
+        }
         for (i, path) in args.add.iter().enumerate() {
             let mut mesh = load_mesh(path)?;
             if let Some(t) = args.transform.get(i).or(args.transform.first()) {
@@ -140,12 +161,22 @@ fn load(args: &SceneArgs) -> anyhow::Result<(raylab::Scene, raylab::controls::Vi
             );
             rho.extend(mesh.reflectance);
         }
+        // cornell-area's point light is off unless given a power.
+        let default_power = if area { 0.0 } else { cornell::LIGHT_POWER };
         let light = raylab::PointLight {
             position: cornell::LIGHT_POSITION,
-            power: Vec3A::splat(args.light_power.unwrap_or(cornell::LIGHT_POWER)),
+            power: Vec3A::splat(args.light_power.unwrap_or(default_power)),
         };
         let mut scene = raylab::Scene::new(tris, rho, light, Vec3A::ZERO)?;
-        scene.ambient = Vec3A::splat(args.ambient.unwrap_or(cornell::AMBIENT));
+        let default_ambient = if area { 0.0 } else { cornell::AMBIENT };
+        scene.ambient = Vec3A::splat(args.ambient.unwrap_or(default_ambient));
+        if area {
+            cornell::light_area_patch(&mut scene);
+        }
+        for (part, material) in &args.material {
+            let range = cornell::part(part).expect("validated by the argument parser");
+            material.apply(&mut scene, range);
+        }
         let step = raylab::controls::LAB_STEP;
         (scene, cornell::CAMERA_POSITION, Mat3A::IDENTITY, step)
     } else if is_obj {
@@ -165,7 +196,7 @@ fn load(args: &SceneArgs) -> anyhow::Result<(raylab::Scene, raylab::controls::Vi
         (scene, framing.camera_pos, framing.base, framing.step)
     } else {
         anyhow::bail!(
-            "scene '{}': unknown scene (built in: cornell; or a Wavefront .obj file)",
+            "scene '{}': unknown scene (built in: cornell, cornell-area; or a Wavefront .obj file)",
             args.scene
         );
     };
@@ -179,7 +210,7 @@ fn load(args: &SceneArgs) -> anyhow::Result<(raylab::Scene, raylab::controls::Vi
         yaw_deg: args.yaw,
         pitch_deg: args.pitch,
         light_pos: scene.light.position,
-        integrator: args.integrator,
+        integrator: args.integrator(),
     };
     Ok((scene, view))
 }

@@ -7,10 +7,10 @@ use std::time::{Duration, Instant};
 
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use raylab::film::{Format, write_image};
-use raylab::render::{RenderSettings, render};
+use raylab::film::{Format, write_image_scaled};
+use raylab::render::{Progressive, RenderSettings, render, render_for};
 
-use crate::args::RenderArgs;
+use crate::args::{MAX_SPP, RenderArgs};
 
 /// A render shorter than this shows no progress bar.
 const PROGRESS_DELAY: Duration = Duration::from_millis(300);
@@ -27,51 +27,96 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     Format::from_path(&output)?;
     let (scene, view) = crate::load(&args.scene)?;
     let camera = view.camera(args.scene.width, args.scene.height);
-    let settings = RenderSettings {
-        integrator: view.integrator,
-        spp: args.spp,
-        seed: args.seed,
-    };
+    let integrator = view.integrator;
+    if integrator.is_physical() && !scene.has_lights() && !args.quiet {
+        eprintln!(
+            "warning: the scene has no light (point light power 0, nothing emits): the path-traced image is black"
+        );
+    }
 
     let bar = ProgressBar::hidden();
-    bar.set_length(camera.height as u64);
-    bar.set_style(
-        ProgressStyle::with_template("{elapsed_precise} [{wide_bar}] {percent}% eta {eta}")
-            .expect("valid template"),
-    );
+    let template = match args.time {
+        // Time-limited: the bar fills with the time spent.
+        Some(_) => "{elapsed_precise} [{wide_bar}] {pos}/{len} ms",
+        None => "{elapsed_precise} [{wide_bar}] {percent}% eta {eta}",
+    };
+    bar.set_style(ProgressStyle::with_template(template).expect("valid template"));
     let show_bar = !args.quiet && std::io::stderr().is_terminal();
     let shown = AtomicBool::new(false);
     let start = Instant::now();
-    let progress = |rows: u64| {
-        bar.inc(rows);
+    let reveal = || {
         if show_bar && start.elapsed() > PROGRESS_DELAY && !shown.swap(true, Ordering::Relaxed) {
             bar.set_draw_target(ProgressDrawTarget::stderr());
         }
     };
-    let rendered = match args.threads {
+    let rows_done = |rows: u64| {
+        bar.inc(rows);
+        reveal();
+    };
+    let time_spent = |t: Duration| {
+        bar.set_position(t.as_millis() as u64);
+        reveal();
+    };
+    let work = || match args.time {
+        Some(seconds) => {
+            let budget = Duration::from_secs_f64(seconds);
+            bar.set_length(budget.as_millis() as u64);
+            let max_spp = args.spp.unwrap_or(MAX_SPP);
+            render_for(
+                &scene,
+                &camera,
+                integrator,
+                args.seed,
+                budget,
+                max_spp,
+                &time_spent,
+            )
+        }
+        None => {
+            let spp = args.spp.unwrap_or(1);
+            bar.set_length(camera.height as u64);
+            let settings = RenderSettings {
+                integrator,
+                spp,
+                seed: args.seed,
+            };
+            Progressive {
+                rendered: render(&scene, &camera, &settings, &rows_done),
+                spp,
+            }
+        }
+    };
+    let done = match args.threads {
         Some(n) => rayon::ThreadPoolBuilder::new()
             .num_threads(n)
             .build()
             .context("cannot start worker threads")?
-            .install(|| render(&scene, &camera, &settings, &progress)),
-        None => render(&scene, &camera, &settings, &progress),
+            .install(work),
+        None => work(),
     };
     let elapsed = start.elapsed();
     bar.finish_and_clear();
 
-    write_image(&rendered.film, &output)?;
+    let png_scale = crate::png_scale(integrator, args.scene.exposure);
+    write_image_scaled(&done.rendered.film, &output, png_scale)?;
     if !args.quiet {
         let secs = elapsed.as_secs_f64();
+        let rays = done.rendered.rays;
+        let dropped = if integrator.is_physical() || done.rendered.dropped > 0 {
+            format!(", {} NaN/Inf samples dropped", done.rendered.dropped)
+        } else {
+            String::new()
+        };
         eprintln!(
-            "wrote {}: {}x{}, {}, {} spp, {:.1} ms, {} rays, {:.1} Mrays/s",
+            "wrote {}: {}x{}, {}, {} spp, {:.1} ms, {} rays, {:.1} Mrays/s{dropped}",
             output.display(),
             camera.width,
             camera.height,
-            settings.integrator,
-            settings.spp,
+            integrator,
+            done.spp,
             secs * 1e3,
-            rendered.rays,
-            rendered.rays as f64 / secs / 1e6,
+            rays,
+            rays as f64 / secs / 1e6,
         );
     }
     Ok(())

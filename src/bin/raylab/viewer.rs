@@ -6,10 +6,10 @@ use std::rc::Rc;
 use std::time::{Duration, Instant};
 
 use anyhow::{Context, anyhow};
-use raylab::Scene;
 use raylab::controls::{Action, ViewState};
-use raylab::film::{Film, srgb8, write_image};
+use raylab::film::{Film, srgb8, write_image_scaled};
 use raylab::render::accumulate;
+use raylab::{Integrator, Scene};
 use rayon::prelude::*;
 use winit::application::ApplicationHandler;
 use winit::dpi::PhysicalSize;
@@ -21,8 +21,11 @@ use winit::window::{Window, WindowId};
 use crate::args::SceneArgs;
 use crate::keys::action_for_key;
 
-/// Samples per pixel after which a still view stops refining and the viewer idles.
+/// Samples per pixel after which a still view stops refining and the viewer idles
+/// (`flat` and `direct`, whose images are exact but for antialiasing).
 const MAX_SAMPLES: u32 = 64;
+/// The same for `path`, whose noise keeps falling.
+const MAX_PATH_SAMPLES: u32 = 1 << 16;
 /// How often the title's timing figures are refreshed.
 const TITLE_INTERVAL: Duration = Duration::from_millis(250);
 
@@ -55,6 +58,8 @@ pub fn run_on(
     args: &SceneArgs,
 ) -> anyhow::Result<()> {
     let mut app = Viewer {
+        path: args.integrator_for_path(),
+        exposure: args.exposure,
         scene,
         initial,
         state: initial,
@@ -83,6 +88,10 @@ struct Graphics {
 }
 
 struct Viewer {
+    /// The `path` integrator with the command line's options (key 3).
+    path: Integrator,
+    /// PNG exposure in stops, also applied on screen.
+    exposure: f32,
     scene: Scene,
     initial: ViewState,
     state: ViewState,
@@ -159,7 +168,26 @@ impl Viewer {
         }
     }
 
+    /// Samples per pixel at which refinement stops for the current integrator.
+    fn max_samples(&self) -> u32 {
+        if self.state.integrator.is_physical() {
+            MAX_PATH_SAMPLES
+        } else {
+            MAX_SAMPLES
+        }
+    }
+
+    /// Factor from pixel values to display values (exposure; π for `path`).
+    fn display_scale(&self) -> f32 {
+        crate::png_scale(self.state.integrator, self.exposure)
+    }
+
     fn handle(&mut self, action: Action, event_loop: &ActiveEventLoop) -> anyhow::Result<()> {
+        // Key 3 selects `path` with the command line's options (--max-depth).
+        let action = match action {
+            Action::Use(Integrator::Path(_)) => Action::Use(self.path),
+            other => other,
+        };
         match action {
             Action::Quit => event_loop.exit(),
             Action::Screenshot => {
@@ -190,7 +218,7 @@ impl Viewer {
             .expect("a free name");
         let mut frame = self.sums.clone();
         frame.scale(1.0 / self.samples.max(1) as f32);
-        write_image(&frame, Path::new(&path))?;
+        write_image_scaled(&frame, Path::new(&path), self.display_scale())?;
         Ok(path)
     }
 
@@ -204,7 +232,7 @@ impl Viewer {
         if self.samples == 0 {
             self.sums.pixels.fill(glam::Vec3A::ZERO);
         }
-        if self.samples < MAX_SAMPLES {
+        if self.samples < self.max_samples() {
             self.scene.light.position = self.state.light_pos;
             let camera = self.state.camera(w, h);
             let k = self.samples;
@@ -220,7 +248,7 @@ impl Viewer {
             self.samples += 1;
         }
         self.present()?;
-        let refining = self.samples < MAX_SAMPLES;
+        let refining = self.samples < self.max_samples();
         // Refresh the title a few times a second, and at once after a change (the
         // integrator may be new) or when refinement ends.
         let due = self.timing.frame(start.elapsed().as_secs_f64() * 1e3);
@@ -235,6 +263,7 @@ impl Viewer {
 
     /// Shows the average of the samples so far, sRGB-encoded.
     fn present(&mut self) -> anyhow::Result<()> {
+        let scale = self.display_scale() / self.samples.max(1) as f32;
         let Some(gfx) = self.gfx.as_mut() else {
             return Ok(());
         };
@@ -242,7 +271,6 @@ impl Viewer {
             .surface
             .buffer_mut()
             .map_err(|e| anyhow!("cannot draw: {e}"))?;
-        let scale = 1.0 / self.samples.max(1) as f32;
         buffer
             .par_chunks_mut(4096)
             .zip(self.sums.pixels.par_chunks(4096))

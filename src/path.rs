@@ -1,0 +1,322 @@
+//! The `path` integrator: a unidirectional path tracer in physical units.
+//!
+//! Radiance is estimated along paths from the camera. At every non-specular
+//! vertex one light is picked in proportion to its power and sampled (next-event
+//! estimation); emission found by following the BSDF sample is weighted against
+//! it with the power heuristic (multiple importance sampling), so area lights get
+//! the better of both strategies. The point light can only be reached by
+//! next-event estimation. Russian roulette ([`RR_SCALE`]) ends paths after
+//! [`RR_DEPTH`] bounces; `max_depth` can cut them earlier.
+//!
+//! Units: a point light of power `P` has intensity `P/(4π)` W/sr, emitting
+//! triangles radiance `Le`, diffuse surfaces reflect `ρ/π`. Nothing is added for
+//! ambient light: the path tracer computes it.
+
+use glam::{Vec2, Vec3A};
+
+use crate::material::{Frame, Material};
+use crate::ray::{Hit, Ray, SurfacePoint};
+use crate::sampler::Rng;
+use crate::scene::{LightSample, Scene};
+
+/// Bounces after which Russian roulette may end a path.
+pub const RR_DEPTH: u32 = 3;
+/// Russian roulette keeps a path with probability `min(RR_SCALE · max(β), 0.95)`
+/// (β the path throughput): only paths whose throughput has fallen below
+/// `1/RR_SCALE` face it at all. Mitsuba's rule is `RR_SCALE = 1`; on the lab box 5
+/// reaches a given relMSE in about a third less time (docs/path-tracing.md), and
+/// the 0.95 cap still ends paths between perfect mirrors.
+pub const RR_SCALE: f32 = 5.0;
+
+/// Which sample points the path tracer uses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum SamplerKind {
+    /// Owen-scrambled Sobol' points ([`crate::sobol`]), a 2D pair per decision.
+    Sobol,
+    /// Independent uniform random numbers (PCG32 keyed by seed, pixel, sample).
+    Independent,
+}
+
+impl SamplerKind {
+    /// Every kind, for the command line.
+    pub const ALL: [SamplerKind; 2] = [SamplerKind::Sobol, SamplerKind::Independent];
+
+    /// The default, usable in constants.
+    pub const DEFAULT: SamplerKind = SamplerKind::Sobol;
+
+    /// The name used on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            SamplerKind::Sobol => "sobol",
+            SamplerKind::Independent => "independent",
+        }
+    }
+}
+
+/// Options of the `path` integrator.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct PathOptions {
+    /// Longest path in segments, as in Mitsuba: 1 sees only emitters, 2 adds
+    /// direct light, ...; `u32::MAX` leaves it to Russian roulette.
+    pub max_depth: u32,
+    /// Sample points.
+    pub sampler: SamplerKind,
+}
+
+impl Default for PathOptions {
+    fn default() -> Self {
+        Self {
+            max_depth: u32::MAX,
+            sampler: SamplerKind::DEFAULT,
+        }
+    }
+}
+
+/// A stream of sample values for one path (one pixel sample). The path tracer
+/// asks for a 2D pair for the pixel position, then per bounce a pair for the
+/// point on the light, a pair for the BSDF direction, a "minor" pair for the
+/// light and lobe choices, and one number for Russian roulette.
+pub trait PathSampler {
+    /// The next two values in `[0, 1)` for a decision that gains little from
+    /// stratification (which light, which lobe).
+    #[inline]
+    fn next_2d_minor(&mut self) -> Vec2 {
+        self.next_2d()
+    }
+    /// The next value in `[0, 1)`.
+    fn next_1d(&mut self) -> f32;
+    /// The next two values in `[0, 1)`.
+    #[inline]
+    fn next_2d(&mut self) -> Vec2 {
+        let x = self.next_1d();
+        Vec2::new(x, self.next_1d())
+    }
+}
+
+impl PathSampler for Rng {
+    #[inline]
+    fn next_1d(&mut self) -> f32 {
+        self.next_f32()
+    }
+}
+
+/// Pairs taken from Sobol' before [`SobolSampler`] goes on with independent
+/// numbers: the pixel position and the first [`SOBOL_BOUNCES`] bounces' light
+/// and BSDF pairs, where stratification pays; later bounces carry little of the
+/// image and are not worth the scrambled points' cost.
+pub const SOBOL_PAIRS: u32 = 1 + 2 * SOBOL_BOUNCES;
+/// Bounces whose 2D decisions use Sobol' points.
+pub const SOBOL_BOUNCES: u32 = 1;
+
+/// Owen-scrambled Sobol' pairs ([`crate::sobol::PixelSampler`]) for the first
+/// [`SOBOL_PAIRS`] 2D decisions, then independent numbers from the sample's own
+/// PCG stream; single numbers (Russian roulette) and minor pairs (light and lobe
+/// choices) are always independent.
+#[derive(Clone, Debug)]
+pub struct SobolSampler {
+    sobol: crate::sobol::PixelSampler,
+    rng: Rng,
+    pairs_left: u32,
+}
+
+impl SobolSampler {
+    /// The sampler of sample `index` of pixel `pixel` in a render seeded `seed`.
+    #[inline]
+    pub fn new(pixel: u64, index: u32, seed: u64) -> Self {
+        Self {
+            sobol: crate::sobol::PixelSampler::new(pixel, index, seed),
+            rng: Rng::for_sample(seed, pixel, index),
+            pairs_left: SOBOL_PAIRS,
+        }
+    }
+}
+
+impl PathSampler for SobolSampler {
+    #[inline]
+    fn next_1d(&mut self) -> f32 {
+        self.rng.next_f32()
+    }
+    #[inline]
+    fn next_2d_minor(&mut self) -> Vec2 {
+        Vec2::new(self.rng.next_f32(), self.rng.next_f32())
+    }
+    #[inline]
+    fn next_2d(&mut self) -> Vec2 {
+        if self.pairs_left > 0 {
+            self.pairs_left -= 1;
+            self.sobol.next_2d()
+        } else {
+            Vec2::new(self.rng.next_f32(), self.rng.next_f32())
+        }
+    }
+}
+
+/// Radiance arriving along `ray` (a unit direction), estimated by one path.
+/// Adds the rays cast (closest-hit and shadow) to `rays`. May return a
+/// non-finite value in pathological cases; the caller drops those.
+pub fn radiance(
+    scene: &Scene,
+    ray: &Ray,
+    options: &PathOptions,
+    sampler: &mut impl PathSampler,
+    rays: &mut u64,
+) -> Vec3A {
+    *rays += 1;
+    let hit = scene.intersect(ray, f32::INFINITY);
+    radiance_from(scene, ray, hit, options, sampler, rays)
+}
+
+/// [`radiance`] for a ray whose closest hit `first` is already known (camera
+/// rays traced four at a time); does not count that ray.
+pub fn radiance_from(
+    scene: &Scene,
+    ray: &Ray,
+    first: Option<Hit>,
+    options: &PathOptions,
+    sampler: &mut impl PathSampler,
+    rays: &mut u64,
+) -> Vec3A {
+    let mut next_hit = first;
+    let mut l = Vec3A::ZERO;
+    let mut beta = Vec3A::ONE;
+    let mut ray = *ray;
+    // Emission reached through a delta lobe (or by the camera ray) cannot have
+    // been sampled by next-event estimation: it counts in full.
+    let mut specular = true;
+    let mut bsdf_pdf = 0.0f32;
+    let mut depth = 0u32;
+    while let Some(hit) = next_hit {
+        let prim = hit.prim;
+        let n = scene.normal(prim);
+        let cos_out = -n.dot(ray.dir);
+
+        // Emission from the front side of an area light.
+        let le = scene.emission(prim);
+        if cos_out > 0.0 && le != Vec3A::ZERO {
+            let weight = if specular {
+                1.0
+            } else {
+                let light_pdf = scene.light_pdf_area(prim) * hit.t * hit.t / cos_out;
+                power_heuristic(bsdf_pdf, light_pdf)
+            };
+            l += beta * le * weight;
+        }
+        // Mitsuba's convention: a path of `max_depth` segments ends here.
+        if depth + 1 >= options.max_depth {
+            break;
+        }
+
+        let material = scene.material(prim);
+        // Surfaces of two-sided scenes face the ray; one-sided ones (the lab box)
+        // reflect nothing from behind, except glass, which has two sides.
+        let two_sided_material = two_sided(material);
+        let n = if scene.two_sided && !two_sided_material && cos_out < 0.0 {
+            -n
+        } else {
+            n
+        };
+        let tri = &scene.triangles()[prim as usize];
+        let sp = SurfacePoint::on_triangle(&tri.v, hit.b1, hit.b2, n);
+        let frame = Frame::from_normal(n);
+        let wo_world = -ray.dir;
+        let wo = frame.to_local(wo_world);
+
+        let u_light_pos = sampler.next_2d();
+        let u_bsdf = sampler.next_2d();
+        let u_choice = sampler.next_2d_minor();
+        let (u_light, u_lobe) = (u_choice.x, u_choice.y);
+        let u_rr = sampler.next_1d();
+
+        // Next-event estimation (nothing to gain on a delta lobe).
+        if !material.is_specular()
+            && let Some(light) = scene.sample_light(u_light, u_light_pos)
+        {
+            let (target, li, light_pdf) = match light {
+                LightSample::Point {
+                    position,
+                    intensity,
+                } => {
+                    let r2 = (position - sp.p).length_squared();
+                    (position, intensity / r2, None)
+                }
+                LightSample::Area {
+                    position,
+                    normal,
+                    radiance,
+                    pdf_area,
+                } => {
+                    let d = position - sp.p;
+                    let r2 = d.length_squared();
+                    let cos_l = -normal.dot(d) / r2.sqrt();
+                    if cos_l > 0.0 {
+                        let pdf = pdf_area * r2 / cos_l;
+                        (position, radiance / pdf, Some(pdf))
+                    } else {
+                        (position, Vec3A::ZERO, None)
+                    }
+                }
+            };
+            if li != Vec3A::ZERO {
+                let wi_world = (target - sp.p).normalize();
+                let wi = frame.to_local(wi_world);
+                let f = material.eval(wo, wi);
+                if f != Vec3A::ZERO {
+                    let (shadow, t_max) = sp.ray_to(target);
+                    *rays += 1;
+                    if !scene.occluded(&shadow, t_max) {
+                        let weight =
+                            light_pdf.map_or(1.0, |pdf| power_heuristic(pdf, material.pdf(wo, wi)));
+                        l += beta * f * li * weight;
+                    }
+                }
+            }
+        }
+
+        // Continue the path by sampling the BSDF.
+        let Some(bs) = material.sample(wo, u_lobe, u_bsdf) else {
+            break;
+        };
+        beta *= bs.weight;
+        specular = bs.specular;
+        bsdf_pdf = bs.pdf;
+        let wi_world = frame.to_world(bs.wi);
+        ray = Ray::new(sp.offset_origin(wi_world), wi_world);
+        depth += 1;
+        if beta == Vec3A::ZERO {
+            break;
+        }
+
+        if depth >= RR_DEPTH {
+            let survive = (beta.max_element() * RR_SCALE).min(0.95);
+            // (A NaN throughput ends the path too.)
+            if u_rr >= survive || survive.is_nan() {
+                break;
+            }
+            beta /= survive;
+        }
+        *rays += 1;
+        next_hit = scene.intersect(&ray, f32::INFINITY);
+    }
+    l
+}
+
+/// The power heuristic (β = 2) weight of a strategy with density `a` against one
+/// with density `b`.
+#[inline]
+pub fn power_heuristic(a: f32, b: f32) -> f32 {
+    let (a2, b2) = (a * a, b * b);
+    if a2 + b2 > 0.0 && a2.is_finite() {
+        a2 / (a2 + b2)
+    } else if a.is_infinite() {
+        1.0
+    } else {
+        0.0
+    }
+}
+
+/// Whether a material scatters light arriving at either side (glass); the others
+/// are one-sided and face the side their normal points to.
+#[inline]
+fn two_sided(material: &Material) -> bool {
+    matches!(material, Material::Dielectric { .. })
+}
