@@ -121,7 +121,8 @@ impl Bvh {
             return None;
         }
         let boxes = BoxQuery::new(ray.origin, ray.dir);
-        let tri_ray = PacketRay::new(ray.origin, ray.dir);
+        // Made at the first leaf: many rays never reach one.
+        let mut tri_ray: Option<PacketRay> = None;
         let mut best: Option<Hit> = None;
         let mut t_max = t_max;
         let mut stack = Stack::<(ChildRef, f32)>::new();
@@ -129,8 +130,9 @@ impl Bvh {
         let mut cur = root;
         loop {
             if cur & LEAF != 0 {
+                let tri_ray = tri_ray.get_or_insert_with(|| PacketRay::new(ray.origin, ray.dir));
                 for p in self.leaf(cur) {
-                    if let Some((lane, h)) = packet::intersect(&tri_ray, p, t_max) {
+                    if let Some((lane, h)) = packet::intersect(tri_ray, p, t_max) {
                         t_max = h.t;
                         best = Some(Hit {
                             t: h.t,
@@ -201,16 +203,18 @@ impl Bvh {
             return false;
         }
         let boxes = BoxQuery::new(ray.origin, ray.dir);
-        let tri_ray = PacketRay::new(ray.origin, ray.dir);
+        // Made at the first leaf: many rays never reach one.
+        let mut tri_ray: Option<PacketRay> = None;
         let mut stack = Stack::<ChildRef>::new();
         let mut t_near = [0.0f32; WIDTH];
         let mut cur = root;
         loop {
             if cur & LEAF != 0 {
+                let tri_ray = tri_ray.get_or_insert_with(|| PacketRay::new(ray.origin, ray.dir));
                 if self
                     .leaf(cur)
                     .iter()
-                    .any(|p| packet::occluded(&tri_ray, p, t_max))
+                    .any(|p| packet::occluded(tri_ray, p, t_max))
                 {
                     return true;
                 }
