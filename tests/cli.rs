@@ -595,3 +595,32 @@ fn path_png_exposure_is_pi_times_two_to_the_e() {
         }
     }
 }
+
+/// `raylab bench ... | head -1`: a reader that closes the pipe early ends the
+/// command quietly with success, not with a panic about a broken pipe.
+#[test]
+fn bench_into_a_closed_pipe_exits_quietly() {
+    let dir = tempfile::tempdir().unwrap();
+    write_tetrahedron(dir.path());
+    let rays: Vec<u8> = [0.2f32, 0.2, -1.0, 0.0, 0.0, 1.0]
+        .iter()
+        .flat_map(|v| v.to_le_bytes())
+        .collect();
+    std::fs::write(dir.path().join("r.rays"), rays).unwrap();
+    for _ in 0..3 {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_raylab"))
+            .args(["bench", "tet.obj", "--rays", "r.rays", "--threads", "1,1,1"])
+            .current_dir(dir.path())
+            .stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("run raylab");
+        // Close the read end before the first line is written (the build comes
+        // first and takes longer than this).
+        drop(child.stdout.take());
+        let out = child.wait_with_output().unwrap();
+        assert!(out.status.success(), "{}", stderr(&out));
+        assert!(stderr(&out).is_empty(), "{}", stderr(&out));
+    }
+}
