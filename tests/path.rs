@@ -1,11 +1,11 @@
 //! The `path` integrator against Mitsuba 3, and the properties of its renders:
 //! determinism on any thread count, dropped non-finite samples, area lights.
 
-use std::path::Path;
+mod common;
 
 use glam::Vec3A;
 use raylab::cornell;
-use raylab::film::{Film, read_exr, rel_mse};
+use raylab::film::{Film, rel_mse};
 use raylab::render::{RenderSettings, Rendered, render};
 use raylab::{Camera, Integrator, Scene};
 
@@ -49,11 +49,7 @@ const REFERENCE_NOISE: f64 = 3e-5;
 /// 0.1 % here, while a missing bounce or a wrong factor moves it by several %.
 #[test]
 fn path_converges_to_mitsuba() {
-    let path =
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/refs/cornell-path-mitsuba-256.exr");
-    let reference = read_exr(&path).unwrap_or_else(|e| {
-        panic!("{e}: the shared folder must sit beside the project (see README)")
-    });
+    let reference = common::shared_ref("cornell-path-mitsuba-256.exr");
     let spp = 64;
     let ours = path_render(&cornell::scene(), &lab_camera(256, 256), spp, 7, 2);
     let e = rel_mse(&ours.film, &reference);

@@ -1,11 +1,11 @@
 //! Whole-image properties of the lab renders: agreement with an independent
 //! reference, no shadow acne, determinism, and progressive refinement.
 
-use std::path::Path;
+mod common;
 
 use glam::Vec3A;
 use raylab::cornell::{self, colors};
-use raylab::film::{Film, read_exr};
+use raylab::film::Film;
 use raylab::render::{RenderSettings, accumulate, render, sample_pixel};
 use raylab::{Camera, Integrator, Scene};
 
@@ -66,11 +66,7 @@ fn analytic_direct(scene: &Scene, prim: u32, p: Vec3A) -> Vec3A {
 /// along silhouettes and exactly on shadow boundaries.
 #[test]
 fn direct_matches_the_independent_reference() {
-    let path =
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/refs/cornell-direct-lab-500.exr");
-    let reference = read_exr(&path).unwrap_or_else(|e| {
-        panic!("{e}: the shared folder must sit beside the project (see README)")
-    });
+    let reference = common::shared_ref("cornell-direct-lab-500.exr");
     let scene = cornell::scene();
     let ours = render(
         &scene,
