@@ -71,6 +71,7 @@ pub(super) enum BinNode {
     },
     Inner {
         bounds: Aabb,
+        count: usize,
         children: Box<[BinNode; 2]>,
     },
 }
@@ -79,6 +80,13 @@ impl BinNode {
     pub(super) fn bounds(&self) -> &Aabb {
         match self {
             BinNode::Leaf { bounds, .. } | BinNode::Inner { bounds, .. } => bounds,
+        }
+    }
+
+    /// Triangles in the subtree.
+    pub(super) fn count(&self) -> usize {
+        match self {
+            BinNode::Leaf { count, .. } | BinNode::Inner { count, .. } => *count,
         }
     }
 }
@@ -121,18 +129,18 @@ pub(super) fn build_binary(triangles: &[Triangle]) -> Option<(BinNode, Vec<Build
         triangles.len() < 1 << 27,
         "too many triangles for the BVH (at most 2^27)"
     );
-    // Mapped in parallel into place, then the few that cannot be hit are dropped
-    // (a parallel filter would gather pieces and copy them together).
+    // Mapped in parallel into place; the few that cannot be hit (if any) are
+    // dropped afterwards (a parallel filter would gather pieces and copy them).
+    let valid = |t: &Triangle| t.is_finite() && t.area() > 0.0;
     let mut prims: Vec<BuildPrim> = Vec::new();
     triangles
         .par_iter()
         .enumerate()
         .map(|(i, t)| BuildPrim::new(t, i as u32))
         .collect_into_vec(&mut prims);
-    prims.retain(|p| {
-        let t = &triangles[p.id() as usize];
-        t.is_finite() && t.area() > 0.0
-    });
+    if !triangles.par_iter().all(valid) {
+        prims.retain(|p| valid(&triangles[p.id() as usize]));
+    }
     if prims.is_empty() {
         return None;
     }
@@ -186,6 +194,7 @@ fn build_range(
                 let ((lb, lc), (rb, rc)) = (bounds_of(l), bounds_of(r));
                 BinNode::Inner {
                     bounds,
+                    count,
                     children: Box::new([
                         build_range(l, first, depth + 1, lb, lc),
                         build_range(r, first + mid, depth + 1, rb, rc),
@@ -236,6 +245,7 @@ fn build_range(
     };
     BinNode::Inner {
         bounds,
+        count,
         children: Box::new(children),
     }
 }

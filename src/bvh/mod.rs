@@ -8,6 +8,7 @@
 //! any-hit traversal stops at the first hit.
 
 mod build;
+mod collapse;
 mod node;
 mod packet;
 mod ray4;
@@ -16,7 +17,8 @@ use std::mem::MaybeUninit;
 
 use crate::ray::{Hit, Ray};
 use crate::triangle::Triangle;
-use build::{BinNode, build_binary};
+use build::build_binary;
+use collapse::{Wide, collapse};
 use node::{BoxQuery, ChildRef, Isa, LEAF, Node, WIDTH};
 use packet::{Packet, PacketRay};
 use rayon::prelude::*;
@@ -49,9 +51,9 @@ impl Bvh {
                 isa,
             };
         };
-        let mut nodes = Vec::with_capacity(prims.len() / 8 + 1);
-        let mut chunks = Vec::with_capacity(prims.len() / 3 + 1);
-        let root = collapse(&binary, &mut nodes, &mut chunks);
+        // The collapse is serial: run side by side, its parts had to be copied
+        // together again, which cost what the second thread saved (bunny_sub2).
+        let (Wide { nodes, chunks }, root) = collapse(&binary);
         // The packets, in the order the leaves took them, gathered in parallel
         // (the triangles are read by scattered index: the slow part of a big build)
         // while the binary tree is freed.
@@ -254,58 +256,6 @@ impl Bvh {
     pub fn memory_bytes(&self) -> usize {
         self.nodes.len() * std::mem::size_of::<Node>()
             + self.packets.len() * std::mem::size_of::<Packet>()
-    }
-}
-
-/// Turns a binary node into a child reference, pulling up grandchildren
-/// (largest box first) until a node has `WIDTH` children.
-fn collapse(node: &BinNode, nodes: &mut Vec<Node>, chunks: &mut Vec<(u32, u32)>) -> ChildRef {
-    match node {
-        BinNode::Leaf { first, count, .. } => {
-            let start = chunks.len() as u32;
-            for offset in (0..*count).step_by(4) {
-                chunks.push(((first + offset) as u32, (count - offset).min(4) as u32));
-            }
-            let n = chunks.len() as u32 - start;
-            assert!(start < 1 << 27, "too many triangles for the BVH");
-            LEAF | start << 4 | n
-        }
-        BinNode::Inner { children, .. } => {
-            let mut kids: [&BinNode; WIDTH] = [&children[0]; WIDTH];
-            kids[1] = &children[1];
-            let mut n = 2;
-            while n < WIDTH {
-                // The inner child with the largest box gives up its children.
-                let widest = (0..n)
-                    .filter(|&i| matches!(kids[i], BinNode::Inner { .. }))
-                    .max_by(|&a, &b| {
-                        kids[a]
-                            .bounds()
-                            .half_area()
-                            .total_cmp(&kids[b].bounds().half_area())
-                    });
-                let Some(i) = widest else { break };
-                let BinNode::Inner { children, .. } = kids[i] else {
-                    unreachable!()
-                };
-                kids[i] = &children[0];
-                kids[n] = &children[1];
-                n += 1;
-            }
-            let slot = nodes.len();
-            nodes.push(Node::EMPTY);
-            for (lane, kid) in kids[..n].iter().enumerate() {
-                let b = *kid.bounds();
-                let child = collapse(kid, nodes, chunks);
-                let node = &mut nodes[slot];
-                for axis in 0..3 {
-                    node.bounds[axis][lane] = b.min[axis];
-                    node.bounds[axis + 3][lane] = b.max[axis];
-                }
-                node.children[lane] = child;
-            }
-            slot as u32
-        }
     }
 }
 
