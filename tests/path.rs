@@ -81,10 +81,7 @@ fn same_seed_gives_identical_path_images_on_any_thread_count() {
     for threads in [2, 3] {
         let other = path_render(&scene, &cam, 3, 11, threads).film;
         assert!(
-            one.pixels
-                .iter()
-                .zip(&other.pixels)
-                .all(|(a, b)| a.to_array().map(f32::to_bits) == b.to_array().map(f32::to_bits)),
+            common::bit_identical(&one, &other),
             "{threads} threads differ from 1"
         );
     }

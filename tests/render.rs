@@ -193,10 +193,7 @@ fn same_seed_gives_identical_images_on_any_thread_count() {
     for threads in [2, 3, 7] {
         let other = render_with(&scene, &cam, settings, threads);
         assert!(
-            one.pixels
-                .iter()
-                .zip(&other.pixels)
-                .all(|(a, b)| a.to_array().map(f32::to_bits) == b.to_array().map(f32::to_bits)),
+            common::bit_identical(&one, &other),
             "{threads} threads differ from 1"
         );
     }

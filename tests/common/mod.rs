@@ -13,3 +13,12 @@ pub fn shared_ref(name: &str) -> Film {
         panic!("{e}: the shared folder must sit beside the project (see README)")
     })
 }
+
+/// Whether two images are equal bit for bit (NaN included, -0.0 ≠ 0.0).
+pub fn bit_identical(a: &Film, b: &Film) -> bool {
+    a.pixels.len() == b.pixels.len()
+        && a.pixels
+            .iter()
+            .zip(&b.pixels)
+            .all(|(p, q)| p.to_array().map(f32::to_bits) == q.to_array().map(f32::to_bits))
+}
