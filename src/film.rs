@@ -43,6 +43,24 @@ impl Film {
         }
     }
 
+    /// Replaces components that are not finite with the nearest finite value (±inf
+    /// to ±`f32::MAX`, NaN to 0), so that none is ever written: every sample is
+    /// finite (non-finite ones are dropped), but an absurdly bright pixel's sum can
+    /// still overflow f32. Returns how many components were replaced.
+    pub fn clamp_to_finite(&mut self) -> usize {
+        self.pixels
+            .par_iter_mut()
+            .map(|p| {
+                let bad = (!p.is_finite_mask()).bitmask().count_ones() as usize;
+                if bad > 0 {
+                    *p = Vec3A::select(p.is_nan_mask(), Vec3A::ZERO, *p)
+                        .clamp(Vec3A::splat(f32::MIN), Vec3A::splat(f32::MAX));
+                }
+                bad
+            })
+            .sum()
+    }
+
     /// 8-bit sRGB of every pixel times `scale`, clamped to `[0, 1]`, as RGB bytes.
     pub fn to_srgb8(&self, scale: f32) -> Vec<u8> {
         let mut out = vec![0u8; self.pixels.len() * 3];
@@ -255,14 +273,21 @@ fn write_format(
         }
         Format::Exr => {
             let w = film.width as usize;
-            exr::prelude::write_rgb_file(tmp, w, film.height as usize, |x, y| {
-                let p = film.pixels[y * w + x];
+            use exr::prelude::*;
+            let pixels = SpecificChannels::rgb(|pos: Vec2<usize>| {
+                let p = film.pixels[pos.y() * w + pos.x()];
                 (p.x, p.y, p.z)
-            })
-            .map_err(|e| match e {
-                exr::error::Error::Io(e) => io_err(e),
-                e => encode_err(e.to_string()),
-            })
+            });
+            // Blocks written in order, not by a thread pool: the same image gives
+            // the same bytes (pixels were identical before, the files not).
+            Image::from_channels((w, film.height as usize), pixels)
+                .write()
+                .non_parallel()
+                .to_file(tmp)
+                .map_err(|e| match e {
+                    exr::error::Error::Io(e) => io_err(e),
+                    e => encode_err(e.to_string()),
+                })
         }
     }
 }
@@ -296,6 +321,17 @@ pub fn read_exr(path: &Path) -> Result<Film, OutputError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn overflowed_pixels_are_clamped_to_finite_values() {
+        let mut film = Film::new(2, 1);
+        film.pixels[0] = Vec3A::new(f32::INFINITY, 1.0, f32::NEG_INFINITY);
+        film.pixels[1] = Vec3A::new(f32::NAN, 2.0, 3.0);
+        assert_eq!(film.clamp_to_finite(), 3);
+        assert_eq!(film.pixels[0], Vec3A::new(f32::MAX, 1.0, f32::MIN));
+        assert_eq!(film.pixels[1], Vec3A::new(0.0, 2.0, 3.0));
+        assert_eq!(film.clamp_to_finite(), 0);
+    }
 
     #[test]
     fn srgb8_matches_the_transfer_function() {

@@ -96,6 +96,7 @@ pub fn render(
         progress,
     );
     film.scale(1.0 / settings.spp.max(1) as f32);
+    film.clamp_to_finite();
     Rendered {
         film,
         rays: tally.rays,
@@ -164,6 +165,7 @@ pub fn render_for(
         spp += n;
     }
     film.scale(1.0 / spp as f32);
+    film.clamp_to_finite();
     Progressive {
         rendered: Rendered {
             film,

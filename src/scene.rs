@@ -204,7 +204,8 @@ impl Scene {
     /// channels (`P`, since its intensity is `P/(4π)` in every direction).
     #[inline]
     fn point_power(&self) -> f32 {
-        let p = self.light.power.element_sum() / 3.0;
+        // In f64: three channels near f32::MAX must not overflow their sum.
+        let p = (self.light.power.as_dvec3().element_sum() / 3.0) as f32;
         if p.is_finite() && p > 0.0 { p } else { 0.0 }
     }
 

@@ -624,3 +624,62 @@ fn bench_into_a_closed_pipe_exits_quietly() {
         assert!(stderr(&out).is_empty(), "{}", stderr(&out));
     }
 }
+
+/// A pixel whose samples are each finite but whose sum overflows f32 (an absurd
+/// light) is written finite.
+#[test]
+fn exr_output_is_finite_even_when_a_pixel_overflows() {
+    let dir = tempfile::tempdir().unwrap();
+    let args = [
+        "render",
+        "--integrator",
+        "path",
+        "--light-power",
+        "5e37",
+        "--light-pos",
+        "0,0.9,0",
+        "--spp",
+        "16",
+        "--width",
+        "64",
+        "--height",
+        "64",
+        "-o",
+        "a.exr",
+    ];
+    let o = raylab(&args, dir.path());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let film = raylab::film::read_exr(&dir.path().join("a.exr")).unwrap();
+    assert!(film.pixels.iter().all(|p| p.is_finite()));
+    assert!(film.pixels.iter().any(|p| p.max_element() > 1e30));
+}
+
+/// The same render gives the same EXR bytes (the writer once compressed blocks on
+/// a thread pool and stored them in the order they finished).
+#[test]
+fn exr_files_are_byte_for_byte_repeatable() {
+    let dir = tempfile::tempdir().unwrap();
+    for out in ["a.exr", "b.exr", "c.exr"] {
+        let o = raylab(&["render", "-o", out], dir.path());
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    let bytes = |f: &str| std::fs::read(dir.path().join(f)).unwrap();
+    assert_eq!(bytes("a.exr"), bytes("b.exr"));
+    assert_eq!(bytes("a.exr"), bytes("c.exr"));
+}
+
+/// `direct` on a scene whose point light is off says why the image is dark.
+#[test]
+fn direct_without_a_point_light_warns() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = raylab(
+        &["render", "cornell-area", "--width", "32", "--height", "32"],
+        dir.path(),
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("warning: the point light is off"),
+        "{}",
+        stderr(&out)
+    );
+}

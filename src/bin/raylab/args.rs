@@ -200,7 +200,7 @@ impl SceneArgs {
                  (give one for all, or one per mesh)"
             ));
         }
-        if !self.material.is_empty() && !self.scene.starts_with("cornell") {
+        if !self.material.is_empty() && !matches!(self.scene.as_str(), "cornell" | "cornell-area") {
             return Err(format!(
                 "error: --material names parts of the built-in box, not of {}",
                 self.scene

@@ -23,14 +23,32 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             .map_or_else(|| "image".into(), |s| s.to_string_lossy().into_owned());
         PathBuf::from(format!("{stem}.png"))
     });
-    // Refuse an unsupported format before spending time on the render.
+    // Refuse an unsupported format or a missing folder before spending time on
+    // the render.
     Format::from_path(&output)?;
+    if let Some(dir) = output.parent().filter(|d| !d.as_os_str().is_empty())
+        && !dir.is_dir()
+    {
+        anyhow::bail!(
+            "cannot write {}: the folder {} does not exist",
+            output.display(),
+            dir.display()
+        );
+    }
     let (scene, view) = crate::load(&args.scene)?;
     let camera = view.camera(args.scene.width, args.scene.height);
     let integrator = view.integrator;
     if integrator.is_physical() && !scene.has_lights() && !args.quiet {
         eprintln!(
             "warning: the scene has no light (point light power 0, nothing emits): the path-traced image is black"
+        );
+    }
+    if integrator == raylab::Integrator::Direct
+        && scene.light.power.max_element() <= 0.0
+        && !args.quiet
+    {
+        eprintln!(
+            "warning: the point light is off: `direct` shows only the ambient term (emitting triangles light the scene under --integrator path)"
         );
     }
 
