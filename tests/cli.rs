@@ -682,4 +682,19 @@ fn direct_without_a_point_light_warns() {
         "{}",
         stderr(&out)
     );
+    // And options that only `path` reads are not silently dropped.
+    let out = raylab(
+        &[
+            "render",
+            "--max-depth",
+            "3",
+            "--width",
+            "32",
+            "--height",
+            "32",
+        ],
+        dir.path(),
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(stderr(&out).contains("--max-depth and --material only change `path`"));
 }

@@ -43,6 +43,12 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             "warning: the scene has no light (point light power 0, nothing emits): the path-traced image is black"
         );
     }
+    let path_only = args.scene.max_depth.is_some() || !args.scene.material.is_empty();
+    if !integrator.is_physical() && path_only && !args.quiet {
+        eprintln!(
+            "warning: --max-depth and --material only change `path` images; {integrator} ignores them"
+        );
+    }
     if integrator == raylab::Integrator::Direct
         && scene.light.power.max_element() <= 0.0
         && !args.quiet
