@@ -43,6 +43,13 @@ impl Film {
         }
     }
 
+    /// Turns a sum of `samples` samples per pixel into their mean. Components that
+    /// overflowed (see [`Film::clamp_to_finite`]) come out finite.
+    pub fn average(&mut self, samples: u32) {
+        self.scale(1.0 / samples.max(1) as f32);
+        self.clamp_to_finite();
+    }
+
     /// Replaces components that are not finite with the nearest finite value (±inf
     /// to ±`f32::MAX`, NaN to 0), so that none is ever written: every sample is
     /// finite (non-finite ones are dropped), but an absurdly bright pixel's sum can

@@ -95,8 +95,7 @@ pub fn render(
         &mut film,
         progress,
     );
-    film.scale(1.0 / settings.spp.max(1) as f32);
-    film.clamp_to_finite();
+    film.average(settings.spp);
     Rendered {
         film,
         rays: tally.rays,
@@ -164,8 +163,7 @@ pub fn render_for(
             );
         spp += n;
     }
-    film.scale(1.0 / spp as f32);
-    film.clamp_to_finite();
+    film.average(spp);
     Progressive {
         rendered: Rendered {
             film,

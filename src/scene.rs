@@ -203,7 +203,7 @@ impl Scene {
     /// Total emitted power of the point light, averaged over the colour
     /// channels (`P`, since its intensity is `P/(4π)` in every direction).
     #[inline]
-    fn point_power(&self) -> f32 {
+    pub fn point_power(&self) -> f32 {
         // In f64: three channels near f32::MAX must not overflow their sum.
         let p = (self.light.power.as_dvec3().element_sum() / 3.0) as f32;
         if p.is_finite() && p > 0.0 { p } else { 0.0 }

@@ -210,11 +210,8 @@ fn build_range(
     };
     let (mid, boxes) = match split {
         Some((axis, bin)) => {
-            // `bins_of(p)[axis] <= bin` on one axis: the bin index truncates the
-            // same float, clamped to [0, BINS - 1], and `bin + 1 <= BINS - 1`.
             let grid = BinGrid::new(&cbounds);
-            let (lo, scale, limit) = (grid.lo[axis], grid.scale[axis], (bin + 1) as f32);
-            partition(prims, |p| (p.centroid2()[axis] - lo) * scale < limit)
+            partition(prims, |p| grid.at_most(p, axis, bin))
         }
         None if prims.len() <= MAX_LEAF => return leaf(),
         None => {
@@ -303,6 +300,15 @@ impl BinGrid {
             .min(Vec4::splat((BINS - 1) as f32))
             .max(Vec4::ZERO);
         truncate(f)
+    }
+
+    /// `bins_of(p)[axis] <= bin` for `bin < BINS - 1`, on that axis alone: the bin
+    /// index truncates the same float clamped to `[0, BINS - 1]`, so it is at most
+    /// `bin` exactly when the float is below `bin + 1` (NaN, clamped to the last
+    /// bin, is not).
+    #[inline(always)]
+    fn at_most(&self, p: &BuildPrim, axis: usize, bin: usize) -> bool {
+        (p.centroid2()[axis] - self.lo[axis]) * self.scale[axis] < (bin + 1) as f32
     }
 }
 

@@ -179,7 +179,7 @@ impl Bvh {
                         stack.push((node.children[lane], t_near[lane]));
                     }
                     stack.sort_far_to_near(base);
-                    cur = stack.pop().map_or(root, |(r, _)| r);
+                    cur = stack.pop().expect("three or more were just pushed").0;
                     continue;
                 }
             }

@@ -49,10 +49,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             "warning: --max-depth and --material only change `path` images; {integrator} ignores them"
         );
     }
-    if integrator == raylab::Integrator::Direct
-        && scene.light.power.max_element() <= 0.0
-        && !args.quiet
-    {
+    if integrator == raylab::Integrator::Direct && scene.point_power() == 0.0 && !args.quiet {
         eprintln!(
             "warning: the point light is off: `direct` shows only the ambient term (emitting triangles light the scene under --integrator path)"
         );

@@ -217,7 +217,7 @@ impl Viewer {
             .find(|p| !p.exists())
             .expect("a free name");
         let mut frame = self.sums.clone();
-        frame.scale(1.0 / self.samples.max(1) as f32);
+        frame.average(self.samples);
         write_image_scaled(&frame, Path::new(&path), self.display_scale())?;
         Ok(path)
     }
