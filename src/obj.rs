@@ -29,12 +29,13 @@ pub struct Mesh {
 #[derive(Debug, Error)]
 pub enum ObjError {
     /// The file could not be opened or read.
-    #[error("{path}: {source}")]
+    #[error("{path}: {cause}")]
     Io {
         /// The file.
         path: PathBuf,
-        /// What the system said.
-        source: std::io::Error,
+        /// What the system said (in the message, so not also a `source`, which
+        /// would print it twice in the command line's one-line error).
+        cause: std::io::Error,
     },
     /// A line is malformed.
     #[error("{path}:{line}: {message}")]
@@ -56,9 +57,9 @@ pub enum ObjError {
 
 /// Reads an OBJ file, its MTL colours, and returns the triangles.
 pub fn load_obj(path: &Path) -> Result<Mesh, ObjError> {
-    let text = std::fs::read_to_string(path).map_err(|source| ObjError::Io {
+    let text = std::fs::read_to_string(path).map_err(|cause| ObjError::Io {
         path: path.to_owned(),
-        source,
+        cause,
     })?;
     parse_obj(&text, path)
 }
