@@ -1,130 +1,36 @@
-//! Binned-SAH construction of a binary tree, the first step of the BVH build.
+//! The eight-wide tree, built top down: a node takes the SAH's split of its
+//! triangles, then keeps splitting its widest child that the SAH would split
+//! until it has [`WIDTH`] children (the tree a binary build collapsed this way
+//! would give, without building the binary tree).
 //!
-//! One pass over a node's triangles bins their centroids on all three axes at
-//! once; large nodes bin in parallel, and the two halves of every split larger
-//! than [`PARALLEL_MIN`] are built in parallel (rayon's `join`).
+//! Children with many triangles are built in parallel, each into its own run of
+//! nodes (a [`Piece`]); the runs are then copied into one array, references
+//! fixed up, while the leaves' triangles are gathered into packets in the order
+//! of the build array.
 
-use glam::Vec4;
+use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
+
 use rayon::prelude::*;
 
+use super::node::{ChildRef, EMPTY, LEAF, Node, WIDTH};
+use super::packet::Packet;
+use super::sah::{Aabb, BuildPrim, Cluster};
 use crate::triangle::Triangle;
 
-const BINS: usize = 12;
-/// Triangles per leaf packet.
-const PACKET: usize = 4;
-/// Largest leaf, in triangles: two four-wide packets.
-pub(super) const MAX_LEAF: usize = 8;
-/// Cost of visiting a node relative to testing one packet of four triangles.
-const TRAVERSAL_COST: f32 = 0.3;
-/// Past this depth only median splits, which bound the depth by log2(n).
-pub(super) const MAX_SAH_DEPTH: usize = 64;
-/// Subtrees at least this big are built in parallel with their siblings.
+/// Children at least this big are built in parallel with their siblings.
 const PARALLEL_MIN: usize = 4096;
-/// Nodes at least this big are binned in parallel.
-const PARALLEL_BINNING_MIN: usize = 65_536;
 
-/// An axis-aligned box in the first three lanes of two `Vec4`s (the fourth lane is
-/// carried along unused: it holds a triangle's index in a [`BuildPrim`]).
-#[derive(Clone, Copy, Debug)]
-pub(super) struct Aabb {
-    pub(super) min: Vec4,
-    pub(super) max: Vec4,
+/// The built tree: nodes, leaf packets and the root.
+pub(super) struct Built {
+    pub(super) nodes: Vec<Node>,
+    pub(super) packets: Vec<Packet>,
+    pub(super) root: ChildRef,
+    pub(super) triangles: usize,
 }
 
-impl Aabb {
-    pub(super) const EMPTY: Aabb = Aabb {
-        min: Vec4::splat(f32::INFINITY),
-        max: Vec4::splat(f32::NEG_INFINITY),
-    };
-
-    #[inline(always)]
-    fn grow(&mut self, o: &Aabb) {
-        self.min = self.min.min(o.min);
-        self.max = self.max.max(o.max);
-    }
-
-    #[inline(always)]
-    fn union(mut self, o: &Aabb) -> Aabb {
-        self.grow(o);
-        self
-    }
-
-    #[inline(always)]
-    fn grow_point(&mut self, p: Vec4) {
-        self.min = self.min.min(p);
-        self.max = self.max.max(p);
-    }
-
-    pub(super) fn half_area(&self) -> f32 {
-        let d = (self.max - self.min).max(Vec4::ZERO);
-        d.x * d.y + d.y * d.z + d.z * d.x
-    }
-}
-
-/// A node of the binary tree: a leaf with `count` triangles from `first` on (in
-/// build order), or an inner node owning its two children.
-pub(super) enum BinNode {
-    Leaf {
-        bounds: Aabb,
-        first: usize,
-        count: usize,
-    },
-    Inner {
-        bounds: Aabb,
-        count: usize,
-        children: Box<[BinNode; 2]>,
-    },
-}
-
-impl BinNode {
-    pub(super) fn bounds(&self) -> &Aabb {
-        match self {
-            BinNode::Leaf { bounds, .. } | BinNode::Inner { bounds, .. } => bounds,
-        }
-    }
-
-    /// Triangles in the subtree.
-    pub(super) fn count(&self) -> usize {
-        match self {
-            BinNode::Leaf { count, .. } | BinNode::Inner { count, .. } => *count,
-        }
-    }
-}
-
-/// A triangle's box, 32 bytes: its scene index rides in the fourth lane of `min`
-/// (as bits; indices below 2^27 are tiny positive floats, never NaN, so the
-/// min/max of bin boxes leave them harmless).
-#[derive(Clone, Copy)]
-pub(super) struct BuildPrim {
-    bounds: Aabb,
-}
-
-impl BuildPrim {
-    fn new(t: &Triangle, id: u32) -> Self {
-        let (lo, hi) = (t.min(), t.max());
-        BuildPrim {
-            bounds: Aabb {
-                min: lo.extend(f32::from_bits(id)),
-                max: hi.extend(0.0),
-            },
-        }
-    }
-
-    /// The triangle's index in the scene.
-    pub(super) fn id(&self) -> u32 {
-        self.bounds.min.w.to_bits()
-    }
-
-    /// Twice the centroid (the halving is folded into the bin scale).
-    #[inline(always)]
-    fn centroid2(&self) -> Vec4 {
-        self.bounds.min + self.bounds.max
-    }
-}
-
-/// A binary tree over the triangles that can be hit (finite, non-zero area), and
-/// those triangles in leaf order; `None` when there are none.
-pub(super) fn build_binary(triangles: &[Triangle]) -> Option<(BinNode, Vec<BuildPrim>)> {
+/// Builds the tree over the triangles that can be hit (finite, non-zero area);
+/// `None` when there are none.
+pub(super) fn build(triangles: &[Triangle]) -> Option<Built> {
     assert!(
         triangles.len() < 1 << 27,
         "too many triangles for the BVH (at most 2^27)"
@@ -132,333 +38,293 @@ pub(super) fn build_binary(triangles: &[Triangle]) -> Option<(BinNode, Vec<Build
     // Mapped in parallel into place; the few that cannot be hit (if any) are
     // dropped afterwards (a parallel filter would gather pieces and copy them).
     let valid = |t: &Triangle| t.is_finite() && t.area() > 0.0;
+    let any_invalid = AtomicBool::new(false);
     let mut prims: Vec<BuildPrim> = Vec::new();
     triangles
         .par_iter()
         .enumerate()
-        .map(|(i, t)| BuildPrim::new(t, i as u32))
+        .map(|(i, t)| {
+            if !valid(t) {
+                any_invalid.store(true, Ordering::Relaxed);
+            }
+            BuildPrim::new(t, i as u32)
+        })
         .collect_into_vec(&mut prims);
-    if !triangles.par_iter().all(valid) {
+    if any_invalid.into_inner() {
         prims.retain(|p| valid(&triangles[p.id() as usize]));
     }
     if prims.is_empty() {
         return None;
     }
-    let (bounds, cbounds) = bounds_of(&prims);
-    let root = build_range(&mut prims, 0, 0, bounds, cbounds);
-    Some((root, prims))
+    let builder = Builder {
+        leaf_sizes: (0..prims.len()).map(|_| AtomicU32::new(0)).collect(),
+    };
+    let root_cluster = Cluster::root(&mut prims);
+    let mut top = Piece::new(prims.len());
+    let root = builder.subtree(&mut prims, 0, root_cluster, &mut top);
+    let (chunks, leaf_packets) = builder.packet_layout();
+    let fix_leaf = |r: ChildRef| {
+        let first = ((r & !LEAF) >> 4) as usize;
+        LEAF | leaf_packets[first] << 4 | (r & 0xf).div_ceil(4)
+    };
+    let root = if root & LEAF != 0 {
+        fix_leaf(root)
+    } else {
+        root
+    };
+    let nodes = top.flatten(&fix_leaf);
+    let packets = gather_packets(triangles, &prims, &chunks);
+    Some(Built {
+        nodes,
+        packets,
+        root,
+        triangles: prims.len(),
+    })
 }
 
-/// Box of the triangles and box of their (doubled) centroids.
-fn bounds_of(prims: &[BuildPrim]) -> (Aabb, Aabb) {
-    let one = |prims: &[BuildPrim]| {
-        let (mut b, mut c) = (Aabb::EMPTY, Aabb::EMPTY);
-        for p in prims {
-            b.grow(&p.bounds);
-            c.grow_point(p.centroid2());
+struct Builder {
+    /// At the position of each leaf's first triangle in the build array, the
+    /// leaf's triangle count (zero elsewhere).
+    leaf_sizes: Vec<AtomicU32>,
+}
+
+impl Builder {
+    /// Builds the subtree of `cluster` (whose `start` is relative to `prims`,
+    /// which begins at `first` in the build array) into `piece`.
+    fn subtree(
+        &self,
+        prims: &mut [BuildPrim],
+        first: usize,
+        cluster: Cluster,
+        piece: &mut Piece,
+    ) -> ChildRef {
+        if cluster.is_leaf() {
+            return self.leaf(first + cluster.start, cluster.len);
         }
-        (b, c)
-    };
-    if prims.len() < PARALLEL_BINNING_MIN {
-        return one(prims);
-    }
-    prims.par_chunks(8192).map(one).reduce(
-        || (Aabb::EMPTY, Aabb::EMPTY),
-        |a, b| (a.0.union(&b.0), a.1.union(&b.1)),
-    )
-}
-
-/// Builds the subtree of `prims`, which start at index `first` of the full array;
-/// `bounds` and `cbounds` are the boxes of their triangles and centroids.
-fn build_range(
-    prims: &mut [BuildPrim],
-    first: usize,
-    depth: usize,
-    bounds: Aabb,
-    cbounds: Aabb,
-) -> BinNode {
-    let count = prims.len();
-    let leaf = || BinNode::Leaf {
-        bounds,
-        first,
-        count,
-    };
-    // Up to four triangles fit one packet: binning is not worth it; try the few
-    // possible splits exactly (large triangles, as the lab box's walls, still
-    // gain from being split apart).
-    if prims.len() <= PACKET {
-        return match small_split(prims, &bounds) {
-            None => leaf(),
-            Some(mid) => {
-                let (l, r) = prims.split_at_mut(mid);
-                let ((lb, lc), (rb, rc)) = (bounds_of(l), bounds_of(r));
-                BinNode::Inner {
-                    bounds,
-                    count,
-                    children: Box::new([
-                        build_range(l, first, depth + 1, lb, lc),
-                        build_range(r, first + mid, depth + 1, rb, rc),
-                    ]),
-                }
+        let (kids, n) = take_children(prims, cluster);
+        let slot = piece.nodes.len();
+        piece.nodes.push(Node::EMPTY);
+        for (lane, kid) in kids[..n].iter().enumerate() {
+            set_bounds(&mut piece.nodes[slot], lane, &kid.bounds);
+        }
+        // The children's runs as disjoint slices, by lane.
+        let mut slices: [Option<&mut [BuildPrim]>; WIDTH] = Default::default();
+        let mut order: [usize; WIDTH] = std::array::from_fn(|lane| lane);
+        order[..n].sort_unstable_by_key(|&lane| kids[lane].start);
+        let mut rest = &mut prims[cluster.start..];
+        for &lane in &order[..n] {
+            let (mine, others) = std::mem::take(&mut rest).split_at_mut(kids[lane].len);
+            slices[lane] = Some(mine);
+            rest = others;
+        }
+        let mut refs = [EMPTY; WIDTH];
+        let mut subpieces: [Option<Piece>; WIDTH] = Default::default();
+        let big = |lane: usize| kids[lane].len >= PARALLEL_MIN;
+        let mut build_small = |slices: &mut [Option<&mut [BuildPrim]>; WIDTH]| {
+            for lane in (0..n).filter(|&lane| !big(lane)) {
+                let slice = slices[lane].take().expect("each run is taken once");
+                let offset = first + kids[lane].start;
+                refs[lane] = self.subtree(slice, offset, kids[lane].on_its_own(), piece);
             }
         };
-    }
-    let split = if depth < MAX_SAH_DEPTH {
-        best_split(prims, &cbounds, &bounds)
-    } else {
-        None
-    };
-    let (mid, boxes) = match split {
-        Some((axis, bin)) => {
-            let grid = BinGrid::new(&cbounds);
-            partition(prims, |p| grid.at_most(p, axis, bin))
-        }
-        None if prims.len() <= MAX_LEAF => return leaf(),
-        None => {
-            // SAH prefers a leaf (or centroids coincide) but the leaf would be too
-            // big: split in the middle of the longest axis by object count.
-            let axis = (bounds.max - bounds.min).truncate().max_position();
-            let mid = prims.len() / 2;
-            prims.select_nth_unstable_by(mid, |a, b| {
-                a.centroid2()[axis].total_cmp(&b.centroid2()[axis])
+        if (0..n).any(big) {
+            rayon::scope(|scope| {
+                for (lane, out) in subpieces.iter_mut().enumerate().take(n) {
+                    if !big(lane) {
+                        continue;
+                    }
+                    let slice = slices[lane].take().expect("each run is taken once");
+                    let kid = kids[lane];
+                    scope.spawn(move |_| {
+                        let mut sub = Piece::new(kid.len);
+                        let offset = first + kid.start;
+                        let root = self.subtree(slice, offset, kid.on_its_own(), &mut sub);
+                        debug_assert_eq!(root, 0, "a big child is a node, made first");
+                        *out = Some(sub);
+                    });
+                }
+                build_small(&mut slices);
             });
-            let (l, r) = prims.split_at(mid);
-            (mid, [bounds_of(l), bounds_of(r)])
+        } else {
+            build_small(&mut slices);
         }
-    };
-    let [(lb, lc), (rb, rc)] = boxes;
-    let (left, right) = prims.split_at_mut(mid);
-    let children = if left.len().min(right.len()) >= PARALLEL_MIN {
-        let (l, r) = rayon::join(
-            || build_range(left, first, depth + 1, lb, lc),
-            || build_range(right, first + mid, depth + 1, rb, rc),
-        );
-        [l, r]
-    } else {
-        [
-            build_range(left, first, depth + 1, lb, lc),
-            build_range(right, first + mid, depth + 1, rb, rc),
-        ]
-    };
-    BinNode::Inner {
-        bounds,
-        count,
-        children: Box::new(children),
-    }
-}
-
-/// For at most one packet of triangles: the exact SAH-best split (sorting them by
-/// centroid along the best axis and returning the left count), or `None` when one
-/// leaf is cheaper.
-fn small_split(prims: &mut [BuildPrim], bounds: &Aabb) -> Option<usize> {
-    let area = bounds.half_area();
-    // A leaf costs one packet test; a split at least a traversal step plus one
-    // packet test in each child the ray enters.
-    let mut best = (area, None);
-    for axis in 0..3 {
-        prims.sort_unstable_by(|a, b| a.centroid2()[axis].total_cmp(&b.centroid2()[axis]));
-        for mid in 1..prims.len() {
-            let (l, r) = prims.split_at(mid);
-            let cost =
-                TRAVERSAL_COST * area + bounds_of(l).0.half_area() + bounds_of(r).0.half_area();
-            if cost < best.0 {
-                best = (cost, Some((axis, mid)));
+        piece.nodes[slot].children = refs;
+        for (lane, sub) in subpieces.into_iter().enumerate() {
+            if let Some(sub) = sub {
+                piece.links.push((slot as u32, lane, sub));
             }
         }
-    }
-    let (axis, mid) = best.1?;
-    prims.sort_unstable_by(|a, b| a.centroid2()[axis].total_cmp(&b.centroid2()[axis]));
-    Some(mid)
-}
-
-/// SAH cost of a leaf of `n` triangles: one test per packet of four.
-fn leaf_cost(n: u32) -> f32 {
-    n.div_ceil(4) as f32
-}
-
-/// The mapping of (doubled) centroids to bins on all three axes at once.
-struct BinGrid {
-    lo: Vec4,
-    scale: Vec4,
-}
-
-impl BinGrid {
-    fn new(cbounds: &Aabb) -> Self {
-        // A flat axis gets scale inf or NaN; its indices are clamped into range all
-        // the same, and no split is ever chosen on it.
-        BinGrid {
-            lo: cbounds.min,
-            scale: Vec4::splat(BINS as f32) / (cbounds.max - cbounds.min),
-        }
+        slot as ChildRef
     }
 
-    /// Bin indices on x, y, z (and an unused fourth lane), each in `0..BINS`.
-    #[inline(always)]
-    fn bins_of(&self, p: &BuildPrim) -> [u32; 4] {
-        // `min` and `max` return their second operand for NaN: the result is in range.
-        let f = ((p.centroid2() - self.lo) * self.scale)
-            .min(Vec4::splat((BINS - 1) as f32))
-            .max(Vec4::ZERO);
-        truncate(f)
+    /// A leaf's provisional reference: its first triangle in the build array and
+    /// its triangle count, until the packets are laid out.
+    fn leaf(&self, first: usize, len: usize) -> ChildRef {
+        self.leaf_sizes[first].store(len as u32, Ordering::Relaxed);
+        LEAF | (first as u32) << 4 | len as u32
     }
 
-    /// `bins_of(p)[axis] <= bin` for `bin < BINS - 1`, on that axis alone: the bin
-    /// index truncates the same float clamped to `[0, BINS - 1]`, so it is at most
-    /// `bin` exactly when the float is below `bin + 1` (NaN, clamped to the last
-    /// bin, is not).
-    #[inline(always)]
-    fn at_most(&self, p: &BuildPrim, axis: usize, bin: usize) -> bool {
-        (p.centroid2()[axis] - self.lo[axis]) * self.scale[axis] < (bin + 1) as f32
-    }
-}
-
-/// Lane-wise truncation of floats known to lie in `[0, BINS)`.
-#[inline(always)]
-fn truncate(f: Vec4) -> [u32; 4] {
-    #[cfg(target_arch = "x86_64")]
-    {
-        use std::arch::x86_64::{__m128, __m128i, _mm_cvttps_epi32};
-        // SAFETY: SSE2 is part of x86-64; both types are 16 bytes of plain integers.
-        unsafe {
-            let i: __m128i = _mm_cvttps_epi32(__m128::from(f));
-            std::mem::transmute::<__m128i, [u32; 4]>(i)
-        }
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        f.to_array().map(|x| x as u32)
-    }
-}
-
-/// Triangle boxes and counts per bin, for the three axes.
-#[derive(Clone, Copy)]
-struct Bins {
-    boxes: [[Aabb; BIN_SLOTS]; 3],
-    counts: [[u32; BIN_SLOTS]; 3],
-}
-
-/// Bins allocated per axis: a power of two at least [`BINS`].
-const BIN_SLOTS: usize = BINS.next_power_of_two();
-
-impl Bins {
-    fn empty() -> Self {
-        Bins {
-            boxes: [[Aabb::EMPTY; BIN_SLOTS]; 3],
-            counts: [[0; BIN_SLOTS]; 3],
-        }
-    }
-
-    /// Adds `prims` to the bins (in place: a `Bins` is 1.3 KB, and moving it
-    /// around cost more than filling it for small nodes).
-    fn fill(&mut self, grid: &BinGrid, prims: &[BuildPrim]) {
-        for p in prims {
-            let index = grid.bins_of(p);
-            for (axis, &i) in index[..3].iter().enumerate() {
-                // The mask lets the compiler drop the bounds check (indices < BINS).
-                let i = i as usize & (BIN_SLOTS - 1);
-                self.boxes[axis][i].grow(&p.bounds);
-                self.counts[axis][i] += 1;
-            }
-        }
-    }
-
-    fn merge(mut self, o: &Bins) -> Self {
-        for axis in 0..3 {
-            for i in 0..BINS {
-                self.boxes[axis][i].grow(&o.boxes[axis][i]);
-                self.counts[axis][i] += o.counts[axis][i];
-            }
-        }
-        self
-    }
-}
-
-/// The SAH-best split as `(axis, last bin of the left side)`, or `None` when a leaf is
-/// cheaper (and small enough) or all centroids coincide.
-fn best_split(prims: &[BuildPrim], cbounds: &Aabb, bounds: &Aabb) -> Option<(usize, usize)> {
-    let grid = BinGrid::new(cbounds);
-    let bins = if prims.len() < PARALLEL_BINNING_MIN {
-        let mut bins = Bins::empty();
-        bins.fill(&grid, prims);
-        bins
-    } else {
-        prims
-            .par_chunks(8192)
-            .map(|chunk| {
-                let mut bins = Bins::empty();
-                bins.fill(&grid, chunk);
-                bins
-            })
-            .reduce(Bins::empty, |a, b| a.merge(&b))
-    };
-    let mut best: Option<(usize, usize)> = None;
-    // Costs are compared multiplied by the parent's area (no division per bin).
-    let parent_area = bounds.half_area();
-    let mut best_cost = if prims.len() <= MAX_LEAF {
-        leaf_cost(prims.len() as u32) * parent_area
-    } else {
-        f32::INFINITY
-    };
-    let split_cost = TRAVERSAL_COST * parent_area;
-    for axis in 0..3 {
-        if cbounds.max[axis] - cbounds.min[axis] <= 0.0 {
-            continue;
-        }
-        let (boxes, counts) = (&bins.boxes[axis][..BINS], &bins.counts[axis][..BINS]);
-        // Sweep from the right for every right side's cost, then from the left.
-        let mut right_cost = [0.0f32; BINS];
-        let (mut acc, mut count) = (Aabb::EMPTY, 0);
-        for i in (1..BINS).rev() {
-            acc.grow(&boxes[i]);
-            count += counts[i];
-            right_cost[i] = acc.half_area() * leaf_cost(count);
-        }
-        let (mut acc, mut count) = (Aabb::EMPTY, 0);
-        for i in 0..BINS - 1 {
-            acc.grow(&boxes[i]);
-            count += counts[i];
-            if count == 0 || count as usize == prims.len() {
+    /// The leaves' packets in build-array order: each packet's run of the build
+    /// array, and for each leaf (at its first triangle's position) its first packet.
+    fn packet_layout(self) -> (Vec<(u32, u32)>, Vec<u32>) {
+        let mut first_packet: Vec<u32> = self
+            .leaf_sizes
+            .into_iter()
+            .map(|a| a.into_inner())
+            .collect();
+        let mut chunks = Vec::with_capacity(first_packet.len() / 3 + 1);
+        for (first, entry) in first_packet.iter_mut().enumerate() {
+            let len = *entry;
+            if len == 0 {
                 continue;
             }
-            let cost = split_cost + acc.half_area() * leaf_cost(count) + right_cost[i + 1];
-            if cost < best_cost {
-                best_cost = cost;
-                best = Some((axis, i));
+            *entry = chunks.len() as u32;
+            for offset in (0..len).step_by(4) {
+                chunks.push((first as u32 + offset, (len - offset).min(4)));
             }
         }
+        assert!(chunks.len() < 1 << 27, "too many packets for the BVH");
+        (chunks, first_packet)
     }
-    best
 }
 
-/// Moves the triangles for which `left` holds to the front, swapping only the
-/// misplaced pairs (Hoare); returns how many there are, and the triangle and
-/// centroid boxes of both sides.
-fn partition(
-    prims: &mut [BuildPrim],
-    left: impl Fn(&BuildPrim) -> bool,
-) -> (usize, [(Aabb, Aabb); 2]) {
-    let mut boxes = [(Aabb::EMPTY, Aabb::EMPTY); 2];
-    let add = |side: &mut (Aabb, Aabb), p: &BuildPrim| {
-        side.0.grow(&p.bounds);
-        side.1.grow_point(p.centroid2());
-    };
-    let (mut i, mut j) = (0, prims.len());
-    loop {
-        while i < j && left(&prims[i]) {
-            add(&mut boxes[0], &prims[i]);
-            i += 1;
-        }
-        while i < j && !left(&prims[j - 1]) {
-            add(&mut boxes[1], &prims[j - 1]);
-            j -= 1;
-        }
-        if i == j {
-            return (i, boxes);
-        }
-        prims.swap(i, j - 1);
-        add(&mut boxes[0], &prims[i]);
-        add(&mut boxes[1], &prims[j - 1]);
-        i += 1;
-        j -= 1;
+/// The node's children: the cluster's split, then the widest child that the SAH
+/// splits gives up its place to its two halves, until there are `WIDTH`.
+fn take_children(prims: &mut [BuildPrim], cluster: Cluster) -> ([Cluster; WIDTH], usize) {
+    let mut kids = [cluster; WIDTH];
+    let mut n = 1;
+    while n < WIDTH {
+        let widest = (0..n).filter(|&i| !kids[i].is_leaf()).max_by(|&a, &b| {
+            let area = |i: usize| kids[i].bounds.half_area();
+            area(a).total_cmp(&area(b))
+        });
+        let Some(i) = widest else { break };
+        let [left, right] = kids[i].split(prims);
+        kids[i] = left;
+        kids[n] = right;
+        n += 1;
+    }
+    (kids, n)
+}
+
+fn set_bounds(node: &mut Node, lane: usize, b: &Aabb) {
+    for axis in 0..3 {
+        node.bounds[axis][lane] = b.min[axis];
+        node.bounds[axis + 3][lane] = b.max[axis];
     }
 }
+
+/// A subtree's nodes, built by one task, with node references local to it; the
+/// children built by other tasks hang off `links` as (node, lane, piece).
+struct Piece {
+    nodes: Vec<Node>,
+    links: Vec<(u32, usize, Piece)>,
+}
+
+impl Piece {
+    /// An empty piece for `len` triangles (room for the usual number of nodes).
+    fn new(len: usize) -> Self {
+        Piece {
+            nodes: Vec::with_capacity(len / 8 + 1),
+            links: Vec::new(),
+        }
+    }
+
+    /// All the nodes in one array, pieces in depth-first order, references made
+    /// global; `fix_leaf` turns a provisional leaf reference into its packets'.
+    fn flatten(&self, fix_leaf: &(impl Fn(ChildRef) -> ChildRef + Sync)) -> Vec<Node> {
+        let mut placed = Vec::new();
+        let total = self.place(0, &mut placed) as usize;
+        let mut nodes = Vec::with_capacity(total);
+        // Carve the destination into each piece's run, in offset order.
+        let mut rest = &mut nodes.spare_capacity_mut()[..total];
+        let mut jobs = Vec::with_capacity(placed.len());
+        for placed in placed {
+            let (mine, others) = std::mem::take(&mut rest).split_at_mut(placed.piece.nodes.len());
+            jobs.push((placed, mine));
+            rest = others;
+        }
+        jobs.into_par_iter().for_each(|(placed, out)| {
+            let mut links = placed.links.iter().peekable();
+            for (slot, (dst, src)) in out.iter_mut().zip(&placed.piece.nodes).enumerate() {
+                let mut node = *src;
+                for r in &mut node.children {
+                    *r = match *r {
+                        EMPTY => EMPTY,
+                        r if r & LEAF != 0 => fix_leaf(r),
+                        r => r + placed.offset,
+                    };
+                }
+                while let Some(&(_, lane, target)) = links.next_if(|l| l.0 == slot as u32) {
+                    node.children[lane] = target;
+                }
+                dst.write(node);
+            }
+        });
+        // SAFETY: the runs cover `0..total` and each was written in full above.
+        unsafe { nodes.set_len(total) };
+        nodes
+    }
+
+    /// Appends this piece and those below it (depth first) to `placed`, starting
+    /// at `offset`; returns the offset after them.
+    fn place<'p>(&'p self, offset: u32, placed: &mut Vec<Placed<'p>>) -> u32 {
+        let me = placed.len();
+        placed.push(Placed {
+            piece: self,
+            offset,
+            links: Vec::with_capacity(self.links.len()),
+        });
+        let mut next = offset + self.nodes.len() as u32;
+        for (slot, lane, sub) in &self.links {
+            placed[me].links.push((*slot, *lane, next));
+            next = sub.place(next, placed);
+        }
+        placed[me].links.sort_unstable();
+        next
+    }
+}
+
+/// A piece's place in the whole array: its first node's index, and the index of
+/// each child built in another piece, as (node, lane, index) sorted by node.
+struct Placed<'p> {
+    piece: &'p Piece,
+    offset: u32,
+    links: Vec<(u32, usize, u32)>,
+}
+
+/// The packets, in the order of `chunks`, gathered in parallel (the triangles are
+/// read by scattered index: the slow part of a big build).
+fn gather_packets(
+    triangles: &[Triangle],
+    prims: &[BuildPrim],
+    chunks: &[(u32, u32)],
+) -> Vec<Packet> {
+    let mut packets = Vec::new();
+    chunks
+        .par_iter()
+        .enumerate()
+        .map(|(k, &(first, len))| {
+            // The triangles a few packets ahead are fetched while this one is made.
+            if let Some(&(ahead, len)) = chunks.get(k + PREFETCH_AHEAD) {
+                for p in &prims[ahead as usize..(ahead + len) as usize] {
+                    // A triangle (48 bytes) may straddle two cache lines.
+                    let t: *const Triangle = &triangles[p.id() as usize];
+                    super::prefetch(t);
+                    super::prefetch(t.cast::<u8>().wrapping_add(size_of::<Triangle>() - 1));
+                }
+            }
+            let chunk = &prims[first as usize..(first + len) as usize];
+            let lane = |i: usize| {
+                let id = chunk[i.min(chunk.len() - 1)].id();
+                (triangles[id as usize], id)
+            };
+            let four: [(Triangle, u32); 4] = std::array::from_fn(lane);
+            Packet::new(&four[..chunk.len()])
+        })
+        .collect_into_vec(&mut packets);
+    packets
+}
+
+/// How many packets ahead the gather prefetches.
+const PREFETCH_AHEAD: usize = 8;

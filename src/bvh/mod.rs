@@ -1,6 +1,6 @@
 //! An eight-wide bounding volume hierarchy over triangles.
 //!
-//! Built as a binary binned-SAH tree ([`build`]), then collapsed so that every node
+//! Built top down with binned SAH ([`sah`], [`build`]): every node
 //! holds up to eight children whose boxes are tested together ([`node`]: AVX2 where
 //! the CPU has it), with leaves of one or two packets of four triangles in
 //! structure-of-arrays layout ([`packet`]). Closest-hit traversal visits children
@@ -8,24 +8,21 @@
 //! any-hit traversal stops at the first hit.
 
 mod build;
-mod collapse;
 mod node;
 mod packet;
 mod ray4;
+mod sah;
 
 use std::mem::MaybeUninit;
 
 use crate::ray::{Hit, Ray};
 use crate::triangle::Triangle;
-use build::build_binary;
-use collapse::{Wide, collapse};
 use node::{BoxQuery, ChildRef, Isa, LEAF, Node, WIDTH};
 use packet::{Packet, PacketRay};
-use rayon::prelude::*;
 
 /// Traversal stack size: SAH depth plus median splits of up to 2^32 triangles,
 /// at most `WIDTH - 1` entries per level.
-const STACK_SIZE: usize = (WIDTH - 1) * (build::MAX_SAH_DEPTH + 32);
+const STACK_SIZE: usize = (WIDTH - 1) * (sah::MAX_SAH_DEPTH + 32);
 
 /// The hierarchy, owning a copy of the triangles in leaf order.
 #[derive(Clone, Debug)]
@@ -42,43 +39,21 @@ impl Bvh {
     /// hit and are left out; hits report indices into `triangles`.
     pub fn build(triangles: &[Triangle]) -> Self {
         let isa = Isa::detect();
-        let Some((binary, prims)) = build_binary(triangles) else {
-            return Bvh {
+        match build::build(triangles) {
+            Some(built) => Bvh {
+                nodes: built.nodes,
+                packets: built.packets,
+                root: Some(built.root),
+                triangles: built.triangles,
+                isa,
+            },
+            None => Bvh {
                 nodes: Vec::new(),
                 packets: Vec::new(),
                 root: None,
                 triangles: 0,
                 isa,
-            };
-        };
-        // The collapse is serial: run side by side, its parts had to be copied
-        // together again, which cost what the second thread saved (bunny_sub2).
-        let (Wide { nodes, chunks }, root) = collapse(&binary);
-        // The packets, in the order the leaves took them, gathered in parallel
-        // (the triangles are read by scattered index: the slow part of a big build)
-        // while the binary tree is freed.
-        let mut packets = Vec::new();
-        let gather = || {
-            chunks
-                .par_iter()
-                .map(|&(first, len)| {
-                    let chunk = &prims[first as usize..(first + len) as usize];
-                    let lane = |i: usize| {
-                        let id = chunk[i.min(chunk.len() - 1)].id();
-                        (triangles[id as usize], id)
-                    };
-                    let four: [(Triangle, u32); 4] = std::array::from_fn(lane);
-                    Packet::new(&four[..chunk.len()])
-                })
-                .collect_into_vec(&mut packets)
-        };
-        rayon::join(gather, || drop(binary));
-        Bvh {
-            nodes,
-            packets,
-            root: Some(root),
-            triangles: prims.len(),
-            isa,
+            },
         }
     }
 
@@ -309,6 +284,20 @@ impl Stack<(ChildRef, f32)> {
             self.items[j] = MaybeUninit::new(item);
         }
     }
+}
+
+/// Asks for the cache line at `p` (a hint: it never faults, and `p` may point
+/// anywhere).
+#[inline(always)]
+fn prefetch<T>(p: *const T) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+        // SAFETY: a prefetch reads nothing the program sees and never faults.
+        unsafe { _mm_prefetch::<_MM_HINT_T0>(p.cast::<i8>()) };
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = p;
 }
 
 /// The closest hit by testing every triangle: the reference the BVH is tested
