@@ -12,7 +12,7 @@ use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 
 use rayon::prelude::*;
 
-use super::node::{ChildRef, EMPTY, LEAF, Node, WIDTH};
+use super::node::{ChildRef, EMPTY, Isa, LEAF, Node, WIDTH};
 use super::packet::Packet;
 use super::sah::{Aabb, BuildPrim, Cluster};
 use crate::triangle::Triangle;
@@ -30,7 +30,7 @@ pub(super) struct Built {
 
 /// Builds the tree over the triangles that can be hit (finite, non-zero area);
 /// `None` when there are none.
-pub(super) fn build(triangles: &[Triangle]) -> Option<Built> {
+pub(super) fn build(triangles: &[Triangle], isa: Isa) -> Option<Built> {
     assert!(
         triangles.len() < 1 << 27,
         "too many triangles for the BVH (at most 2^27)"
@@ -59,7 +59,7 @@ pub(super) fn build(triangles: &[Triangle]) -> Option<Built> {
     let builder = Builder {
         leaf_sizes: (0..prims.len()).map(|_| AtomicU32::new(0)).collect(),
     };
-    let root_cluster = Cluster::root(&mut prims);
+    let root_cluster = Cluster::root(&mut prims, isa);
     let mut top = Piece::new(prims.len());
     let root = builder.subtree(&mut prims, 0, root_cluster, &mut top);
     let (chunks, leaf_packets) = builder.packet_layout();

@@ -39,7 +39,7 @@ impl Bvh {
     /// hit and are left out; hits report indices into `triangles`.
     pub fn build(triangles: &[Triangle]) -> Self {
         let isa = Isa::detect();
-        match build::build(triangles) {
+        match build::build(triangles, isa) {
             Some(built) => Bvh {
                 nodes: built.nodes,
                 packets: built.packets,

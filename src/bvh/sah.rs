@@ -8,13 +8,14 @@
 use glam::Vec4;
 use rayon::prelude::*;
 
+use super::node::Isa;
 use crate::triangle::Triangle;
 
 const BINS: usize = 12;
 /// Triangles per leaf packet.
 const PACKET: usize = 4;
 /// Runs of at most this many triangles are split by exact SAH, not binned.
-const EXACT_MAX: usize = 16;
+const EXACT_MAX: usize = 8;
 /// Largest leaf, in triangles: two four-wide packets.
 pub(super) const MAX_LEAF: usize = 8;
 /// Cost of visiting a node relative to testing one packet of four triangles.
@@ -34,6 +35,7 @@ const PARALLEL_BINNING_MIN: usize = 65_536;
 /// An axis-aligned box in the first three lanes of two `Vec4`s (the fourth lane is
 /// carried along unused: it holds a triangle's index in a [`BuildPrim`]).
 #[derive(Clone, Copy, Debug)]
+#[repr(C)]
 pub(super) struct Aabb {
     pub(super) min: Vec4,
     pub(super) max: Vec4,
@@ -73,6 +75,7 @@ impl Aabb {
 /// (as bits; indices below 2^27 are tiny positive floats, never NaN, so the
 /// min/max of bin boxes leave them harmless).
 #[derive(Clone, Copy)]
+#[repr(C)]
 pub(super) struct BuildPrim {
     bounds: Aabb,
 }
@@ -113,6 +116,8 @@ pub(super) struct Cluster {
     /// Depth in the binary recursion, which bounds the SAH's depth.
     depth: usize,
     split: Split,
+    /// The instructions the binning may use.
+    isa: Isa,
 }
 
 #[derive(Clone, Copy)]
@@ -141,6 +146,7 @@ impl Cluster {
         bounds: Aabb,
         cbounds: Aabb,
         depth: usize,
+        isa: Isa,
     ) -> Self {
         let len = prims.len();
         // A few triangles are not worth binning: every split is tried exactly
@@ -150,7 +156,7 @@ impl Cluster {
             exact_split(prims, &bounds).map_or(Split::Leaf, Split::Sorted)
         } else {
             let binned = if depth < MAX_SAH_DEPTH {
-                best_split(prims, &cbounds, &bounds)
+                best_split(prims, &cbounds, &bounds, isa)
             } else {
                 None
             };
@@ -167,13 +173,14 @@ impl Cluster {
             cbounds,
             depth,
             split,
+            isa,
         }
     }
 
     /// The cluster of all the triangles.
-    pub(super) fn root(prims: &mut [BuildPrim]) -> Self {
+    pub(super) fn root(prims: &mut [BuildPrim], isa: Isa) -> Self {
         let (bounds, cbounds) = bounds_of(prims);
-        Cluster::new(prims, 0, bounds, cbounds, 0)
+        Cluster::new(prims, 0, bounds, cbounds, 0, isa)
     }
 
     /// The same cluster, with `start` relative to its own run.
@@ -214,8 +221,8 @@ impl Cluster {
         let (l, r) = mine.split_at_mut(mid);
         let depth = self.depth + 1;
         [
-            Cluster::new(l, self.start, lb, lc, depth),
-            Cluster::new(r, self.start + mid, rb, rc, depth),
+            Cluster::new(l, self.start, lb, lc, depth, self.isa),
+            Cluster::new(r, self.start + mid, rb, rc, depth, self.isa),
         ]
     }
 }
@@ -356,12 +363,40 @@ fn truncate(f: Vec4) -> [u32; 4] {
     }
 }
 
-/// Triangle boxes per bin for the three axes (minima and maxima apart, which
-/// makes an empty set cheap to write), and counts per bin with one lane per axis.
+/// A bin's box as its minimum and its negated maximum: growing it is then one
+/// eight-wide minimum (with AVX), and an empty box is all +inf.
+#[derive(Clone, Copy)]
+#[repr(C, align(32))]
+struct BinBox {
+    lo: Vec4,
+    neg_hi: Vec4,
+}
+
+impl BinBox {
+    const EMPTY: BinBox = BinBox {
+        lo: Vec4::INFINITY,
+        neg_hi: Vec4::INFINITY,
+    };
+
+    #[inline(always)]
+    fn grow(&mut self, lo: Vec4, neg_hi: Vec4) {
+        self.lo = self.lo.min(lo);
+        self.neg_hi = self.neg_hi.min(neg_hi);
+    }
+
+    fn aabb(&self) -> Aabb {
+        Aabb {
+            min: self.lo,
+            max: -self.neg_hi,
+        }
+    }
+}
+
+/// Triangle boxes per bin for the three axes, and counts per bin with one lane
+/// per axis.
 #[derive(Clone, Copy)]
 struct Bins {
-    lo: [[Vec4; BIN_SLOTS]; 3],
-    hi: [[Vec4; BIN_SLOTS]; 3],
+    boxes: [[BinBox; BIN_SLOTS]; 3],
     counts: [[u32; 4]; BIN_SLOTS],
 }
 
@@ -372,24 +407,65 @@ impl Bins {
     #[inline(always)]
     fn empty() -> Self {
         Bins {
-            lo: [[Vec4::INFINITY; BIN_SLOTS]; 3],
-            hi: [[Vec4::NEG_INFINITY; BIN_SLOTS]; 3],
+            boxes: [[BinBox::EMPTY; BIN_SLOTS]; 3],
             counts: [[0; 4]; BIN_SLOTS],
         }
     }
 
     /// Adds `prims` to the bins (in place: a `Bins` is 1.8 KB, and moving it
     /// around cost more than filling it for small nodes).
-    fn fill(&mut self, grid: &BinGrid, prims: &[BuildPrim]) {
+    fn fill(&mut self, isa: Isa, grid: &BinGrid, prims: &[BuildPrim]) {
+        match isa {
+            // SAFETY: `Isa::Avx2` is only chosen when the CPU has AVX2.
+            #[cfg(target_arch = "x86_64")]
+            Isa::Avx2 => unsafe { self.fill_avx2(grid, prims) },
+            Isa::Portable => self.fill_portable(grid, prims),
+        }
+    }
+
+    fn fill_portable(&mut self, grid: &BinGrid, prims: &[BuildPrim]) {
         if prims.len() >= PREFETCH_MIN {
-            self.fill_with::<true>(grid, prims)
+            self.fill_with::<true>(grid, prims, |b, p| b.grow(p.bounds.min, -p.bounds.max))
         } else {
-            self.fill_with::<false>(grid, prims)
+            self.fill_with::<false>(grid, prims, |b, p| b.grow(p.bounds.min, -p.bounds.max))
+        }
+    }
+
+    /// The same as the portable fill, each box grown by one eight-wide minimum.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn fill_avx2(&mut self, grid: &BinGrid, prims: &[BuildPrim]) {
+        use std::arch::x86_64::{
+            __m256, _mm256_load_ps, _mm256_loadu_ps, _mm256_min_ps, _mm256_set_ps, _mm256_store_ps,
+            _mm256_xor_ps,
+        };
+        let grow = |b: &mut BinBox, p: &BuildPrim| {
+            // SAFETY: a `BuildPrim` is eight floats (minimum, maximum) and a `BinBox`
+            // eight floats aligned to 32 bytes (minimum, negated maximum).
+            unsafe {
+                let neg_hi = _mm256_set_ps(-0.0, -0.0, -0.0, -0.0, 0.0, 0.0, 0.0, 0.0);
+                let prim: __m256 = _mm256_loadu_ps((p as *const BuildPrim).cast());
+                let b = (b as *mut BinBox).cast::<f32>();
+                _mm256_store_ps(
+                    b,
+                    _mm256_min_ps(_mm256_load_ps(b), _mm256_xor_ps(prim, neg_hi)),
+                );
+            }
+        };
+        if prims.len() >= PREFETCH_MIN {
+            self.fill_with::<true>(grid, prims, grow)
+        } else {
+            self.fill_with::<false>(grid, prims, grow)
         }
     }
 
     #[inline(always)]
-    fn fill_with<const PREFETCH: bool>(&mut self, grid: &BinGrid, prims: &[BuildPrim]) {
+    fn fill_with<const PREFETCH: bool>(
+        &mut self,
+        grid: &BinGrid,
+        prims: &[BuildPrim],
+        grow: impl Fn(&mut BinBox, &BuildPrim),
+    ) {
         for (k, p) in prims.iter().enumerate() {
             if PREFETCH {
                 super::prefetch(prims.as_ptr().wrapping_add(k + PREFETCH_AHEAD));
@@ -398,8 +474,7 @@ impl Bins {
             for (axis, &i) in index[..3].iter().enumerate() {
                 // The mask lets the compiler drop the bounds check (indices < BINS).
                 let i = i as usize & (BIN_SLOTS - 1);
-                self.lo[axis][i] = self.lo[axis][i].min(p.bounds.min);
-                self.hi[axis][i] = self.hi[axis][i].max(p.bounds.max);
+                grow(&mut self.boxes[axis][i], p);
                 self.counts[i][axis] += 1;
             }
         }
@@ -413,8 +488,8 @@ impl Bins {
     fn merge(mut self, o: &Bins) -> Self {
         for i in 0..BINS {
             for axis in 0..3 {
-                self.lo[axis][i] = self.lo[axis][i].min(o.lo[axis][i]);
-                self.hi[axis][i] = self.hi[axis][i].max(o.hi[axis][i]);
+                let other = o.boxes[axis][i];
+                self.boxes[axis][i].grow(other.lo, other.neg_hi);
                 self.counts[i][axis] += o.counts[i][axis];
             }
         }
@@ -422,10 +497,7 @@ impl Bins {
     }
 
     fn bin(&self, axis: usize, i: usize) -> Aabb {
-        Aabb {
-            min: self.lo[axis][i],
-            max: self.hi[axis][i],
-        }
+        self.boxes[axis][i].aabb()
     }
 }
 
@@ -472,22 +544,23 @@ fn best_split(
     prims: &[BuildPrim],
     cbounds: &Aabb,
     bounds: &Aabb,
+    isa: Isa,
 ) -> Option<(usize, usize, [Aabb; 2])> {
     let grid = BinGrid::new(cbounds);
-    let bins = if prims.len() < PARALLEL_BINNING_MIN {
-        let mut bins = Bins::empty();
-        bins.fill(&grid, prims);
-        bins
+    // Filled in place (the serial case is the common one: no copy of 1.8 KB).
+    let mut bins = Bins::empty();
+    if prims.len() < PARALLEL_BINNING_MIN {
+        bins.fill(isa, &grid, prims);
     } else {
-        prims
+        bins = prims
             .par_chunks(8192)
             .map(|chunk| {
                 let mut bins = Bins::empty();
-                bins.fill(&grid, chunk);
+                bins.fill(isa, &grid, chunk);
                 bins
             })
-            .reduce(Bins::empty, |a, b| a.merge(&b))
-    };
+            .reduce(Bins::empty, |a, b| a.merge(&b));
+    }
     // Costs are compared multiplied by the parent's area (no division per bin).
     let parent_area = bounds.half_area();
     let leaf = if prims.len() <= MAX_LEAF {
