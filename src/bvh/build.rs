@@ -61,7 +61,7 @@ pub(super) fn build(triangles: &[Triangle], isa: Isa) -> Option<Built> {
     };
     let root_cluster = Cluster::root(&mut prims, isa);
     let mut top = Piece::new(prims.len());
-    let root = builder.subtree(&mut prims, 0, root_cluster, &mut top);
+    let root = builder.subtree(&mut prims, 0, &root_cluster, &mut top);
     let (chunks, leaf_packets) = builder.packet_layout();
     let fix_leaf = |r: ChildRef| {
         let first = ((r & !LEAF) >> 4) as usize;
@@ -89,42 +89,44 @@ struct Builder {
 }
 
 impl Builder {
-    /// Builds the subtree of `cluster` (whose `start` is relative to `prims`,
-    /// which begins at `first` in the build array) into `piece`.
+    /// Builds the subtree of `cluster`, whose triangles are all of `prims` (which
+    /// begins at `first` in the build array), into `piece`.
     fn subtree(
         &self,
         prims: &mut [BuildPrim],
         first: usize,
-        cluster: Cluster,
+        cluster: &Cluster,
         piece: &mut Piece,
     ) -> ChildRef {
         if cluster.is_leaf() {
-            return self.leaf(first + cluster.start, cluster.len);
+            return self.leaf(first, cluster.len);
         }
-        let (kids, n) = take_children(prims, cluster);
+        let mut kids: [Option<Cluster>; WIDTH] = [const { None }; WIDTH];
+        let n = take_children(prims, cluster, &mut kids);
+        let kid = |lane: usize| kids[lane].as_ref().expect("lanes below n are taken");
         let slot = piece.nodes.len();
         piece.nodes.push(Node::EMPTY);
-        for (lane, kid) in kids[..n].iter().enumerate() {
-            set_bounds(&mut piece.nodes[slot], lane, &kid.bounds);
+        for lane in 0..n {
+            set_bounds(&mut piece.nodes[slot], lane, &kid(lane).bounds);
         }
         // The children's runs as disjoint slices, by lane.
         let mut slices: [Option<&mut [BuildPrim]>; WIDTH] = Default::default();
         let mut order: [usize; WIDTH] = std::array::from_fn(|lane| lane);
-        order[..n].sort_unstable_by_key(|&lane| kids[lane].start);
-        let mut rest = &mut prims[cluster.start..];
+        order[..n].sort_unstable_by_key(|&lane| kid(lane).start);
+        let mut rest = prims;
         for &lane in &order[..n] {
-            let (mine, others) = std::mem::take(&mut rest).split_at_mut(kids[lane].len);
+            let (mine, others) = std::mem::take(&mut rest).split_at_mut(kid(lane).len);
             slices[lane] = Some(mine);
             rest = others;
         }
         let mut refs = [EMPTY; WIDTH];
         let mut subpieces: [Option<Piece>; WIDTH] = Default::default();
-        let big = |lane: usize| kids[lane].len >= PARALLEL_MIN;
+        let big = |lane: usize| kid(lane).len >= PARALLEL_MIN;
         let mut build_small = |slices: &mut [Option<&mut [BuildPrim]>; WIDTH]| {
             for lane in (0..n).filter(|&lane| !big(lane)) {
                 let slice = slices[lane].take().expect("each run is taken once");
-                let offset = first + kids[lane].start;
-                refs[lane] = self.subtree(slice, offset, kids[lane].on_its_own(), piece);
+                let offset = first + kid(lane).start;
+                refs[lane] = self.subtree(slice, offset, kid(lane), piece);
             }
         };
         if (0..n).any(big) {
@@ -134,11 +136,10 @@ impl Builder {
                         continue;
                     }
                     let slice = slices[lane].take().expect("each run is taken once");
-                    let kid = kids[lane];
+                    let kid = kid(lane);
                     scope.spawn(move |_| {
                         let mut sub = Piece::new(kid.len);
-                        let offset = first + kid.start;
-                        let root = self.subtree(slice, offset, kid.on_its_own(), &mut sub);
+                        let root = self.subtree(slice, first + kid.start, kid, &mut sub);
                         debug_assert_eq!(root, 0, "a big child is a node, made first");
                         *out = Some(sub);
                     });
@@ -188,23 +189,29 @@ impl Builder {
     }
 }
 
-/// The node's children: the cluster's split, then the widest child that the SAH
-/// splits gives up its place to its two halves, until there are `WIDTH`.
-fn take_children(prims: &mut [BuildPrim], cluster: Cluster) -> ([Cluster; WIDTH], usize) {
-    let mut kids = [cluster; WIDTH];
+/// The node's children, into `kids`: the cluster's split, then the widest child
+/// that the SAH splits gives up its place to its two halves, until there are
+/// `WIDTH`; returns how many. `prims` are the cluster's triangles.
+fn take_children(
+    prims: &mut [BuildPrim],
+    cluster: &Cluster,
+    kids: &mut [Option<Cluster>; WIDTH],
+) -> usize {
+    kids[0] = Some(cluster.on_its_own());
     let mut n = 1;
     while n < WIDTH {
-        let widest = (0..n).filter(|&i| !kids[i].is_leaf()).max_by(|&a, &b| {
-            let area = |i: usize| kids[i].bounds.half_area();
+        let kid = |i: usize| kids[i].as_ref().expect("lanes below n are taken");
+        let widest = (0..n).filter(|&i| !kid(i).is_leaf()).max_by(|&a, &b| {
+            let area = |i: usize| kid(i).bounds.half_area();
             area(a).total_cmp(&area(b))
         });
         let Some(i) = widest else { break };
-        let [left, right] = kids[i].split(prims);
-        kids[i] = left;
-        kids[n] = right;
+        let [left, right] = kid(i).split(prims);
+        kids[i] = Some(left);
+        kids[n] = Some(right);
         n += 1;
     }
-    (kids, n)
+    n
 }
 
 fn set_bounds(node: &mut Node, lane: usize, b: &Aabb) {
