@@ -260,6 +260,20 @@ fn exact_split(prims: &mut [BuildPrim], bounds: &Aabb) -> Option<usize> {
     } else {
         f32::INFINITY
     };
+    // One triangle is a leaf; two have one split (in centroid order along x).
+    if n == 1 {
+        return None;
+    }
+    if n == 2 {
+        let [a, b] = [&prims[0], &prims[1]].map(|p| p.bounds.half_area());
+        if split_cost + a + b >= best_cost {
+            return None;
+        }
+        if prims[0].centroid2().x > prims[1].centroid2().x {
+            prims.swap(0, 1);
+        }
+        return Some(1);
+    }
     let mut best: Option<([u8; EXACT_MAX], usize)> = None;
     let centroids: [Vec4; EXACT_MAX] = std::array::from_fn(|k| prims[k.min(n - 1)].centroid2());
     let keys: [[f32; EXACT_MAX]; 3] =
