@@ -11,7 +11,13 @@ use rayon::prelude::*;
 use super::node::Isa;
 use crate::triangle::Triangle;
 
-const BINS: usize = 12;
+/// Bins per axis for runs of at least [`MANY_BINS_MIN`] triangles, and below.
+/// Few bins make the many small runs cheaper to bin; many serve large runs and
+/// the few big triangles of scenes like the lab box (8 bins for its 30 triangles
+/// made it render 30 % slower).
+const MANY_BINS: usize = 12;
+const FEW_BINS: usize = 8;
+const MANY_BINS_MIN: usize = 24;
 /// Triangles per leaf packet.
 const PACKET: usize = 4;
 /// Runs of at most this many triangles are split by exact SAH, not binned.
@@ -112,7 +118,6 @@ pub(super) struct Cluster {
     pub(super) start: usize,
     pub(super) len: usize,
     pub(super) bounds: Aabb,
-    cbounds: Aabb,
     /// Depth in the binary recursion, which bounds the SAH's depth.
     depth: usize,
     split: Split,
@@ -130,6 +135,7 @@ enum Split {
         axis: usize,
         bin: usize,
         sides: [Aabb; 2],
+        grid: BinGrid,
     },
     /// The SAH wants a leaf that would be too big: half the triangles by centroid
     /// along the longest axis.
@@ -161,7 +167,12 @@ impl Cluster {
                 None
             };
             match binned {
-                Some((axis, bin, sides)) => Split::Binned { axis, bin, sides },
+                Some((axis, bin, sides, grid)) => Split::Binned {
+                    axis,
+                    bin,
+                    sides,
+                    grid,
+                },
                 None if len <= MAX_LEAF => Split::Leaf,
                 None => Split::Median,
             }
@@ -170,7 +181,6 @@ impl Cluster {
             start,
             len,
             bounds,
-            cbounds,
             depth,
             split,
             isa,
@@ -197,8 +207,12 @@ impl Cluster {
         let mine = &mut prims[self.start..self.start + self.len];
         let (mid, [(lb, lc), (rb, rc)]) = match self.split {
             Split::Leaf => unreachable!("a leaf is not split"),
-            Split::Binned { axis, bin, sides } => {
-                let grid = BinGrid::new(&self.cbounds);
+            Split::Binned {
+                axis,
+                bin,
+                sides,
+                grid,
+            } => {
                 let (mid, [lc, rc]) = partition(mine, |p| grid.at_most(p, axis, bin));
                 (mid, [(sides[0], lc), (sides[1], rc)])
             }
@@ -321,34 +335,38 @@ fn leaf_cost(n: u32) -> f32 {
     n.div_ceil(4) as f32
 }
 
-/// The mapping of (doubled) centroids to bins on all three axes at once.
+/// The mapping of (doubled) centroids to `bins` bins on all three axes at once.
+#[derive(Clone, Copy)]
 struct BinGrid {
     lo: Vec4,
     scale: Vec4,
+    /// The last bin's index, in every lane.
+    last: Vec4,
 }
 
 impl BinGrid {
-    fn new(cbounds: &Aabb) -> Self {
+    fn new(cbounds: &Aabb, bins: usize) -> Self {
         // A flat axis gets scale inf or NaN; its indices are clamped into range all
         // the same, and no split is ever chosen on it.
         BinGrid {
             lo: cbounds.min,
-            scale: Vec4::splat(BINS as f32) / (cbounds.max - cbounds.min),
+            scale: Vec4::splat(bins as f32) / (cbounds.max - cbounds.min),
+            last: Vec4::splat((bins - 1) as f32),
         }
     }
 
-    /// Bin indices on x, y, z (and an unused fourth lane), each in `0..BINS`.
+    /// Bin indices on x, y, z (and an unused fourth lane), each in `0..bins`.
     #[inline(always)]
     fn bins_of(&self, p: &BuildPrim) -> [u32; 4] {
         // `min` and `max` return their second operand for NaN: the result is in range.
         let f = ((p.centroid2() - self.lo) * self.scale)
-            .min(Vec4::splat((BINS - 1) as f32))
+            .min(self.last)
             .max(Vec4::ZERO);
         truncate(f)
     }
 
-    /// `bins_of(p)[axis] <= bin` for `bin < BINS - 1`, on that axis alone: the bin
-    /// index truncates the same float clamped to `[0, BINS - 1]`, so it is at most
+    /// `bins_of(p)[axis] <= bin` for `bin` below the last, on that axis alone: the
+    /// bin index truncates the same float clamped to `[0, last]`, so it is at most
     /// `bin` exactly when the float is below `bin + 1` (NaN, clamped to the last
     /// bin, is not).
     #[inline(always)]
@@ -359,7 +377,7 @@ impl BinGrid {
     }
 }
 
-/// Lane-wise truncation of floats known to lie in `[0, BINS)`.
+/// Lane-wise truncation of floats known to lie in `[0, 2^31)`.
 #[inline(always)]
 fn truncate(f: Vec4) -> [u32; 4] {
     #[cfg(target_arch = "x86_64")]
@@ -407,22 +425,19 @@ impl BinBox {
 }
 
 /// Triangle boxes per bin for the three axes, and counts per bin with one lane
-/// per axis.
+/// per axis; `SLOTS` bins per axis, a power of two (at least the bins used).
 #[derive(Clone, Copy)]
-struct Bins {
-    boxes: [[BinBox; BIN_SLOTS]; 3],
-    counts: [[u32; 4]; BIN_SLOTS],
+struct Bins<const SLOTS: usize> {
+    boxes: [[BinBox; SLOTS]; 3],
+    counts: [[u32; 4]; SLOTS],
 }
 
-/// Bins allocated per axis: a power of two at least [`BINS`].
-const BIN_SLOTS: usize = BINS.next_power_of_two();
-
-impl Bins {
+impl<const SLOTS: usize> Bins<SLOTS> {
     #[inline(always)]
     fn empty() -> Self {
         Bins {
-            boxes: [[BinBox::EMPTY; BIN_SLOTS]; 3],
-            counts: [[0; 4]; BIN_SLOTS],
+            boxes: [[BinBox::EMPTY; SLOTS]; 3],
+            counts: [[0; 4]; SLOTS],
         }
     }
 
@@ -486,8 +501,8 @@ impl Bins {
             }
             let index = grid.bins_of(p);
             for (axis, &i) in index[..3].iter().enumerate() {
-                // The mask lets the compiler drop the bounds check (indices < BINS).
-                let i = i as usize & (BIN_SLOTS - 1);
+                // The mask lets the compiler drop the bounds check (indices < SLOTS).
+                let i = i as usize & (SLOTS - 1);
                 grow(&mut self.boxes[axis][i], p);
                 self.counts[i][axis] += 1;
             }
@@ -499,8 +514,8 @@ impl Bins {
         self.counts[i][axis]
     }
 
-    fn merge(mut self, o: &Bins) -> Self {
-        for i in 0..BINS {
+    fn merge(mut self, o: &Self) -> Self {
+        for i in 0..SLOTS {
             for axis in 0..3 {
                 let other = o.boxes[axis][i];
                 self.boxes[axis][i].grow(other.lo, other.neg_hi);
@@ -531,7 +546,7 @@ impl Sweep {
 
     /// Takes in bin `i` of every axis.
     #[inline(always)]
-    fn add(&mut self, bins: &Bins, i: usize) {
+    fn add<const SLOTS: usize>(&mut self, bins: &Bins<SLOTS>, i: usize) {
         for axis in 0..3 {
             self.boxes[axis].grow(&bins.bin(axis, i));
             self.counts[axis] += bins.count(axis, i);
@@ -552,17 +567,32 @@ impl Sweep {
     }
 }
 
-/// The SAH-best split as `(axis, last bin of the left side, the sides' boxes)`, or
-/// `None` when a leaf is cheaper (and small enough) or all centroids coincide.
-fn best_split(
+/// The binned SAH's best split of `prims` as `(axis, last bin of the left side,
+/// the sides' boxes, the grid)`, with [`FEW_BINS`] bins for runs under
+/// [`MANY_BINS_MIN`] triangles and [`MANY_BINS`] otherwise; or `None` when a
+/// leaf is cheaper (and small enough) or all centroids coincide.
+fn best_split(prims: &[BuildPrim], cbounds: &Aabb, bounds: &Aabb, isa: Isa) -> Option<BinSplit> {
+    if prims.len() < MANY_BINS_MIN {
+        best_split_in::<FEW_BINS, { FEW_BINS.next_power_of_two() }>(prims, cbounds, bounds, isa)
+    } else {
+        best_split_in::<MANY_BINS, { MANY_BINS.next_power_of_two() }>(prims, cbounds, bounds, isa)
+    }
+}
+
+/// A binned split: the axis, the last bin of the left side, the triangle boxes of
+/// both sides and the grid.
+type BinSplit = (usize, usize, [Aabb; 2], BinGrid);
+
+fn best_split_in<const BINS: usize, const SLOTS: usize>(
     prims: &[BuildPrim],
     cbounds: &Aabb,
     bounds: &Aabb,
     isa: Isa,
-) -> Option<(usize, usize, [Aabb; 2])> {
-    let grid = BinGrid::new(cbounds);
+) -> Option<BinSplit> {
+    const { assert!(BINS <= SLOTS && SLOTS.is_power_of_two()) };
+    let grid = BinGrid::new(cbounds, BINS);
     // Filled in place (the serial case is the common one: no copy of 1.8 KB).
-    let mut bins = Bins::empty();
+    let mut bins = Bins::<SLOTS>::empty();
     if prims.len() < PARALLEL_BINNING_MIN {
         bins.fill(isa, &grid, prims);
     } else {
@@ -625,7 +655,7 @@ fn best_split(
     let side = |range: std::ops::Range<usize>| {
         range.fold(Aabb::EMPTY, |acc, i| acc.union(&bins.bin(axis, i)))
     };
-    Some((axis, bin, [side(0..bin + 1), side(bin + 1..BINS)]))
+    Some((axis, bin, [side(0..bin + 1), side(bin + 1..BINS)], grid))
 }
 
 /// Moves the triangles for which `left` holds to the front; returns how many
