@@ -369,6 +369,81 @@ mod tests {
         }
     }
 
+    /// A large soup takes the parallel paths of the build (children built as
+    /// separate pieces, binning and partition in parallel blocks).
+    #[test]
+    fn agrees_with_brute_force_on_a_large_soup() {
+        let mut rng = Rng::new(5, 2);
+        let tris = random_triangles(&mut rng, 100_000);
+        let bvh = Bvh::build(&tris);
+        assert_eq!(bvh.triangle_count(), tris.len());
+        for _ in 0..300 {
+            let o = Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 3.0 - 1.5;
+            let d = (Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) - 0.5).normalize();
+            let ray = Ray::new(o, d);
+            let (a, b) = (
+                bvh.intersect(&ray, f32::INFINITY),
+                brute_force(&tris, &ray, f32::INFINITY),
+            );
+            assert_eq!(a.is_some(), b.is_some(), "{ray:?}");
+            if let (Some(a), Some(b)) = (a, b) {
+                assert!((a.t - b.t).abs() <= 1e-5 * b.t, "{a:?} {b:?}");
+                assert!(a.prim == b.prim || a.t == b.t, "{a:?} {b:?}");
+            }
+            assert_eq!(
+                bvh.occluded(&ray, 0.5),
+                brute_force(&tris, &ray, 0.5).is_some()
+            );
+        }
+    }
+
+    /// Every node's boxes and children, and every packet's triangles and indices,
+    /// hashed bit for bit.
+    fn fingerprint(built: &build::Built) -> u64 {
+        use std::hash::{Hash, Hasher};
+        let mut h = std::collections::hash_map::DefaultHasher::new();
+        built.root.hash(&mut h);
+        for node in &built.nodes {
+            node.bounds
+                .iter()
+                .flatten()
+                .for_each(|x| x.to_bits().hash(&mut h));
+            node.children.hash(&mut h);
+        }
+        for p in &built.packets {
+            for lane in 0..4 {
+                p.prim(lane).hash(&mut h);
+                let t = p.triangle(lane);
+                t.iter()
+                    .flat_map(|v| v.to_array())
+                    .for_each(|x| x.to_bits().hash(&mut h));
+            }
+        }
+        h.finish()
+    }
+
+    /// The same tree, bit for bit, on any number of threads and with either
+    /// instruction set for the binning.
+    #[test]
+    fn build_is_the_same_on_any_thread_count_and_isa() {
+        let mut rng = Rng::new(7, 3);
+        let tris = random_triangles(&mut rng, 100_000);
+        let on = |threads: usize, isa: Isa| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .expect("thread pool");
+            let built = pool.install(|| build::build(&tris, isa)).expect("a tree");
+            (built.nodes.len(), fingerprint(&built))
+        };
+        let isa = Isa::detect();
+        let one = on(1, isa);
+        assert!(one.0 > 1000, "a big tree: {} nodes", one.0);
+        assert_eq!(on(2, isa), one);
+        assert_eq!(on(3, isa), one);
+        assert_eq!(on(2, Isa::Portable), one);
+    }
+
     #[test]
     fn empty_and_degenerate_inputs() {
         let ray = Ray::new(Vec3A::ZERO, Vec3A::Z);
