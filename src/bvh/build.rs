@@ -1,12 +1,12 @@
-//! The eight-wide tree, built top down: a node takes the SAH's split of its
-//! triangles, then keeps splitting its widest child that the SAH would split
+//! The eight-wide tree, built top down: a node takes the planned split of its
+//! triangles, then keeps splitting its widest child that has a planned split
 //! until it has [`WIDTH`] children (the tree a binary build collapsed this way
 //! would give, without building the binary tree).
 //!
 //! Children with many triangles are built in parallel, each into its own run of
 //! nodes (a [`Piece`]); the runs are then copied into one array, references
-//! fixed up, while the leaves' triangles are gathered into packets in the order
-//! of the build array.
+//! fixed up, and then the leaves' triangles are gathered into packets in the
+//! order of the build array.
 
 use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 
@@ -190,7 +190,7 @@ impl Builder {
 }
 
 /// The node's children, into `kids`: the cluster's split, then the widest child
-/// that the SAH splits gives up its place to its two halves, until there are
+/// that has a planned split gives up its place to its two halves, until there are
 /// `WIDTH`; returns how many. `prims` are the cluster's triangles.
 fn take_children(
     prims: &mut [BuildPrim],
@@ -313,7 +313,7 @@ fn gather_packets(
         .enumerate()
         .map(|(k, &(first, len))| {
             // The triangles a few packets ahead are fetched while this one is made.
-            if let Some(&(ahead, len)) = chunks.get(k + PREFETCH_AHEAD) {
+            if let Some(&(ahead, len)) = chunks.get(k + PREFETCH_PACKETS) {
                 for p in &prims[ahead as usize..(ahead + len) as usize] {
                     // A triangle (48 bytes) may straddle two cache lines.
                     let t: *const Triangle = &triangles[p.id() as usize];
@@ -334,4 +334,4 @@ fn gather_packets(
 }
 
 /// How many packets ahead the gather prefetches.
-const PREFETCH_AHEAD: usize = 8;
+const PREFETCH_PACKETS: usize = 8;

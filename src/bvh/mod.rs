@@ -20,8 +20,10 @@ use crate::triangle::Triangle;
 use node::{BoxQuery, ChildRef, Isa, LEAF, Node, WIDTH};
 use packet::{Packet, PacketRay};
 
-/// Traversal stack size: SAH depth plus median splits of up to 2^32 triangles,
-/// at most `WIDTH - 1` entries per level.
+/// Traversal stack size: at most `WIDTH - 1` entries per level of the tree, whose
+/// depth is at most that of the binary splits it is made of: [`sah::MAX_SAH_DEPTH`]
+/// SAH levels, then median splits of fewer than 2^27 triangles down to eight (24
+/// levels) and exact splits of four triangles or fewer (2), within the 32 spare.
 const STACK_SIZE: usize = (WIDTH - 1) * (sah::MAX_SAH_DEPTH + 32);
 
 /// The hierarchy, owning a copy of the triangles in leaf order.

@@ -19,7 +19,8 @@ pub(super) const EMPTY: ChildRef = u32::MAX;
 
 /// Eight children's boxes, by coordinate: `bounds[0..3]` are the minima in x, y, z
 /// and `bounds[3..6]` the maxima, one lane per child. Empty lanes have min = +inf
-/// and max = -inf, which no ray can hit. 224 bytes, four cache lines.
+/// and max = -inf, which no ray can hit. 224 bytes of data (four cache
+/// lines), 256 with the alignment padding.
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(64))]
 pub(super) struct Node {

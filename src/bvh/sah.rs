@@ -35,8 +35,9 @@ const PREFETCH_AHEAD: usize = 32;
 const PARTITION_BLOCK: usize = 16_384;
 /// Runs at least this big (1 MB) are read with prefetching.
 const PREFETCH_MIN: usize = 32_768;
-/// Runs at least this big are binned in parallel.
-const PARALLEL_BINNING_MIN: usize = 65_536;
+/// Runs at least this big are bounded, binned and partitioned in parallel (the
+/// partition's blocks, below [`PREFETCH_MIN`], are read without prefetching).
+const PARALLEL_RUN_MIN: usize = 65_536;
 
 /// An axis-aligned box in the first three lanes of two `Vec4`s (the fourth lane is
 /// carried along unused: it holds a triangle's index in a [`BuildPrim`]).
@@ -137,8 +138,9 @@ enum Split {
         sides: [Aabb; 2],
         grid: BinGrid,
     },
-    /// The SAH wants a leaf that would be too big: half the triangles by centroid
-    /// along the longest axis.
+    /// No binned split (past [`MAX_SAH_DEPTH`], or all centroids in one bin) for
+    /// more triangles than a leaf holds: half of them by centroid along the
+    /// longest axis.
     Median,
     /// A packet's worth, already sorted: the first `mid` go left.
     Sorted(usize),
@@ -252,7 +254,7 @@ fn bounds_of(prims: &[BuildPrim]) -> (Aabb, Aabb) {
         }
         (b, c)
     };
-    if prims.len() < PARALLEL_BINNING_MIN {
+    if prims.len() < PARALLEL_RUN_MIN {
         return one(prims);
     }
     prims.par_chunks(8192).map(one).reduce(
@@ -593,7 +595,7 @@ fn best_split_in<const BINS: usize, const SLOTS: usize>(
     let grid = BinGrid::new(cbounds, BINS);
     // Filled in place (the serial case is the common one: no copy of 1.8 KB).
     let mut bins = Bins::<SLOTS>::empty();
-    if prims.len() < PARALLEL_BINNING_MIN {
+    if prims.len() < PARALLEL_RUN_MIN {
         bins.fill(isa, &grid, prims);
     } else {
         bins = prims
@@ -665,7 +667,7 @@ fn partition(
     prims: &mut [BuildPrim],
     left: impl Fn(&BuildPrim) -> bool + Sync,
 ) -> (usize, [Aabb; 2]) {
-    if prims.len() < PARALLEL_BINNING_MIN {
+    if prims.len() < PARALLEL_RUN_MIN {
         return partition_block(prims, &left);
     }
     // Fixed blocks: the result does not depend on the number of threads.
