@@ -12,7 +12,7 @@ use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 
 use rayon::prelude::*;
 
-use super::node::{ChildRef, EMPTY, Isa, LEAF, Node, WIDTH};
+use super::node::{ChildRef, EMPTY, Isa, LEAF, Node, WIDTH, leaf_parts, leaf_ref};
 use super::packet::Packet;
 use super::sah::{Aabb, BuildPrim, Cluster};
 use crate::triangle::Triangle;
@@ -64,8 +64,8 @@ pub(super) fn build(triangles: &[Triangle], isa: Isa) -> Option<Built> {
     let root = builder.subtree(&mut prims, 0, &root_cluster, &mut top);
     let (chunks, leaf_packets) = builder.packet_layout();
     let fix_leaf = |r: ChildRef| {
-        let first = ((r & !LEAF) >> 4) as usize;
-        LEAF | leaf_packets[first] << 4 | (r & 0xf).div_ceil(4)
+        let (first, len) = leaf_parts(r);
+        leaf_ref(leaf_packets[first] as usize, len.div_ceil(4))
     };
     let root = if root & LEAF != 0 {
         fix_leaf(root)
@@ -162,7 +162,7 @@ impl Builder {
     /// its triangle count, until the packets are laid out.
     fn leaf(&self, first: usize, len: usize) -> ChildRef {
         self.leaf_sizes[first].store(len as u32, Ordering::Relaxed);
-        LEAF | (first as u32) << 4 | len as u32
+        leaf_ref(first, len)
     }
 
     /// The leaves' packets in build-array order: each packet's run of the build

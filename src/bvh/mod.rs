@@ -17,7 +17,7 @@ use std::mem::MaybeUninit;
 
 use crate::ray::{Hit, Ray};
 use crate::triangle::Triangle;
-use node::{BoxQuery, ChildRef, Isa, LEAF, Node, WIDTH};
+use node::{BoxQuery, ChildRef, Isa, LEAF, Node, WIDTH, leaf_parts};
 use packet::{Packet, PacketRay};
 
 /// Traversal stack size: at most `WIDTH - 1` entries per level of the tree, whose
@@ -215,8 +215,8 @@ impl Bvh {
 
     #[inline]
     fn leaf(&self, r: ChildRef) -> &[Packet] {
-        let start = ((r & !LEAF) >> 4) as usize;
-        &self.packets[start..start + (r & 15) as usize]
+        let (start, count) = leaf_parts(r);
+        &self.packets[start..start + count]
     }
 
     /// Number of eight-wide nodes.

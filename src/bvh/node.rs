@@ -17,6 +17,20 @@ pub(super) const LEAF: u32 = 1 << 31;
 /// An unused child slot (never a valid leaf: leaves start below packet 2^27).
 pub(super) const EMPTY: ChildRef = u32::MAX;
 
+/// The reference to a leaf of `count` (below 16) items from `start` (below 2^27).
+/// The builder also uses it for a provisional reference to a run of triangles.
+#[inline(always)]
+pub(super) fn leaf_ref(start: usize, count: usize) -> ChildRef {
+    debug_assert!(start < 1 << 27 && count < 16);
+    LEAF | (start as u32) << 4 | count as u32
+}
+
+/// The `(start, count)` of a leaf reference.
+#[inline(always)]
+pub(super) fn leaf_parts(r: ChildRef) -> (usize, usize) {
+    (((r & !LEAF) >> 4) as usize, (r & 15) as usize)
+}
+
 /// Eight children's boxes, by coordinate: `bounds[0..3]` are the minima in x, y, z
 /// and `bounds[3..6]` the maxima, one lane per child. Empty lanes have min = +inf
 /// and max = -inf, which no ray can hit. 224 bytes of data (four cache

@@ -20,8 +20,9 @@ const FEW_BINS: usize = 8;
 const MANY_BINS_MIN: usize = 24;
 /// Triangles per leaf packet.
 const PACKET: usize = 4;
-/// Runs of at most this many triangles are split by exact SAH, not binned.
-const EXACT_MAX: usize = 8;
+/// Runs of at most this many triangles are split by exact SAH, not binned (as
+/// many as a leaf holds: binned runs are never small enough to be a leaf).
+const EXACT_MAX: usize = MAX_LEAF;
 /// Largest leaf, in triangles: two four-wide packets.
 pub(super) const MAX_LEAF: usize = 8;
 /// Cost of visiting a node relative to testing one packet of four triangles.
@@ -247,8 +248,11 @@ impl Cluster {
 fn bounds_of(prims: &[BuildPrim]) -> (Aabb, Aabb) {
     let one = |prims: &[BuildPrim]| {
         let (mut b, mut c) = (Aabb::EMPTY, Aabb::EMPTY);
+        let ahead = prims.len() >= PREFETCH_MIN;
         for (k, p) in prims.iter().enumerate() {
-            super::prefetch(prims.as_ptr().wrapping_add(k + PREFETCH_AHEAD));
+            if ahead {
+                super::prefetch(prims.as_ptr().wrapping_add(k + PREFETCH_AHEAD));
+            }
             b.grow(&p.bounds);
             c.grow_point(p.centroid2());
         }
@@ -271,11 +275,7 @@ fn exact_split(prims: &mut [BuildPrim], bounds: &Aabb) -> Option<usize> {
     assert!(n <= EXACT_MAX);
     let area = bounds.half_area();
     let split_cost = TRAVERSAL_COST * area;
-    let mut best_cost = if n <= MAX_LEAF {
-        leaf_cost(n as u32) * area
-    } else {
-        f32::INFINITY
-    };
+    let mut best_cost = leaf_cost(n as u32) * area;
     // One triangle is a leaf; two have one split (in centroid order along x).
     if n == 1 {
         return None;
@@ -571,8 +571,8 @@ impl Sweep {
 
 /// The binned SAH's best split of `prims` as `(axis, last bin of the left side,
 /// the sides' boxes, the grid)`, with [`FEW_BINS`] bins for runs under
-/// [`MANY_BINS_MIN`] triangles and [`MANY_BINS`] otherwise; or `None` when a
-/// leaf is cheaper (and small enough) or all centroids coincide.
+/// [`MANY_BINS_MIN`] triangles and [`MANY_BINS`] otherwise; or `None` when the
+/// centroids fall in one bin on every axis. The run is too big for a leaf.
 fn best_split(prims: &[BuildPrim], cbounds: &Aabb, bounds: &Aabb, isa: Isa) -> Option<BinSplit> {
     if prims.len() < MANY_BINS_MIN {
         best_split_in::<FEW_BINS, { FEW_BINS.next_power_of_two() }>(prims, cbounds, bounds, isa)
@@ -607,13 +607,9 @@ fn best_split_in<const BINS: usize, const SLOTS: usize>(
             })
             .reduce(Bins::empty, |a, b| a.merge(&b));
     }
+    debug_assert!(prims.len() > MAX_LEAF, "smaller runs take the exact split");
     // Costs are compared multiplied by the parent's area (no division per bin).
     let parent_area = bounds.half_area();
-    let leaf = if prims.len() <= MAX_LEAF {
-        leaf_cost(prims.len() as u32) * parent_area
-    } else {
-        f32::INFINITY
-    };
     let split_cost = Vec4::splat(TRAVERSAL_COST * parent_area);
     // Sweep from the right for every right side's cost, then from the left; the
     // three axes side by side, each lane keeping its first cheapest bin.
@@ -623,7 +619,7 @@ fn best_split_in<const BINS: usize, const SLOTS: usize>(
         sweep.add(&bins, i);
         right_cost[i] = sweep.cost();
     }
-    let mut best_cost = Vec4::splat(leaf);
+    let mut best_cost = Vec4::INFINITY;
     let mut best_bin = [usize::MAX; 3];
     let mut sweep = Sweep::new();
     let n = prims.len() as u32;
@@ -642,10 +638,10 @@ fn best_split_in<const BINS: usize, const SLOTS: usize>(
             }
         }
     }
-    // The cheapest axis (the first of equals) that beats a leaf; a flat axis
-    // (all centroids in one bin) never has a bin.
+    // The cheapest axis (the first of equals); a flat axis (all centroids in one
+    // bin) never has a bin.
     let mut best: Option<(usize, usize)> = None;
-    let mut cheapest = leaf;
+    let mut cheapest = f32::INFINITY;
     for axis in 0..3 {
         let flat = cbounds.max[axis] - cbounds.min[axis] <= 0.0;
         if best_bin[axis] != usize::MAX && !flat && best_cost[axis] < cheapest {
