@@ -342,32 +342,37 @@ mod tests {
             .collect()
     }
 
+    /// `rays` random rays through the soup's cube: closest hits agree with brute
+    /// force (same hit or miss, `t` within 1e-5, the same triangle or a tie), and
+    /// any-hit agrees with closest-hit with and without a `t_max` cut.
+    fn check_against_brute_force(bvh: &Bvh, tris: &[Triangle], rng: &mut Rng, rays: usize) {
+        for _ in 0..rays {
+            let o = Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 3.0 - 1.5;
+            let d = (Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) - 0.5).normalize();
+            let ray = Ray::new(o, d);
+            let a = bvh.intersect(&ray, f32::INFINITY);
+            let b = brute_force(tris, &ray, f32::INFINITY);
+            assert_eq!(a.is_some(), b.is_some(), "n={} {ray:?}", tris.len());
+            if let (Some(a), Some(b)) = (a, b) {
+                assert!((a.t - b.t).abs() <= 1e-5 * b.t, "{a:?} {b:?}");
+                assert!(a.prim == b.prim || a.t == b.t, "{a:?} {b:?}");
+            }
+            assert_eq!(bvh.occluded(&ray, f32::INFINITY), b.is_some());
+            let cut = 0.5;
+            assert_eq!(
+                bvh.occluded(&ray, cut),
+                brute_force(tris, &ray, cut).is_some()
+            );
+        }
+    }
+
     #[test]
     fn agrees_with_brute_force_on_random_soup() {
         let mut rng = Rng::new(3, 1);
         for &n in &[1usize, 2, 7, 100, 3000] {
             let tris = random_triangles(&mut rng, n);
             let bvh = Bvh::build(&tris);
-            for _ in 0..2000 {
-                let o = Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 3.0 - 1.5;
-                let d =
-                    (Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) - 0.5).normalize();
-                let ray = Ray::new(o, d);
-                let a = bvh.intersect(&ray, f32::INFINITY);
-                let b = brute_force(&tris, &ray, f32::INFINITY);
-                assert_eq!(a.is_some(), b.is_some(), "n={n} {ray:?}");
-                if let (Some(a), Some(b)) = (a, b) {
-                    assert!((a.t - b.t).abs() <= 1e-5 * b.t, "{a:?} {b:?}");
-                    assert!(a.prim == b.prim || a.t == b.t, "{a:?} {b:?}");
-                }
-                // Any-hit agrees with closest-hit, with and without a t_max cut.
-                assert_eq!(bvh.occluded(&ray, f32::INFINITY), b.is_some());
-                let cut = 0.5;
-                assert_eq!(
-                    bvh.occluded(&ray, cut),
-                    brute_force(&tris, &ray, cut).is_some()
-                );
-            }
+            check_against_brute_force(&bvh, &tris, &mut rng, 2000);
         }
     }
 
@@ -379,24 +384,7 @@ mod tests {
         let tris = random_triangles(&mut rng, 100_000);
         let bvh = Bvh::build(&tris);
         assert_eq!(bvh.triangle_count(), tris.len());
-        for _ in 0..300 {
-            let o = Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 3.0 - 1.5;
-            let d = (Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) - 0.5).normalize();
-            let ray = Ray::new(o, d);
-            let (a, b) = (
-                bvh.intersect(&ray, f32::INFINITY),
-                brute_force(&tris, &ray, f32::INFINITY),
-            );
-            assert_eq!(a.is_some(), b.is_some(), "{ray:?}");
-            if let (Some(a), Some(b)) = (a, b) {
-                assert!((a.t - b.t).abs() <= 1e-5 * b.t, "{a:?} {b:?}");
-                assert!(a.prim == b.prim || a.t == b.t, "{a:?} {b:?}");
-            }
-            assert_eq!(
-                bvh.occluded(&ray, 0.5),
-                brute_force(&tris, &ray, 0.5).is_some()
-            );
-        }
+        check_against_brute_force(&bvh, &tris, &mut rng, 300);
     }
 
     /// Every node's boxes and children, and every packet's triangles and indices,
