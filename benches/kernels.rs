@@ -7,9 +7,9 @@ use std::hint::black_box;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use glam::Vec3A;
-use raylab::bvh::Bvh;
-use raylab::ray::Ray;
-use raylab::triangle::{RayShear, Triangle, intersect};
+use raylab::geometry::bvh::Bvh;
+use raylab::geometry::ray::Ray;
+use raylab::geometry::triangle::{RayShear, Triangle, intersect};
 use raylab::workload;
 
 /// A UV sphere of about `2·n²` triangles with a bumpy radius.

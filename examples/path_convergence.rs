@@ -8,10 +8,10 @@ use std::path::Path;
 use std::time::{Duration, Instant};
 
 use raylab::film::{Film, read_exr, rel_mse};
-use raylab::integrator::Integrator;
-use raylab::path::{PathOptions, SamplerKind};
+use raylab::integrators::Integrator;
+use raylab::integrators::path::{PathOptions, SamplerKind};
 use raylab::render::accumulate;
-use raylab::{Camera, cornell};
+use raylab::{Camera, scene::cornell};
 
 fn main() {
     let mut args = std::env::args().skip(1);

@@ -7,7 +7,7 @@
 
 use glam::{Mat3A, Vec3A};
 
-use crate::ray::Ray;
+use crate::geometry::ray::Ray;
 
 /// A pinhole camera producing rays for an image of `width × height` pixels.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -4,7 +4,7 @@
 use glam::{Mat3A, Vec3A};
 
 use crate::camera::{Camera, lab_rotation};
-use crate::integrator::Integrator;
+use crate::integrators::Integrator;
 
 /// Camera and light travel per key press in the lab box (2 units wide); other
 /// scenes scale it with their size (see [`ViewState::step`]).

@@ -4,47 +4,43 @@
 //!
 //! The crate follows pbrt's split into small modules, one concept each:
 //!
-//! * [`ray`]: rays and robust spawning of secondary rays off a surface;
-//! * [`triangle`]: the watertight ray–triangle test;
-//! * [`bvh`]: the bounding volume hierarchy that answers scene queries;
-//! * [`scene`]: triangles with their materials and the light, behind the
-//!   [`Scene::intersect`] / [`Scene::occluded`] seam;
-//! * [`cornell`]: the lab's built-in Cornell box;
-//! * [`obj`]: Wavefront OBJ/MTL meshes, and [`framing`]: a camera and light for them;
-//! * [`camera`]: the lab's pinhole camera (yaw/pitch);
-//! * [`integrator`]: `flat`, `direct` (the lab's lighting model) and `path`;
-//! * [`path`]: the path tracer (next-event estimation, MIS, Russian roulette);
-//! * [`material`]: BSDFs (diffuse, mirror, glass, rough conductor);
-//! * [`sampler`]: PCG32 streams keyed by (seed, pixel, sample), and [`sobol`]:
+//! * [`geometry`]: rays and robust spawning of secondary rays, the watertight
+//!   ray–triangle test and the eight-wide BVH;
+//! * [`scene`]: the one scene representation of every source (triangles, their
+//!   vertex attributes, materials, textures, lights, cameras) behind the
+//!   [`Scene::intersect`] / [`Scene::occluded`] seam, and its loaders (the lab's
+//!   built-in boxes, Wavefront OBJ, glTF 2.0);
+//! * [`camera`]: pinhole (and orthographic) cameras;
+//! * [`materials`]: BSDFs (diffuse, mirror, glass, rough conductor, the glTF
+//!   metallic–roughness BRDF);
+//! * [`textures`]: decoded images shared by materials, and their lookups;
+//! * [`lights`]: point, spot and directional lights, and area lights;
+//! * [`integrators`]: `flat`, `direct` (the lab's lighting model) and `path`
+//!   (next-event estimation, MIS, Russian roulette);
+//! * [`sampling`]: PCG32 streams keyed by (seed, pixel, sample), and
 //!   Owen-scrambled Sobol' points;
 //! * [`render`]: tiles on rayon, deterministic per-pixel sampling;
-//! * [`film`]: the image buffer and atomic PNG/EXR output;
+//! * [`film`]: the image buffer, tone mapping and atomic PNG/EXR output;
 //! * [`controls`]: the viewer's camera/light state and how input changes it;
 //! * [`workload`]: the ray-casting workloads of `raylab bench`.
 
 #![warn(missing_docs)]
 
-pub mod bvh;
 pub mod camera;
 pub mod controls;
-pub mod cornell;
 pub mod film;
-pub mod framing;
-pub mod integrator;
-pub mod material;
-pub mod obj;
-pub mod path;
-pub mod ray;
+pub mod geometry;
+pub mod integrators;
+pub mod lights;
+pub mod materials;
 pub mod render;
-pub mod sampler;
+pub mod sampling;
 pub mod scene;
-pub mod sobol;
-pub mod transform;
-pub mod triangle;
+pub mod textures;
 pub mod workload;
 
 pub use camera::Camera;
-pub use integrator::Integrator;
-pub use ray::{Hit, Ray};
+pub use geometry::ray::{Hit, Ray};
+pub use geometry::triangle::Triangle;
+pub use integrators::Integrator;
 pub use scene::{LightSample, PointLight, Scene, SceneError};
-pub use triangle::Triangle;

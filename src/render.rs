@@ -9,10 +9,10 @@ use rayon::prelude::*;
 
 use crate::camera::Camera;
 use crate::film::Film;
-use crate::integrator::Integrator;
-use crate::path::{self, PathOptions, PathSampler, SamplerKind};
-use crate::ray::{Hit, Ray};
-use crate::sampler::Rng;
+use crate::geometry::ray::{Hit, Ray};
+use crate::integrators::Integrator;
+use crate::integrators::path::{self, PathOptions, PathSampler, SamplerKind};
+use crate::sampling::sampler::Rng;
 use crate::scene::Scene;
 
 /// Rows per tile: small enough to balance two cores on small images, large enough

@@ -6,10 +6,10 @@ use std::path::Path;
 use glam::{DVec3, Vec3A};
 use rayon::prelude::*;
 
-use crate::bvh::Bvh;
-use crate::ray::{Hit, Ray};
-use crate::sampler::Rng;
-use crate::triangle::Triangle;
+use crate::geometry::bvh::Bvh;
+use crate::geometry::ray::{Hit, Ray};
+use crate::geometry::triangle::Triangle;
+use crate::sampling::sampler::Rng;
 
 /// Rays handed to one thread at a time.
 const CHUNK: usize = 1024;

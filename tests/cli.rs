@@ -163,7 +163,7 @@ fn exr_holds_the_linear_values_unchanged_and_png_the_srgb_encoding() {
         let out = raylab(&all, dir.path());
         assert!(out.status.success(), "{}", stderr(&out));
     }
-    let mut scene = raylab::cornell::scene();
+    let mut scene = raylab::scene::cornell::scene();
     scene.light.position = glam::Vec3A::new(0.2, -0.6, -0.5);
     scene.light.power = glam::Vec3A::splat(20.0);
     scene.ambient = glam::Vec3A::splat(0.25);

@@ -4,9 +4,9 @@
 mod common;
 
 use glam::Vec3A;
-use raylab::cornell;
 use raylab::film::{Film, rel_mse};
 use raylab::render::{RenderSettings, Rendered, render};
+use raylab::scene::cornell;
 use raylab::{Camera, Integrator, Scene};
 
 fn lab_camera(w: u32, h: u32) -> Camera {
@@ -130,7 +130,7 @@ fn the_area_light_box_is_lit_and_the_patch_seen_at_its_radiance() {
 
 /// A closed cube around the origin whose twelve triangles face inwards, all with
 /// `material` and emitting `le` towards the inside.
-fn furnace(material: raylab::material::Material, le: Vec3A) -> Scene {
+fn furnace(material: raylab::materials::Material, le: Vec3A) -> Scene {
     use raylab::Triangle;
     let c = |i: usize| {
         Vec3A::new(
@@ -176,7 +176,7 @@ fn furnace(material: raylab::material::Material, le: Vec3A) -> Scene {
 fn furnace_mean(scene: &Scene, max_depth: u32, spp: u32) -> (Vec3A, Rendered) {
     let cam = Camera::lab(Vec3A::new(0.1, -0.2, 0.05), 20.0, 10.0, 24, 24);
     let settings = RenderSettings {
-        integrator: Integrator::Path(raylab::path::PathOptions {
+        integrator: Integrator::Path(raylab::integrators::path::PathOptions {
             max_depth,
             ..Default::default()
         }),
@@ -193,7 +193,7 @@ fn furnace_mean(scene: &Scene, max_depth: u32, spp: u32) -> (Vec3A, Rendered) {
 /// Anything else means the estimator gains or loses energy.
 #[test]
 fn white_furnace_diffuse() {
-    use raylab::material::Material;
+    use raylab::materials::Material;
     let le = Vec3A::new(1.0, 0.5, 0.25);
     let white = furnace(
         Material::Diffuse {
@@ -236,7 +236,7 @@ fn white_furnace_diffuse() {
 /// lose energy at grazing angles but never gains any.
 #[test]
 fn white_furnace_perfect_conductor() {
-    use raylab::material::Material;
+    use raylab::materials::Material;
     let le = Vec3A::new(1.0, 0.5, 0.25);
     let polished = furnace(Material::perfect_conductor(0.0), le);
     let (_, out) = furnace_mean(&polished, 3, 2);
@@ -276,7 +276,7 @@ fn white_furnace_perfect_conductor() {
 #[test]
 fn area_light_direct_light_matches_lamberts_formula() {
     use raylab::Triangle;
-    use raylab::path::{PathOptions, SamplerKind, SobolSampler, radiance};
+    use raylab::integrators::path::{PathOptions, SamplerKind, SobolSampler, radiance};
     let (lo, hi) = (-3.0, 3.0);
     let floor = [
         Vec3A::new(lo, 1.0, lo),
@@ -343,7 +343,7 @@ fn area_light_direct_light_matches_lamberts_formula() {
                     &scene,
                     &ray,
                     &options,
-                    &mut raylab::sampler::Rng::for_sample(3, 7, i),
+                    &mut raylab::sampling::sampler::Rng::for_sample(3, 7, i),
                     &mut rays,
                 ),
             };

@@ -4,9 +4,9 @@
 mod common;
 
 use glam::Vec3A;
-use raylab::cornell::{self, colors};
 use raylab::film::Film;
 use raylab::render::{RenderSettings, accumulate, render, sample_pixel};
+use raylab::scene::cornell::{self, colors};
 use raylab::{Camera, Integrator, Scene};
 
 /// The seven reflectances of the box.

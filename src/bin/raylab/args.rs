@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use clap::{Args, Parser, Subcommand};
 use glam::Vec3A;
 use raylab::Integrator;
-use raylab::cornell::{self, MaterialChoice};
+use raylab::scene::cornell::{self, MaterialChoice};
 
 /// Largest accepted image side, in pixels.
 pub const MAX_SIDE: u32 = 16_384;
@@ -87,7 +87,7 @@ pub struct SceneArgs {
     /// Sample points of `path`: `sobol` (Owen-scrambled Sobol' for the pixel and
     /// the first bounce) or `independent` (PCG32 only).
     #[arg(long, default_value = "sobol", value_parser = parse_sampler)]
-    pub sampler: raylab::path::SamplerKind,
+    pub sampler: raylab::integrators::path::SamplerKind,
     /// Materials of the built-in box's parts for `path`, e.g.
     /// `tall=mirror,short=glass,floor=gold:0.2`. Parts: floor, ceiling, back, left,
     /// right, short, tall. Materials: diffuse, mirror, glass[:IOR], gold, copper,
@@ -122,7 +122,7 @@ pub struct SceneArgs {
     /// y = 0, centred, scaled to the height). One for all meshes, or one per --add.
     /// The bunny on the lab box's floor: "fit 0.8; rotate x 180; translate 0.3 1 -0.3".
     #[arg(long, value_name = "OPS", allow_hyphen_values = true)]
-    pub transform: Vec<raylab::transform::Transform>,
+    pub transform: Vec<raylab::scene::transform::Transform>,
     /// Ambient term N added to the direct light (the lab's stand-in for indirect
     /// light) [default: 0.5 in the box, 0.15 for a mesh].
     #[arg(long, value_name = "N", allow_hyphen_values = true, value_parser = parse_non_negative)]
@@ -250,8 +250,8 @@ fn parse_assignment(s: &str) -> Result<(String, MaterialChoice), String> {
     Ok((part.to_string(), MaterialChoice::parse(material.trim())?))
 }
 
-fn parse_sampler(s: &str) -> Result<raylab::path::SamplerKind, String> {
-    raylab::path::SamplerKind::ALL
+fn parse_sampler(s: &str) -> Result<raylab::integrators::path::SamplerKind, String> {
+    raylab::integrators::path::SamplerKind::ALL
         .into_iter()
         .find(|k| k.name() == s)
         .ok_or_else(|| format!("unknown sampler '{s}' (expected sobol or independent)"))
@@ -379,7 +379,7 @@ mod tests {
             parse_assignment("tall=glass:1.4"),
             Ok((
                 "tall".into(),
-                MaterialChoice::Other(raylab::material::Material::Dielectric { ior: 1.4 })
+                MaterialChoice::Other(raylab::materials::Material::Dielectric { ior: 1.4 })
             ))
         );
         for bad in ["tall", "wall=mirror", "tall=plastic", "tall=gold:7"] {

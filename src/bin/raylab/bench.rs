@@ -4,9 +4,9 @@ use std::io::Write;
 use std::time::Instant;
 
 use anyhow::{Context, anyhow};
-use raylab::bvh::Bvh;
 use raylab::film::write_bytes;
-use raylab::ray::{Hit, Ray};
+use raylab::geometry::bvh::Bvh;
+use raylab::geometry::ray::{Hit, Ray};
 use raylab::workload::{self, cast_closest, cast_closest4, cast_occluded, encode_hits};
 
 use crate::args::BenchArgs;

@@ -77,7 +77,7 @@ fn run_default() -> anyhow::Result<()> {
         height: 500,
         integrator: raylab::Integrator::Direct,
         max_depth: None,
-        sampler: raylab::path::SamplerKind::DEFAULT,
+        sampler: raylab::integrators::path::SamplerKind::DEFAULT,
         material: Vec::new(),
         exposure: 0.0,
         camera_pos: None,
@@ -123,8 +123,8 @@ pub fn png_scale(integrator: raylab::Integrator, exposure: f32) -> f32 {
 }
 
 /// Reads a mesh file, telling the user what it had to guess (missing materials).
-fn load_mesh(path: &std::path::Path) -> anyhow::Result<raylab::obj::Mesh> {
-    let mesh = raylab::obj::load_obj(path)?;
+fn load_mesh(path: &std::path::Path) -> anyhow::Result<raylab::scene::obj::Mesh> {
+    let mesh = raylab::scene::obj::load_obj(path)?;
     for w in &mesh.warnings {
         eprintln!("warning: {w}");
     }
@@ -137,7 +137,7 @@ const MESH_AMBIENT: f32 = 0.15;
 /// Builds the scene and the initial view from the shared arguments.
 fn load(args: &SceneArgs) -> anyhow::Result<(raylab::Scene, raylab::controls::ViewState)> {
     use glam::{Mat3A, Vec3A};
-    use raylab::{Triangle, cornell};
+    use raylab::{Triangle, scene::cornell};
     let is_obj = std::path::Path::new(&args.scene)
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("obj"));
@@ -188,7 +188,7 @@ fn load(args: &SceneArgs) -> anyhow::Result<(raylab::Scene, raylab::controls::Vi
         }
         let mesh = load_mesh(std::path::Path::new(&args.scene))?;
         let ambient = args.ambient.unwrap_or(MESH_AMBIENT);
-        let (mut scene, framing) = raylab::framing::mesh_scene(mesh, ambient)
+        let (mut scene, framing) = raylab::scene::framing::mesh_scene(mesh, ambient)
             .map_err(|e| anyhow::anyhow!("{}: {e}", args.scene))?;
         if let Some(p) = args.light_power {
             scene.light.power = Vec3A::splat(p);

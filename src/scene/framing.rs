@@ -4,7 +4,7 @@
 use glam::{Mat3A, Vec3A};
 
 use crate::camera::Y_UP_TOWARDS_MINUS_Z;
-use crate::obj::Mesh;
+use crate::scene::obj::Mesh;
 use crate::scene::{PointLight, Scene, SceneError};
 
 /// Where the camera and light go for a mesh, and how far a key press moves them.

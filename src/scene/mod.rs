@@ -2,15 +2,20 @@
 //! light and the ambient term, behind one query seam ([`Scene::intersect`],
 //! [`Scene::occluded`]).
 
+pub mod cornell;
+pub mod framing;
+pub mod obj;
+pub mod transform;
+
 use std::f32::consts::PI;
 
 use glam::{Vec2, Vec3A};
 use thiserror::Error;
 
-use crate::bvh::Bvh;
-use crate::material::Material;
-use crate::ray::{Hit, Ray, SurfacePoint};
-use crate::triangle::Triangle;
+use crate::geometry::bvh::Bvh;
+use crate::geometry::ray::{Hit, Ray, SurfacePoint};
+use crate::geometry::triangle::Triangle;
+use crate::materials::Material;
 
 /// The lab's point light: position and power per colour channel.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -3,8 +3,8 @@
 
 use glam::{BVec4A, Vec3A, Vec4};
 
-use crate::ray::Ray;
-use crate::triangle::{self, RayShear, Triangle, TriangleHit, axis_order, t_error_bound};
+use crate::geometry::ray::Ray;
+use crate::geometry::triangle::{self, RayShear, Triangle, TriangleHit, axis_order, t_error_bound};
 
 /// Four triangles, lane by lane: `v[vertex][axis]`. Unused lanes repeat the last
 /// triangle, so they never change a result.
@@ -105,7 +105,7 @@ pub(super) struct Candidates {
     pub(super) det: Vec4,
 }
 
-/// The watertight test of [`crate::triangle::intersect`] on four lanes: either one
+/// The watertight test of [`crate::geometry::triangle::intersect`] on four lanes: either one
 /// ray against four triangles or four rays against one triangle (broadcast). Each
 /// lane computes exactly the scalar test's operations, so the answers agree bit for
 /// bit. `Err` means an edge function was exactly zero somewhere: the caller
@@ -220,7 +220,7 @@ fn scalar_closest(r: &PacketRay, p: &Packet, t_max: f32) -> Option<(usize, Trian
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sampler::Rng;
+    use crate::sampling::sampler::Rng;
 
     #[test]
     fn four_wide_test_agrees_with_the_scalar_test() {

@@ -3,9 +3,9 @@
 
 use glam::Vec3A;
 
-use crate::material::Material;
+use crate::geometry::triangle::Triangle;
+use crate::materials::Material;
 use crate::scene::{PointLight, Scene};
-use crate::triangle::Triangle;
 
 /// Side of the box in the lab's model units before normalisation.
 const L: f32 = 555.0;

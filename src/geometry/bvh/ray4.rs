@@ -12,8 +12,8 @@ use glam::{BVec4A, Vec4};
 use super::node::{ChildRef, EMPTY, LEAF, WIDTH, safe_inverse};
 use super::packet::{Packet, candidates};
 use super::{Bvh, Stack};
-use crate::ray::{Hit, Ray, gamma};
-use crate::triangle::{self, RayShear, axis_order};
+use crate::geometry::ray::{Hit, Ray, gamma};
+use crate::geometry::triangle::{self, RayShear, axis_order};
 
 /// Per-packet constants: origins and safe inverse directions by axis, and the
 /// triangle test's shared axis order with per-lane origins and shears.
@@ -247,8 +247,8 @@ fn scalar_lanes(q: &Query4<'_>, p: &Packet, i: usize, t_max: Vec4) -> Hits4 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sampler::Rng;
-    use crate::triangle::Triangle;
+    use crate::geometry::triangle::Triangle;
+    use crate::sampling::sampler::Rng;
     use glam::Vec3A;
 
     /// A closed icosphere-like blob of triangles with shared edges.

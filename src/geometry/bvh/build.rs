@@ -15,7 +15,7 @@ use rayon::prelude::*;
 use super::node::{ChildRef, EMPTY, Isa, LEAF, Node, WIDTH, leaf_parts, leaf_ref};
 use super::packet::Packet;
 use super::sah::{Aabb, BuildPrim, Cluster};
-use crate::triangle::Triangle;
+use crate::geometry::triangle::Triangle;
 
 /// Children at least this big are built in parallel with their siblings.
 const PARALLEL_MIN: usize = 4096;

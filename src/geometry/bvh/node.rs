@@ -5,7 +5,7 @@
 
 use glam::{Vec3A, Vec4};
 
-use crate::ray::gamma;
+use crate::geometry::ray::gamma;
 
 /// Children per node.
 pub(super) const WIDTH: usize = 8;
@@ -194,7 +194,7 @@ impl BoxQuery {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sampler::Rng;
+    use crate::sampling::sampler::Rng;
 
     /// Random nodes (some slots empty, some boxes flat) against random rays,
     /// including axis-parallel ones and ones starting inside a box: both tests

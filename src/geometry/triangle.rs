@@ -13,7 +13,7 @@ use std::ops::{Add, Div, Mul};
 
 use glam::{Mat3A, Vec3A, Vec4};
 
-use crate::ray::{Ray, gamma};
+use crate::geometry::ray::{Ray, gamma};
 
 /// A triangle given by its three vertices, in the winding the scene defines.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -319,7 +319,7 @@ mod tests {
     /// at least one of them, for many irregular fans and directions.
     #[test]
     fn shared_edges_and_vertices_have_no_cracks() {
-        let mut rng = crate::sampler::Rng::new(7, 0);
+        let mut rng = crate::sampling::sampler::Rng::new(7, 0);
         let mut tests = 0;
         for _ in 0..2000 {
             // A fan of triangles around a centre vertex, all in a tilted plane.

@@ -538,7 +538,7 @@ impl Material {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sampler::Rng;
+    use crate::sampling::sampler::Rng;
     use std::f64::consts::PI as PI64;
 
     fn rng(key: u64) -> Rng {

@@ -15,8 +15,8 @@ mod sah;
 
 use std::mem::MaybeUninit;
 
-use crate::ray::{Hit, Ray};
-use crate::triangle::Triangle;
+use crate::geometry::ray::{Hit, Ray};
+use crate::geometry::triangle::Triangle;
 use node::{BoxQuery, ChildRef, Isa, LEAF, Node, WIDTH, leaf_parts};
 use packet::{Packet, PacketRay};
 
@@ -306,11 +306,11 @@ fn prefetch<T>(p: *const T) {
 /// against (and a way to check a suspicious hit by hand). Same answers as
 /// [`Bvh::intersect`] except which triangle is reported at an exact tie.
 pub fn brute_force(triangles: &[Triangle], ray: &Ray, t_max: f32) -> Option<Hit> {
-    let s = crate::triangle::RayShear::new(ray);
+    let s = crate::geometry::triangle::RayShear::new(ray);
     let mut best: Option<Hit> = None;
     for (i, t) in triangles.iter().enumerate() {
         let limit = best.map_or(t_max, |b| b.t);
-        if let Some(h) = crate::triangle::intersect(&s, &t.v, limit) {
+        if let Some(h) = crate::geometry::triangle::intersect(&s, &t.v, limit) {
             best = Some(Hit {
                 t: h.t,
                 prim: i as u32,
@@ -329,7 +329,7 @@ fn is_finite_ray(ray: &Ray) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sampler::Rng;
+    use crate::sampling::sampler::Rng;
     use glam::Vec3A;
 
     fn random_triangles(rng: &mut Rng, n: usize) -> Vec<Triangle> {

@@ -14,9 +14,9 @@
 
 use glam::{Vec2, Vec3A};
 
-use crate::material::{Frame, Material};
-use crate::ray::{Hit, Ray, SurfacePoint};
-use crate::sampler::Rng;
+use crate::geometry::ray::{Hit, Ray, SurfacePoint};
+use crate::materials::{Frame, Material};
+use crate::sampling::sampler::Rng;
 use crate::scene::{LightSample, Scene};
 
 /// Bounces after which Russian roulette may end a path.
@@ -31,7 +31,7 @@ pub const RR_SCALE: f32 = 5.0;
 /// Which sample points the path tracer uses.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum SamplerKind {
-    /// Owen-scrambled Sobol' points ([`crate::sobol`]), a 2D pair per decision.
+    /// Owen-scrambled Sobol' points ([`crate::sampling::sobol`]), a 2D pair per decision.
     Sobol,
     /// Independent uniform random numbers (PCG32 keyed by seed, pixel, sample).
     Independent,
@@ -108,13 +108,13 @@ pub const SOBOL_PAIRS: u32 = 1 + 2 * SOBOL_BOUNCES;
 /// Bounces whose 2D decisions use Sobol' points.
 pub const SOBOL_BOUNCES: u32 = 1;
 
-/// Owen-scrambled Sobol' pairs ([`crate::sobol::PixelSampler`]) for the first
+/// Owen-scrambled Sobol' pairs ([`crate::sampling::sobol::PixelSampler`]) for the first
 /// [`SOBOL_PAIRS`] 2D decisions, then independent numbers from the sample's own
 /// PCG stream; single numbers (Russian roulette) and minor pairs (light and lobe
 /// choices) are always independent.
 #[derive(Clone, Debug)]
 pub struct SobolSampler {
-    sobol: crate::sobol::PixelSampler,
+    sobol: crate::sampling::sobol::PixelSampler,
     rng: Rng,
     pairs_left: u32,
 }
@@ -124,7 +124,7 @@ impl SobolSampler {
     #[inline]
     pub fn new(pixel: u64, index: u32, seed: u64) -> Self {
         Self {
-            sobol: crate::sobol::PixelSampler::new(pixel, index, seed),
+            sobol: crate::sampling::sobol::PixelSampler::new(pixel, index, seed),
             rng: Rng::for_sample(seed, pixel, index),
             pairs_left: SOBOL_PAIRS,
         }

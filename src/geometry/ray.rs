@@ -138,8 +138,8 @@ mod tests {
     /// the triangle they leave (the lab report's acne, in general form).
     #[test]
     fn spawned_rays_never_hit_their_own_triangle() {
-        use crate::triangle::{RayShear, Triangle, intersect};
-        let mut rng = crate::sampler::Rng::new(9, 9);
+        use crate::geometry::triangle::{RayShear, Triangle, intersect};
+        let mut rng = crate::sampling::sampler::Rng::new(9, 9);
         let mut r = move || rng.next_f32();
         for i in 0..200_000 {
             let scale = [0.01, 1.0, 100.0][i % 3];

@@ -6,7 +6,7 @@ use std::str::FromStr;
 
 use glam::{Affine3A, Mat3, Vec3, Vec3A};
 
-use crate::triangle::Triangle;
+use crate::geometry::triangle::Triangle;
 
 /// One step of a [`Transform`].
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -212,7 +212,7 @@ mod tests {
                 .filter(|&b| index >> b & 1 != 0)
                 .fold(0, |x, b| x ^ SOBOL_DIM1[b])
         };
-        let mut rng = crate::sampler::Rng::new(1, 1);
+        let mut rng = crate::sampling::sampler::Rng::new(1, 1);
         for i in (0..4096)
             .chain((0..4096).map(|_| rng.next_u32()))
             .chain([u32::MAX])
@@ -220,7 +220,7 @@ mod tests {
             assert_eq!(sobol_u32(i, 1), by_bits(i), "index {i}");
         }
     }
-    use crate::sampler::Rng;
+    use crate::sampling::sampler::Rng;
 
     #[test]
     fn first_sobol_dimensions_match_joe_kuo() {

@@ -1,15 +1,17 @@
 //! Integrators: what colour a camera ray brings back.
 
+pub mod path;
+
 use std::f32::consts::PI;
 use std::fmt;
 use std::str::FromStr;
 
 use glam::Vec3A;
 
-use crate::path::{self, PathOptions};
-use crate::ray::{Hit, Ray};
-use crate::sampler::Rng;
+use crate::geometry::ray::{Hit, Ray};
+use crate::sampling::sampler::Rng;
 use crate::scene::Scene;
+use path::PathOptions;
 
 /// The light transport algorithm used for each camera ray.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
@@ -173,8 +175,8 @@ impl FromStr for Integrator {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::geometry::triangle::Triangle;
     use crate::scene::PointLight;
-    use crate::triangle::Triangle;
 
     fn one_triangle(light: Vec3A, blocker: bool) -> Scene {
         // A large floor triangle in the plane y = 1 whose lab normal points up (-y).

@@ -9,7 +9,7 @@ use glam::Vec4;
 use rayon::prelude::*;
 
 use super::node::Isa;
-use crate::triangle::Triangle;
+use crate::geometry::triangle::Triangle;
 
 /// Bins per axis for runs of at least [`MANY_BINS_MIN`] triangles, and below.
 /// Few bins make the many small runs cheaper to bin; many serve large runs and

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use glam::Vec3A;
 use thiserror::Error;
 
-use crate::triangle::Triangle;
+use crate::geometry::triangle::Triangle;
 
 /// Reflectance of triangles without an MTL colour.
 pub const DEFAULT_REFLECTANCE: f32 = 0.75;

@@ -1,0 +1,1 @@
+//! Lights: the closed set of light kinds a scene holds.

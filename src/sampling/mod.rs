@@ -1,0 +1,5 @@
+//! Sample values: PCG32 streams keyed by (seed, pixel, sample) and
+//! Owen-scrambled Sobol' points.
+
+pub mod sampler;
+pub mod sobol;

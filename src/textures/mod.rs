@@ -1,0 +1,1 @@
+//! Textures: decoded images shared by materials, and their lookups.
