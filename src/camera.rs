@@ -1,23 +1,71 @@
-//! The lab's pinhole camera: a position, a rotation `R = Ry(yaw)·Rx(pitch)` and a
-//! focal length in pixels.
+//! Cameras: the lab's pinhole camera (a position, a rotation `R = Ry(yaw)·Rx(pitch)`
+//! and a focal length in pixels), any perspective field of view, orthographic
+//! views, and the cameras a scene file brings.
 //!
 //! Camera space has x to the right, y down and z forward, like the lab's image:
 //! the ray through image point `(px, py)` (pixel units, `(0, 0)` the top-left
-//! corner) has direction `R·(px − W/2, py − H/2, f)`.
+//! corner) has direction `R·(px − W/2, py − H/2, f)`; an orthographic camera's
+//! rays all go along `R·z` from `R·((px − W/2)·s, (py − H/2)·s, 0)`.
 
 use glam::{Mat3A, Vec3A};
 
 use crate::geometry::ray::Ray;
 
-/// A pinhole camera producing rays for an image of `width × height` pixels.
+/// How a camera projects: perspective with a focal length relative to the image
+/// height, or orthographic with a fixed view height.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Lens {
+    /// A pinhole: the focal length is `focal_scale` × the image height in pixels
+    /// (the lab's camera has exactly 1, a vertical field of view of `2·atan(0.5)`).
+    Perspective {
+        /// Focal length over image height: `0.5 / tan(yfov / 2)`.
+        focal_scale: f32,
+    },
+    /// Parallel rays; the image spans `2 · half_height` scene units vertically.
+    Orthographic {
+        /// Half the view's height in scene units (glTF's `ymag`).
+        half_height: f32,
+    },
+}
+
+impl Lens {
+    /// The lab's camera: focal length equal to the image height.
+    pub const LAB: Lens = Lens::Perspective { focal_scale: 1.0 };
+
+    /// A perspective lens with vertical field of view `yfov` (radians).
+    pub fn from_yfov(yfov: f32) -> Lens {
+        Lens::Perspective {
+            focal_scale: 0.5 / (0.5 * yfov).tan(),
+        }
+    }
+}
+
+/// A camera as a scene file describes it, before an image size is chosen.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SceneCamera {
+    /// Its name in the file (may be empty).
+    pub name: String,
+    /// Centre of projection.
+    pub position: Vec3A,
+    /// Camera-to-world rotation; columns: right, down (image rows), forward.
+    pub rotation: Mat3A,
+    /// Projection.
+    pub lens: Lens,
+    /// Width over height the file asks for, if any.
+    pub aspect_ratio: Option<f32>,
+}
+
+/// A camera producing rays for an image of `width × height` pixels.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Camera {
     /// Centre of projection.
     pub position: Vec3A,
     /// Camera-to-world rotation; its columns are the right, down and forward axes.
     pub rotation: Mat3A,
-    /// Focal length in pixels.
+    /// Focal length in pixels (perspective cameras).
     pub focal_px: f32,
+    /// Scene units per pixel for an orthographic camera; `None` for perspective.
+    pub ortho_px: Option<f32>,
     /// Image width in pixels.
     pub width: u32,
     /// Image height in pixels.
@@ -44,10 +92,35 @@ impl Camera {
         width: u32,
         height: u32,
     ) -> Self {
+        Self::with_lens(
+            position,
+            base * lab_rotation(yaw_deg, pitch_deg),
+            Lens::LAB,
+            width,
+            height,
+        )
+    }
+
+    /// A camera with any lens; `rotation`'s columns are right, down and forward.
+    pub fn with_lens(
+        position: Vec3A,
+        rotation: Mat3A,
+        lens: Lens,
+        width: u32,
+        height: u32,
+    ) -> Self {
+        let (focal_px, ortho_px) = match lens {
+            // The lab's exact f = H for focal_scale 1.
+            Lens::Perspective { focal_scale } => (focal_scale * height as f32, None),
+            Lens::Orthographic { half_height } => {
+                (height as f32, Some(2.0 * half_height / height as f32))
+            }
+        };
         Self {
             position,
-            rotation: base * lab_rotation(yaw_deg, pitch_deg),
-            focal_px: height as f32,
+            rotation,
+            focal_px,
+            ortho_px,
             width,
             height,
         }
@@ -56,11 +129,12 @@ impl Camera {
     /// The ray through image point `(px, py)` in pixel units, with a unit direction.
     #[inline]
     pub fn ray(&self, px: f32, py: f32) -> Ray {
-        let d = Vec3A::new(
-            px - 0.5 * self.width as f32,
-            py - 0.5 * self.height as f32,
-            self.focal_px,
-        );
+        let (x, y) = (px - 0.5 * self.width as f32, py - 0.5 * self.height as f32);
+        if let Some(s) = self.ortho_px {
+            let origin = self.position + self.rotation * Vec3A::new(x * s, y * s, 0.0);
+            return Ray::new(origin, self.rotation.z_axis);
+        }
+        let d = Vec3A::new(x, y, self.focal_px);
         Ray::new(self.position, (self.rotation * d).normalize())
     }
 

@@ -3,7 +3,7 @@
 
 use glam::{Mat3A, Vec3A};
 
-use crate::camera::{Camera, lab_rotation};
+use crate::camera::{Camera, Lens, lab_rotation};
 use crate::integrators::Integrator;
 
 /// Camera and light travel per key press in the lab box (2 units wide); other
@@ -67,16 +67,17 @@ pub struct ViewState {
     pub light_pos: Vec3A,
     /// Integrator in use.
     pub integrator: Integrator,
+    /// The camera's projection.
+    pub lens: Lens,
 }
 
 impl ViewState {
     /// The camera for an image of `width × height`.
     pub fn camera(&self, width: u32, height: u32) -> Camera {
-        Camera::oriented(
+        Camera::with_lens(
             self.camera_pos,
-            self.base,
-            self.yaw_deg,
-            self.pitch_deg,
+            self.base * lab_rotation(self.yaw_deg, self.pitch_deg),
+            self.lens,
             width,
             height,
         )
@@ -139,6 +140,7 @@ mod tests {
             pitch_deg: 0.0,
             light_pos: Vec3A::new(0.0, -0.5, -0.7),
             integrator: Integrator::Direct,
+            lens: Lens::LAB,
         }
     }
 

@@ -70,7 +70,7 @@ impl Integrator {
         let Some(hit) = scene.intersect(ray, f32::INFINITY) else {
             return Vec3A::ZERO;
         };
-        let rho = scene.reflectance(hit.prim);
+        let rho = scene.base_color(&hit);
         match self {
             Integrator::Flat => rho,
             _ => rho * (direct_light(scene, &hit, ray.dir, rays) + scene.ambient),
@@ -86,7 +86,7 @@ impl Integrator {
         }
         *count += 4;
         let hits = scene.intersect4(rays, f32::INFINITY);
-        let rho = hits.map(|h| h.map_or(Vec3A::ZERO, |h| scene.reflectance(h.prim)));
+        let rho = hits.map(|h| h.map_or(Vec3A::ZERO, |h| scene.base_color(&h)));
         if self == Integrator::Flat {
             return rho;
         }

@@ -14,7 +14,7 @@
 
 use glam::{Vec2, Vec3A};
 
-use crate::geometry::ray::{Hit, Ray, SurfacePoint};
+use crate::geometry::ray::{Hit, Ray};
 use crate::materials::{Frame, Material};
 use crate::sampling::sampler::Rng;
 use crate::scene::{LightSample, Scene};
@@ -185,18 +185,25 @@ pub fn radiance_from(
     let mut specular = true;
     let mut bsdf_pdf = 0.0f32;
     let mut depth = 0u32;
+    // Beer–Lambert attenuation per unit length of the medium the ray is in.
+    let mut medium = Vec3A::ZERO;
+    let textures = scene.textures();
     while let Some(hit) = next_hit {
-        let prim = hit.prim;
-        let n = scene.normal(prim);
-        let cos_out = -n.dot(ray.dir);
+        if medium != Vec3A::ZERO {
+            beta *= (-medium * hit.t).exp();
+        }
+        let surface = scene.surface(&hit);
+        let material = &scene.materials()[surface.material as usize];
+        let ng = surface.ng;
+        let cos_out = -ng.dot(ray.dir);
 
-        // Emission from the front side of an area light.
-        let le = scene.emission(prim);
-        if cos_out > 0.0 && le != Vec3A::ZERO {
+        // Emission from the front side of an area light (or either side).
+        if material.is_emissive() && (cos_out > 0.0 || material.emits_both_sides) {
+            let le = material.emitted(&surface.attrs, textures);
             let weight = if specular {
                 1.0
             } else {
-                let light_pdf = scene.light_pdf_area(prim) * hit.t * hit.t / cos_out;
+                let light_pdf = scene.light_pdf_area(hit.prim) * hit.t * hit.t / cos_out.abs();
                 power_heuristic(bsdf_pdf, light_pdf)
             };
             l += beta * le * weight;
@@ -206,20 +213,27 @@ pub fn radiance_from(
             break;
         }
 
-        let material = scene.material(prim);
-        // Surfaces of two-sided scenes face the ray; one-sided ones (the lab box)
-        // reflect nothing from behind, except glass, which has two sides.
-        let two_sided_material = two_sided(material);
-        let n = if scene.two_sided && !two_sided_material && cos_out < 0.0 {
-            -n
-        } else {
-            n
-        };
-        let tri = &scene.triangles()[prim as usize];
-        let sp = SurfacePoint::on_triangle(&tri.v, hit.b1, hit.b2, n);
-        let frame = Frame::from_normal(n);
+        let bsdf = material.bsdf(&surface.attrs, textures);
         let wo_world = -ray.dir;
+        // The shading frame's normal. Two-sided BSDFs (glass, glTF) take the
+        // front normal and tell the sides apart themselves; one-sided ones face
+        // the ray in two-sided scenes and reflect nothing from behind in the
+        // lab box.
+        let shading = surface.ns != ng;
+        let mut n = if shading {
+            consistent_normal(surface.ns, ng, wo_world)
+        } else {
+            ng
+        };
+        if scene.two_sided && !two_sided(&bsdf) && cos_out < 0.0 {
+            n = -n;
+        }
+        let sp = surface.point;
+        let frame = Frame::from_normal(n);
         let wo = frame.to_local(wo_world);
+        // With shading normals, a direction must be on the same side of the
+        // geometric and the shading surface, or light leaks through it.
+        let same_side = |w: Vec3A| !shading || (w.dot(ng) > 0.0) == (w.dot(n) > 0.0);
 
         let u_light_pos = sampler.next_2d();
         let u_bsdf = sampler.next_2d();
@@ -228,8 +242,8 @@ pub fn radiance_from(
         let u_rr = sampler.next_1d();
 
         // Next-event estimation (nothing to gain on a delta lobe).
-        if !material.is_specular()
-            && let Some(light) = scene.sample_light(u_light, u_light_pos)
+        if !bsdf.is_specular()
+            && let Some(light) = scene.sample_light(sp.p, u_light, u_light_pos)
         {
             let (target, li, light_pdf) = match light {
                 LightSample::Point {
@@ -239,15 +253,24 @@ pub fn radiance_from(
                     let r2 = (position - sp.p).length_squared();
                     (position, intensity / r2, None)
                 }
+                LightSample::Directional {
+                    to_light,
+                    irradiance,
+                    distance,
+                } => (sp.p + to_light * distance, irradiance, None),
                 LightSample::Area {
                     position,
                     normal,
                     radiance,
+                    two_sided,
                     pdf_area,
                 } => {
                     let d = position - sp.p;
                     let r2 = d.length_squared();
-                    let cos_l = -normal.dot(d) / r2.sqrt();
+                    let mut cos_l = -normal.dot(d) / r2.sqrt();
+                    if two_sided {
+                        cos_l = cos_l.abs();
+                    }
                     if cos_l > 0.0 {
                         let pdf = pdf_area * r2 / cos_l;
                         (position, radiance / pdf, Some(pdf))
@@ -259,13 +282,13 @@ pub fn radiance_from(
             if li != Vec3A::ZERO {
                 let wi_world = (target - sp.p).normalize();
                 let wi = frame.to_local(wi_world);
-                let f = material.eval(wo, wi);
-                if f != Vec3A::ZERO {
+                let f = bsdf.eval(wo, wi);
+                if f != Vec3A::ZERO && same_side(wi_world) {
                     let (shadow, t_max) = sp.ray_to(target);
                     *rays += 1;
                     if !scene.occluded(&shadow, t_max) {
                         let weight =
-                            light_pdf.map_or(1.0, |pdf| power_heuristic(pdf, material.pdf(wo, wi)));
+                            light_pdf.map_or(1.0, |pdf| power_heuristic(pdf, bsdf.pdf(wo, wi)));
                         l += beta * f * li * weight;
                     }
                 }
@@ -273,13 +296,24 @@ pub fn radiance_from(
         }
 
         // Continue the path by sampling the BSDF.
-        let Some(bs) = material.sample(wo, u_lobe, u_bsdf) else {
+        let Some(bs) = bsdf.sample(wo, u_lobe, u_bsdf) else {
             break;
         };
+        let wi_world = frame.to_world(bs.wi);
+        if !same_side(wi_world) {
+            break;
+        }
         beta *= bs.weight;
         specular = bs.specular;
         bsdf_pdf = bs.pdf;
-        let wi_world = frame.to_world(bs.wi);
+        // Crossing a refracting surface enters or leaves its medium.
+        if wi_world.dot(ng) * cos_out < 0.0 {
+            medium = if cos_out > 0.0 {
+                material.attenuation()
+            } else {
+                Vec3A::ZERO
+            };
+        }
         ray = Ray::new(sp.offset_origin(wi_world), wi_world);
         depth += 1;
         if beta == Vec3A::ZERO {
@@ -300,6 +334,27 @@ pub fn radiance_from(
     l
 }
 
+/// The shading normal `ns` adjusted so that `wo` lies on the same side of it as
+/// of the geometric normal `ng` (interpolated and normal-mapped normals can
+/// tilt past `wo`, which would make the surface black or leak light): if not,
+/// `ns` is turned within the plane of `ns` and `wo` until `wo` is just above
+/// (or below) it.
+#[inline]
+pub fn consistent_normal(ns: Vec3A, ng: Vec3A, wo: Vec3A) -> Vec3A {
+    /// How far above the shading horizon `wo` ends up (a cosine).
+    const MARGIN: f32 = 0.01;
+    let side = if wo.dot(ng) >= 0.0 { 1.0 } else { -1.0 };
+    let d = wo.dot(ns);
+    if d * side >= MARGIN {
+        return ns;
+    }
+    let perp = (ns - wo * d).normalize_or_zero();
+    if perp == Vec3A::ZERO {
+        return ng;
+    }
+    (perp * (1.0 - MARGIN * MARGIN).sqrt() + wo * (MARGIN * side)).normalize()
+}
+
 /// The power heuristic (β = 2) weight of a strategy with density `a` against one
 /// with density `b`.
 #[inline]
@@ -314,9 +369,10 @@ pub fn power_heuristic(a: f32, b: f32) -> f32 {
     }
 }
 
-/// Whether a material scatters light arriving at either side (glass); the others
-/// are one-sided and face the side their normal points to.
+/// Whether a BSDF tells the two sides of a surface apart itself (glass, the glTF
+/// material, whose transmission refracts into the inside); the others are
+/// one-sided and face the side their normal points to.
 #[inline]
 fn two_sided(material: &Material) -> bool {
-    matches!(material, Material::Dielectric { .. })
+    matches!(material, Material::Dielectric { .. } | Material::Pbr(_))
 }

@@ -48,8 +48,13 @@
 //!
 //! Nothing here allocates.
 
+pub mod pbr;
+pub mod surface;
+
 use glam::{Vec2, Vec3A};
 use std::f32::consts::{FRAC_1_PI, FRAC_PI_4, PI};
+
+pub use pbr::PbrBsdf;
 
 /// Conductors with `alpha` below this are treated as perfectly smooth (a delta
 /// lobe): GGX at such roughness is numerically a spike that f32 cannot resolve.
@@ -127,6 +132,8 @@ pub enum Material {
         /// channel makes that channel a perfect conductor (Fresnel exactly 1).
         k: Vec3A,
     },
+    /// The glTF 2.0 metallic–roughness BSDF (see [`pbr`]).
+    Pbr(PbrBsdf),
 }
 
 /// One direction drawn by [`Material::sample`].
@@ -351,6 +358,7 @@ impl Material {
             Material::Diffuse { .. } => false,
             Material::Mirror { .. } | Material::Dielectric { .. } => true,
             Material::RoughConductor { alpha, .. } => Self::is_smooth(alpha),
+            Material::Pbr(ref p) => p.is_specular(),
         }
     }
 
@@ -364,6 +372,7 @@ impl Material {
     /// directions on the wrong side and for one-sided materials seen from below.
     pub fn eval(&self, wo: Vec3A, wi: Vec3A) -> Vec3A {
         match *self {
+            Material::Pbr(ref p) => p.eval(wo, wi),
             Material::Diffuse { reflectance } => {
                 if !above(wo) || !above(wi) {
                     return Vec3A::ZERO;
@@ -394,6 +403,7 @@ impl Material {
     /// delta lobes and wherever [`Material::eval`] is zero).
     pub fn pdf(&self, wo: Vec3A, wi: Vec3A) -> f32 {
         match *self {
+            Material::Pbr(ref p) => p.pdf(wo, wi),
             Material::Diffuse { .. } => {
                 if !above(wo) || !above(wi) {
                     return 0.0;
@@ -425,6 +435,7 @@ impl Material {
     /// degenerate configuration).
     pub fn sample(&self, wo: Vec3A, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
         match *self {
+            Material::Pbr(ref p) => p.sample(wo, u_lobe, u),
             Material::Diffuse { reflectance } => {
                 if !above(wo) {
                     return None;

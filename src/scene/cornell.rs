@@ -323,12 +323,13 @@ mod tests {
         MaterialChoice::parse("mirror")
             .unwrap()
             .apply(&mut scene, part("tall").unwrap());
-        assert!(scene.material(25).is_specular());
+        use crate::materials::surface::MaterialKind;
+        assert!(matches!(scene.material(25).kind, MaterialKind::Fixed(m) if m.is_specular()));
         assert_eq!(
-            *scene.material(0),
-            Material::Diffuse {
+            scene.material(0).kind,
+            MaterialKind::Fixed(Material::Diffuse {
                 reflectance: colors::GREEN
-            }
+            })
         );
     }
 

@@ -1,28 +1,45 @@
-//! The scene: triangles with their reflectance, materials and emission, a point
-//! light and the ambient term, behind one query seam ([`Scene::intersect`],
-//! [`Scene::occluded`]).
+//! The scene: one representation for every source (the lab's built-in boxes,
+//! OBJ, glTF). Triangles in world space for the BVH, with a material index
+//! each; meshes whose vertex attributes (shading normals, two UV sets, tangents,
+//! colours) are looked up from a hit; a material table; a texture store shared
+//! by the materials; lights (the key point light, other punctual lights,
+//! emitting triangles); cameras. Rays see it through one query seam
+//! ([`Scene::intersect`], [`Scene::occluded`]), which also makes alpha-masked
+//! surfaces holes.
 
 pub mod cornell;
 pub mod framing;
+pub mod gltf;
+pub mod load;
+pub mod mesh;
 pub mod obj;
 pub mod transform;
 
+use std::collections::HashMap;
 use std::f32::consts::PI;
 
 use glam::{Vec2, Vec3A};
+use rayon::prelude::*;
 use thiserror::Error;
 
+use crate::camera::SceneCamera;
 use crate::geometry::bvh::Bvh;
 use crate::geometry::ray::{Hit, Ray, SurfacePoint};
 use crate::geometry::triangle::Triangle;
+use crate::lights::{Incident, Light};
 use crate::materials::Material;
+use crate::materials::surface::{AlphaMode, HitAttributes, SurfaceMaterial};
+use crate::textures::TextureStore;
+pub use load::{LoadError, LoadOptions, Loaded, load};
+pub use mesh::{Instance, MeshData, Tangents};
 
 /// The lab's point light: position and power per colour channel.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct PointLight {
     /// Where the light is.
     pub position: Vec3A,
-    /// Emitted power `P` per colour channel (the lab's "light colour").
+    /// Emitted power `P` per colour channel (the lab's "light colour"); its
+    /// intensity is `P/(4π)` W/sr.
     pub power: Vec3A,
 }
 
@@ -51,27 +68,83 @@ pub enum SceneError {
         /// The offending value.
         value: [f32; 3],
     },
-    /// Triangle and reflectance lists differ in length.
+    /// Per-triangle lists differ in length.
     #[error("{triangles} triangles but {reflectances} reflectances")]
     LengthMismatch {
         /// Number of triangles.
         triangles: usize,
-        /// Number of reflectances.
+        /// Number of entries in the other list.
         reflectances: usize,
+    },
+    /// A triangle names a material, instance or texture that does not exist.
+    #[error("{what}")]
+    BadReference {
+        /// What is wrong.
+        what: String,
     },
 }
 
-/// Triangles, their materials and the light, with an acceleration structure.
+/// Everything a scene is made of, for loaders; [`Scene::from_parts`] checks it
+/// and builds the BVH and the light tables.
+#[derive(Clone, Debug, Default)]
+pub struct SceneParts {
+    /// Triangles in world space, in the order of the per-triangle lists.
+    pub triangles: Vec<Triangle>,
+    /// Unit front normal of each triangle (light leaves emitters on this side;
+    /// one-sided scenes reflect only on it). Zero for degenerate triangles.
+    pub normals: Vec<Vec3A>,
+    /// Material of each triangle.
+    pub material_of: Vec<u32>,
+    /// Instance of each triangle, or [`NO_INSTANCE`] for bare triangles (face
+    /// normal, no texture coordinates); may be empty when all are bare.
+    pub instance_of: Vec<u32>,
+    /// Meshes with their vertex attributes.
+    pub meshes: Vec<MeshData>,
+    /// Meshes placed in the world.
+    pub instances: Vec<Instance>,
+    /// The material table.
+    pub materials: Vec<SurfaceMaterial>,
+    /// Images the materials' textures refer to.
+    pub textures: TextureStore,
+    /// The key point light (`direct`'s light, the viewer's movable light).
+    pub light: PointLight,
+    /// Other punctual lights.
+    pub lights: Vec<Light>,
+    /// The lab's ambient term.
+    pub ambient: Vec3A,
+    /// Whether surfaces reflect on both sides (everything but the lab box).
+    pub two_sided: bool,
+    /// Cameras from the file.
+    pub cameras: Vec<SceneCamera>,
+}
+
+/// Marks a bare triangle in [`SceneParts::instance_of`].
+pub const NO_INSTANCE: u32 = u32::MAX;
+
+/// Alpha-masked layers a ray passes through at most before the next surface
+/// counts as solid (a bound, so a pathological file cannot hang a render).
+pub const MAX_ALPHA_LAYERS: usize = 256;
+
+/// Triangles, their materials and attributes, textures, lights and cameras,
+/// with an acceleration structure.
 #[derive(Clone, Debug)]
 pub struct Scene {
     triangles: Vec<Triangle>,
     normals: Vec<Vec3A>,
-    reflectance: Vec<Vec3A>,
-    materials: Vec<Material>,
-    emission: Vec<Vec3A>,
+    material_of: Vec<u32>,
+    instance_of: Vec<u32>,
+    meshes: Vec<MeshData>,
+    instances: Vec<Instance>,
+    materials: Vec<SurfaceMaterial>,
+    textures: TextureStore,
+    lights: Vec<Light>,
+    light_powers: Vec<f32>,
     area_lights: AreaLights,
+    has_alpha: bool,
+    bounds: (Vec3A, Vec3A),
     bvh: Bvh,
-    /// The point light.
+    /// The key point light: the lab's light, `direct`'s light and the one the
+    /// viewer moves (power 0 when the scene has none).
     pub light: PointLight,
     /// The lab's constant ambient term `N` (indirect light stand-in).
     pub ambient: Vec3A,
@@ -79,11 +152,30 @@ pub struct Scene {
     /// the lab (its normal is `cross(v2 − v0, v1 − v0)`); meshes are two-sided,
     /// since their windings vary (and OBJ's is the opposite of the lab's).
     pub two_sided: bool,
+    /// Cameras from the file, in depth-first node order.
+    pub cameras: Vec<SceneCamera>,
+}
+
+/// What a hit looks like: its point, normals and interpolated attributes.
+#[derive(Clone, Copy, Debug)]
+pub struct SurfaceHit {
+    /// The hit point with its error bound; its normal is `ng`.
+    pub point: SurfacePoint,
+    /// Unit front geometric normal.
+    pub ng: Vec3A,
+    /// Unit shading normal (interpolated, normal-mapped), on `ng`'s side.
+    pub ns: Vec3A,
+    /// Texture coordinates and colour.
+    pub attrs: HitAttributes,
+    /// Index of the material.
+    pub material: u32,
 }
 
 impl Scene {
-    /// Builds a scene. Degenerate (zero-area) triangles are kept, so indices stay
-    /// those of the input, but can never be hit.
+    /// Builds a scene of bare triangles with diffuse reflectances (the lab's
+    /// form: one-sided, lab normals `cross(v2 − v0, v1 − v0)`). Degenerate
+    /// (zero-area) triangles are kept, so indices stay those of the input, but
+    /// can never be hit.
     pub fn new(
         triangles: Vec<Triangle>,
         reflectance: Vec<Vec3A>,
@@ -96,9 +188,6 @@ impl Scene {
                 reflectances: reflectance.len(),
             });
         }
-        if let Some(index) = triangles.iter().position(|t| !t.is_finite()) {
-            return Err(SceneError::NonFiniteVertex { index });
-        }
         let valid = |r: &Vec3A| r.is_finite() && r.min_element() >= 0.0 && r.max_element() <= 1.0;
         if let Some(index) = reflectance.iter().position(|r| !valid(r)) {
             return Err(SceneError::BadReflectance {
@@ -106,36 +195,163 @@ impl Scene {
                 value: reflectance[index].into(),
             });
         }
-        let normals = triangles.iter().map(Triangle::lab_normal).collect();
-        let bvh = Bvh::build(&triangles);
-        let materials = reflectance
+        // One material per distinct colour.
+        let mut ids: HashMap<[u32; 3], u32> = HashMap::new();
+        let mut materials = Vec::new();
+        let material_of = reflectance
             .iter()
-            .map(|&reflectance| Material::Diffuse { reflectance })
+            .map(|r| {
+                *ids.entry(r.to_array().map(f32::to_bits))
+                    .or_insert_with(|| {
+                        materials.push(SurfaceMaterial::diffuse(*r));
+                        materials.len() as u32 - 1
+                    })
+            })
             .collect();
-        let emission = vec![Vec3A::ZERO; triangles.len()];
-        Ok(Self {
+        let normals = triangles.iter().map(Triangle::lab_normal).collect();
+        Self::from_parts(SceneParts {
             triangles,
             normals,
-            reflectance,
+            material_of,
             materials,
-            emission,
-            area_lights: AreaLights::default(),
-            bvh,
             light,
             ambient,
-            two_sided: false,
+            ..SceneParts::default()
         })
     }
 
-    /// The closest hit along `ray` with `t` in `(0, t_max]`.
-    #[inline]
-    pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
-        self.bvh.intersect(ray, t_max)
+    /// Checks the parts (finite vertices, references in range) and builds the
+    /// BVH and the light tables.
+    pub fn from_parts(parts: SceneParts) -> Result<Self, SceneError> {
+        let n = parts.triangles.len();
+        if let Some(index) = parts.triangles.iter().position(|t| !t.is_finite()) {
+            return Err(SceneError::NonFiniteVertex { index });
+        }
+        for (what, len) in [
+            ("normals", parts.normals.len()),
+            ("material indices", parts.material_of.len()),
+        ] {
+            if len != n {
+                return Err(SceneError::BadReference {
+                    what: format!("{n} triangles but {len} {what}"),
+                });
+            }
+        }
+        if !parts.instance_of.is_empty() && parts.instance_of.len() != n {
+            return Err(SceneError::BadReference {
+                what: format!(
+                    "{n} triangles but {} instance indices",
+                    parts.instance_of.len()
+                ),
+            });
+        }
+        if let Some(i) = parts
+            .material_of
+            .iter()
+            .position(|&m| m as usize >= parts.materials.len())
+        {
+            return Err(SceneError::BadReference {
+                what: format!(
+                    "triangle {i} has material {} of {}",
+                    parts.material_of[i],
+                    parts.materials.len()
+                ),
+            });
+        }
+        for (i, inst) in parts.instances.iter().enumerate() {
+            let Some(mesh) = parts.meshes.get(inst.mesh as usize) else {
+                return Err(SceneError::BadReference {
+                    what: format!(
+                        "instance {i} has mesh {} of {}",
+                        inst.mesh,
+                        parts.meshes.len()
+                    ),
+                });
+            };
+            let end = inst.first_triangle as usize + mesh.indices.len();
+            let owned = parts.instance_of.get(inst.first_triangle as usize..end);
+            if owned.is_none_or(|o| o.iter().any(|&k| k as usize != i)) {
+                return Err(SceneError::BadReference {
+                    what: format!("instance {i}'s triangles are not marked as its own"),
+                });
+            }
+        }
+        let image_count = parts.textures.len();
+        for m in &parts.materials {
+            if !(m.emission.is_finite() && m.emission.min_element() >= 0.0) {
+                return Err(SceneError::BadReference {
+                    what: format!(
+                        "material '{}' has emission {} (must be finite and >= 0)",
+                        m.name, m.emission
+                    ),
+                });
+            }
+            if crate::materials::surface::texture_refs(m).any(|t| t.image as usize >= image_count) {
+                return Err(SceneError::BadReference {
+                    what: format!("material '{}' refers to a missing image", m.name),
+                });
+            }
+        }
+        let has_alpha = parts.materials.iter().any(|m| m.alpha != AlphaMode::Opaque);
+        let bounds = parts
+            .triangles
+            .par_iter()
+            .fold(
+                || (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY)),
+                |(lo, hi), t| (lo.min(t.min()), hi.max(t.max())),
+            )
+            .reduce(
+                || (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY)),
+                |a, b| (a.0.min(b.0), a.1.max(b.1)),
+            );
+        let bounds = if n == 0 {
+            (Vec3A::ZERO, Vec3A::ZERO)
+        } else {
+            bounds
+        };
+        let bvh = Bvh::build(&parts.triangles);
+        let mut scene = Self {
+            triangles: parts.triangles,
+            normals: parts.normals,
+            material_of: parts.material_of,
+            instance_of: parts.instance_of,
+            meshes: parts.meshes,
+            instances: parts.instances,
+            materials: parts.materials,
+            textures: parts.textures,
+            lights: Vec::new(),
+            light_powers: Vec::new(),
+            area_lights: AreaLights::default(),
+            has_alpha,
+            bounds,
+            bvh,
+            light: parts.light,
+            ambient: parts.ambient,
+            two_sided: parts.two_sided,
+            cameras: parts.cameras,
+        };
+        scene.set_lights(parts.lights);
+        scene.area_lights = AreaLights::build(&scene);
+        Ok(scene)
     }
 
-    /// Whether anything blocks `ray` for `t` in `(0, t_max]`.
+    /// The closest hit along `ray` with `t` in `(0, t_max]`; alpha-masked holes
+    /// are passed through.
+    #[inline]
+    pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
+        let hit = self.bvh.intersect(ray, t_max)?;
+        if !self.has_alpha {
+            return Some(hit);
+        }
+        self.through_holes(ray, t_max, hit)
+    }
+
+    /// Whether anything blocks `ray` for `t` in `(0, t_max]` (holes do not).
     #[inline]
     pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
+        if self.has_alpha {
+            return self.intersect(ray, t_max).is_some();
+        }
         self.bvh.occluded(ray, t_max)
     }
 
@@ -144,6 +360,9 @@ impl Scene {
     /// which triangle is reported at an exact tie.
     #[inline]
     pub fn intersect4(&self, rays: &[Ray; 4], t_max: f32) -> [Option<Hit>; 4] {
+        if self.has_alpha {
+            return rays.map(|r| self.intersect(&r, t_max));
+        }
         self.bvh.intersect4(rays, t_max)
     }
 
@@ -151,7 +370,55 @@ impl Scene {
     /// not `active` answer `false`.
     #[inline]
     pub fn occluded4(&self, rays: &[Ray; 4], t_max: [f32; 4], active: [bool; 4]) -> [bool; 4] {
+        if self.has_alpha {
+            return std::array::from_fn(|i| active[i] && self.occluded(&rays[i], t_max[i]));
+        }
         self.bvh.occluded4(rays, t_max, active)
+    }
+
+    /// Follows a ray past alpha holes: `first` is its closest hit; returns the
+    /// first hit that is not a hole, with `t` measured along the original ray.
+    #[cold]
+    fn through_holes(&self, ray: &Ray, t_max: f32, first: Hit) -> Option<Hit> {
+        let mut hit = first;
+        let mut current = *ray;
+        let inv_len2 = 1.0 / ray.dir.length_squared();
+        for _ in 0..MAX_ALPHA_LAYERS {
+            let p = self.hit_point(&hit);
+            if !self.is_hole(&current, &hit, &p) {
+                hit.t = (p.p - ray.origin).dot(ray.dir) * inv_len2;
+                return Some(hit);
+            }
+            // Start again just past the surface, on the far side.
+            let origin = p.offset_origin(ray.dir);
+            let travelled = (origin - ray.origin).dot(ray.dir) * inv_len2;
+            current = Ray::new(origin, ray.dir);
+            hit = self.bvh.intersect(&current, t_max - travelled)?;
+        }
+        let p = self.hit_point(&hit);
+        hit.t = (p.p - ray.origin).dot(ray.dir) * inv_len2;
+        Some(hit)
+    }
+
+    /// The point of a hit, reconstructed from its barycentrics.
+    #[inline]
+    fn hit_point(&self, hit: &Hit) -> SurfacePoint {
+        let prim = hit.prim as usize;
+        SurfacePoint::on_triangle(&self.triangles[prim].v, hit.b1, hit.b2, self.normals[prim])
+    }
+
+    /// Whether `ray` passes through its hit: alpha below a mask's cut-off, or a
+    /// blended surface's coverage test failed.
+    fn is_hole(&self, ray: &Ray, hit: &Hit, p: &SurfacePoint) -> bool {
+        let m = &self.materials[self.material_of[hit.prim as usize] as usize];
+        match m.alpha {
+            AlphaMode::Opaque => false,
+            AlphaMode::Mask(cutoff) => m.alpha_at(&self.attributes(hit), &self.textures) < cutoff,
+            AlphaMode::Blend => {
+                let alpha = m.alpha_at(&self.attributes(hit), &self.textures);
+                coverage_number(ray, hit.prim, p.p) >= alpha
+            }
+        }
     }
 
     /// The triangles, in input order.
@@ -159,40 +426,86 @@ impl Scene {
         &self.triangles
     }
 
-    /// Face normal (the lab's convention) of triangle `prim`.
+    /// Front normal of triangle `prim` (for the built-in boxes the lab's
+    /// convention; for glTF the counter-clockwise side after the transform).
     #[inline]
     pub fn normal(&self, prim: u32) -> Vec3A {
         self.normals[prim as usize]
     }
 
-    /// Diffuse reflectance ρ of triangle `prim`.
+    /// Reflectance ρ of triangle `prim` for `flat` and `direct`, without
+    /// textures (see [`Scene::base_color`]).
     #[inline]
     pub fn reflectance(&self, prim: u32) -> Vec3A {
-        self.reflectance[prim as usize]
+        self.material(prim).reflectance
     }
 
-    /// Material of triangle `prim` (used by the `path` integrator; `flat` and
-    /// `direct` keep using the reflectance). A diffuse one with the triangle's
-    /// reflectance unless [`Scene::set_material`] changed it.
+    /// The material of triangle `prim`.
     #[inline]
-    pub fn material(&self, prim: u32) -> &Material {
-        &self.materials[prim as usize]
+    pub fn material(&self, prim: u32) -> &SurfaceMaterial {
+        &self.materials[self.material_of[prim as usize] as usize]
     }
 
-    /// Gives triangle `prim` another material (for the `path` integrator).
+    /// The material table.
+    pub fn materials(&self) -> &[SurfaceMaterial] {
+        &self.materials
+    }
+
+    /// The images the materials use.
+    pub fn textures(&self) -> &TextureStore {
+        &self.textures
+    }
+
+    /// Meshes with vertex attributes.
+    pub fn meshes(&self) -> &[MeshData] {
+        &self.meshes
+    }
+
+    /// Placed meshes.
+    pub fn instances(&self) -> &[Instance] {
+        &self.instances
+    }
+
+    /// Punctual lights other than the key light.
+    pub fn lights(&self) -> &[Light] {
+        &self.lights
+    }
+
+    /// Replaces the punctual lights other than the key light.
+    pub fn set_lights(&mut self, lights: Vec<Light>) {
+        let radius = self.radius();
+        self.light_powers = lights.iter().map(|l| l.power(radius)).collect();
+        self.lights = lights;
+    }
+
+    /// Axis-aligned bounds of all triangles.
+    pub fn bounds(&self) -> (Vec3A, Vec3A) {
+        self.bounds
+    }
+
+    /// Radius of the sphere around the bounds.
+    pub fn radius(&self) -> f32 {
+        0.5 * (self.bounds.1 - self.bounds.0).length()
+    }
+
+    /// Gives triangle `prim` another BSDF (for the `path` integrator; `flat` and
+    /// `direct` keep its reflectance).
     pub fn set_material(&mut self, prim: usize, material: Material) {
-        self.materials[prim] = material;
+        let mut m = self.materials[self.material_of[prim] as usize].clone();
+        m.kind = crate::materials::surface::MaterialKind::Fixed(material);
+        self.material_of[prim] = self.materials.len() as u32;
+        self.materials.push(m);
     }
 
     /// Radiance `Le` emitted by triangle `prim` from its front side (the side its
-    /// lab normal points to); zero for a triangle that is not a light.
+    /// normal points to) without textures; zero for a triangle that is not a light.
     #[inline]
     pub fn emission(&self, prim: u32) -> Vec3A {
-        self.emission[prim as usize]
+        self.material(prim).emission
     }
 
     /// Makes triangle `prim` an area light emitting radiance `le` from its front
-    /// side (zero turns it off), and updates the light list.
+    /// side (zero turns it off), and updates the light tables.
     pub fn set_emission(&mut self, prim: usize, le: Vec3A) -> Result<(), SceneError> {
         if !(le.is_finite() && le.min_element() >= 0.0) {
             return Err(SceneError::BadEmission {
@@ -200,12 +513,15 @@ impl Scene {
                 value: le.into(),
             });
         }
-        self.emission[prim] = le;
-        self.area_lights = AreaLights::build(&self.triangles, &self.emission);
+        let mut m = self.materials[self.material_of[prim] as usize].clone();
+        m.emission = le;
+        self.material_of[prim] = self.materials.len() as u32;
+        self.materials.push(m);
+        self.area_lights = AreaLights::build(self);
         Ok(())
     }
 
-    /// Total emitted power of the point light, averaged over the colour
+    /// Total emitted power of the key point light, averaged over the colour
     /// channels (`P`, since its intensity is `P/(4π)` in every direction).
     #[inline]
     pub fn point_power(&self) -> f32 {
@@ -214,44 +530,105 @@ impl Scene {
         if p.is_finite() && p > 0.0 { p } else { 0.0 }
     }
 
-    /// Whether anything emits light: the point light has power or a triangle
-    /// emits.
+    /// Whether anything emits light.
     pub fn has_lights(&self) -> bool {
-        self.point_power() > 0.0 || self.area_lights.total > 0.0
+        self.point_power() > 0.0
+            || self.light_powers.iter().any(|&p| p > 0.0)
+            || self.area_lights.total > 0.0
     }
 
-    /// Picks a light in proportion to its power (area lights: `π·A·Le`, one
-    /// triangle at a time, a point uniformly by area on it) with `u_light`, and a
-    /// point on it with `u`. `None` when the scene has no light.
+    /// Sum of the selection weights of all lights.
     #[inline]
-    pub fn sample_light(&self, u_light: f32, u: Vec2) -> Option<LightSample> {
-        let point = self.point_power();
-        let total = point + self.area_lights.total;
+    fn total_power(&self) -> f32 {
+        self.point_power() + self.light_powers.iter().sum::<f32>() + self.area_lights.total
+    }
+
+    /// Picks a light in proportion to its power (the key light: `P`; other
+    /// punctual lights: [`Light::power`]; area lights `π·A·Le`, doubled for
+    /// two-sided emitters, one triangle at a time, a point uniformly by area on
+    /// it) with `u_light`, and a point on it with `u`, to light the point `p`.
+    /// `None` when the scene has no light or the chosen one sends nothing to `p`.
+    #[inline]
+    pub fn sample_light(&self, p: Vec3A, u_light: f32, u: Vec2) -> Option<LightSample> {
+        let key = self.point_power();
+        let total = self.total_power();
         if total <= 0.0 {
             return None;
         }
-        let x = u_light * total;
-        if x < point || self.area_lights.prims.is_empty() {
-            let pmf = point / total;
+        let mut x = u_light * total;
+        if x < key || (self.light_powers.is_empty() && self.area_lights.prims.is_empty()) {
+            let pmf = key / total;
             return Some(LightSample::Point {
                 position: self.light.position,
                 intensity: self.light.power * (1.0 / (4.0 * PI * pmf)),
             });
         }
+        x -= key;
+        // The punctual light whose range holds x; rounding can push x past the
+        // last range when there are no area lights: the last light takes it.
+        let last = self.light_powers.iter().rposition(|&p| p > 0.0);
+        let mut chosen = None;
+        for (i, &power) in self.light_powers.iter().enumerate() {
+            if x < power {
+                chosen = Some(i);
+                break;
+            }
+            x -= power;
+        }
+        if chosen.is_none() && self.area_lights.prims.is_empty() {
+            chosen = last;
+        }
+        if let Some(i) = chosen {
+            let scale = total / self.light_powers[i];
+            return Some(match self.lights[i].incident(p)? {
+                Incident::FromPoint {
+                    position,
+                    intensity,
+                } => LightSample::Point {
+                    position,
+                    intensity: intensity * scale,
+                },
+                Incident::FromDirection {
+                    to_light,
+                    irradiance,
+                } => LightSample::Directional {
+                    to_light,
+                    irradiance: irradiance * scale,
+                    // Far enough to leave the scene's bounds from anywhere in them.
+                    distance: 2.0 * self.radius() + (p - self.bounds.0).length() + 1.0,
+                },
+            });
+        }
         let lights = &self.area_lights;
+        if lights.prims.is_empty() {
+            return None;
+        }
         let i = lights
             .cdf
-            .partition_point(|&c| c <= x - point)
+            .partition_point(|&c| c <= x)
             .min(lights.prims.len() - 1);
         let prim = lights.prims[i];
         let v = &self.triangles[prim as usize].v;
         let su = u.x.sqrt();
         let (b1, b2) = (1.0 - su, u.y * su);
         let position = (1.0 - b1 - b2) * v[0] + b1 * v[1] + b2 * v[2];
+        let material = self.material(prim);
+        let radiance = if material.emission_texture.is_some() {
+            let hit = Hit {
+                t: 0.0,
+                prim,
+                b1,
+                b2,
+            };
+            material.emitted(&self.attributes(&hit), &self.textures)
+        } else {
+            material.emission
+        };
         Some(LightSample::Area {
             position,
             normal: self.normals[prim as usize],
-            radiance: self.emission[prim as usize],
+            radiance,
+            two_sided: material.emits_both_sides,
             pdf_area: self.light_pdf_area(prim),
         })
     }
@@ -260,10 +637,10 @@ impl Scene {
     /// on emitting triangle `prim`: its selection probability over its area.
     #[inline]
     pub fn light_pdf_area(&self, prim: u32) -> f32 {
-        let total = self.point_power() + self.area_lights.total;
         let Some(&(power, area)) = self.area_lights.per_prim.get(prim as usize) else {
             return 0.0;
         };
+        let total = self.total_power();
         if total <= 0.0 || area <= 0.0 {
             return 0.0;
         }
@@ -282,31 +659,196 @@ impl Scene {
         }
         SurfacePoint::on_triangle(&self.triangles[prim].v, hit.b1, hit.b2, n)
     }
+
+    /// The base colour at a hit (textures and vertex colours applied), which
+    /// `flat` shows and `direct` uses as ρ.
+    #[inline]
+    pub fn base_color(&self, hit: &Hit) -> Vec3A {
+        let m = self.material(hit.prim);
+        match m.kind {
+            crate::materials::surface::MaterialKind::Fixed(_) => m.reflectance,
+            _ => Vec3A::from(
+                m.base_color(&self.attributes(hit), &self.textures)
+                    .truncate(),
+            ),
+        }
+    }
+
+    /// Texture coordinates and colour at a hit (defaults for bare triangles).
+    #[inline]
+    pub fn attributes(&self, hit: &Hit) -> HitAttributes {
+        let Some((inst, mesh, idx)) = self.mesh_of(hit.prim) else {
+            return HitAttributes::default();
+        };
+        let _ = inst;
+        let b = [1.0 - hit.b1 - hit.b2, hit.b1, hit.b2];
+        let mut attrs = HitAttributes::default();
+        for (set, uvs) in mesh.uvs.iter().enumerate() {
+            if !uvs.is_empty() {
+                attrs.uv[set] = interpolate(b, idx.map(|i| uvs[i as usize]));
+            }
+        }
+        if !mesh.colors.is_empty() {
+            attrs.color = interpolate(b, idx.map(|i| mesh.colors[i as usize]));
+        }
+        attrs
+    }
+
+    /// The instance, mesh and vertex indices of triangle `prim`, if it has
+    /// vertex attributes.
+    #[inline]
+    fn mesh_of(&self, prim: u32) -> Option<(&Instance, &MeshData, [u32; 3])> {
+        let inst = *self.instance_of.get(prim as usize)?;
+        let inst = self.instances.get(inst as usize)?;
+        let mesh = &self.meshes[inst.mesh as usize];
+        let local = (prim - inst.first_triangle) as usize;
+        Some((inst, mesh, mesh.indices[local]))
+    }
+
+    /// Everything shading needs at a hit: the point, its front geometric normal,
+    /// the shading normal (interpolated vertex normals, then the material's
+    /// normal map, turned to the geometric normal's side) and the attributes.
+    #[inline]
+    pub fn surface(&self, hit: &Hit) -> SurfaceHit {
+        let prim = hit.prim as usize;
+        let ng = self.normals[prim];
+        let point = SurfacePoint::on_triangle(&self.triangles[prim].v, hit.b1, hit.b2, ng);
+        let material = self.material_of[prim];
+        let Some((inst, mesh, idx)) = self.mesh_of(hit.prim) else {
+            return SurfaceHit {
+                point,
+                ng,
+                ns: ng,
+                attrs: HitAttributes::default(),
+                material,
+            };
+        };
+        let attrs = self.attributes(hit);
+        let b = [1.0 - hit.b1 - hit.b2, hit.b1, hit.b2];
+        let mut ns = ng;
+        if !mesh.normals.is_empty() {
+            let n = interpolate(b, idx.map(|i| mesh.normals[i as usize]));
+            let n = (inst.normal_to_world * Vec3A::from(n)).normalize_or_zero();
+            if n != Vec3A::ZERO && n.is_finite() {
+                ns = if n.dot(ng) < 0.0 { -n } else { n };
+            }
+        }
+        let m = &self.materials[material as usize];
+        if let Some(mapped) = m.mapped_normal(&attrs, &self.textures) {
+            let local = (hit.prim - inst.first_triangle) as usize;
+            let tangent = match &mesh.tangents {
+                Tangents::PerVertex(t) => Some(interpolate(b, idx.map(|i| t[i as usize]))),
+                Tangents::PerCorner(t) => Some(interpolate(b, t[local])),
+                Tangents::None => None,
+            };
+            if let Some(t) = tangent {
+                let sign = if inst.mirrors { -t.w } else { t.w };
+                let t = inst.to_world.matrix3 * Vec3A::from(t.truncate());
+                // Gram–Schmidt against the shading normal.
+                let t = (t - ns * ns.dot(t)).normalize_or_zero();
+                if t != Vec3A::ZERO {
+                    let bitangent = sign.signum() * ns.cross(t);
+                    let n =
+                        (mapped.x * t + mapped.y * bitangent + mapped.z * ns).normalize_or_zero();
+                    if n != Vec3A::ZERO && n.is_finite() {
+                        ns = n;
+                    }
+                }
+            }
+        }
+        SurfaceHit {
+            point,
+            ng,
+            ns,
+            attrs,
+            material,
+        }
+    }
+
+    /// Bytes held by the scene's geometry, attributes and BVH (textures apart).
+    pub fn geometry_bytes(&self) -> usize {
+        use std::mem::size_of_val;
+        size_of_val(self.triangles.as_slice())
+            + size_of_val(self.normals.as_slice())
+            + size_of_val(self.material_of.as_slice())
+            + size_of_val(self.instance_of.as_slice())
+            + self
+                .meshes
+                .iter()
+                .map(MeshData::memory_bytes)
+                .sum::<usize>()
+            + self.bvh.memory_bytes()
+    }
+
+    /// How many triangles emit light.
+    pub fn emitter_count(&self) -> usize {
+        self.area_lights.prims.len()
+    }
+}
+
+/// The barycentric combination of three values.
+#[inline]
+fn interpolate<T>(b: [f32; 3], v: [T; 3]) -> T
+where
+    T: std::ops::Mul<f32, Output = T> + std::ops::Add<Output = T> + Copy,
+{
+    v[0] * b[0] + v[1] * b[1] + v[2] * b[2]
+}
+
+/// A number in `[0, 1)` that decides whether a ray passes a blended surface:
+/// a hash of the ray and the hit, so the same ray always gets the same answer
+/// (images stay deterministic) while different samples' rays get independent
+/// ones.
+#[inline]
+fn coverage_number(ray: &Ray, prim: u32, p: Vec3A) -> f32 {
+    let mut h = 0x9e37_79b9_7f4a_7c15u64 ^ prim as u64;
+    for x in [ray.origin, ray.dir, p].iter().flat_map(|v| v.to_array()) {
+        h = (h ^ x.to_bits() as u64).wrapping_mul(0xff51_afd7_ed55_8ccd);
+        h ^= h >> 33;
+    }
+    (h >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
 }
 
 /// A light chosen by [`Scene::sample_light`], with its selection probability
 /// already divided out.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum LightSample {
-    /// The point light.
+    /// A point light (the key light, a point or spot light).
     Point {
         /// Where it is.
         position: Vec3A,
-        /// Its intensity `P/(4π)` (W/sr) divided by the probability of choosing it.
+        /// Its intensity towards the point (W/sr) divided by the probability of
+        /// choosing it.
         intensity: Vec3A,
+    },
+    /// A directional light.
+    Directional {
+        /// Unit direction towards the light.
+        to_light: Vec3A,
+        /// Irradiance on a surface facing it, divided by the probability of
+        /// choosing it.
+        irradiance: Vec3A,
+        /// How far a shadow ray must go to leave the scene.
+        distance: f32,
     },
     /// A point on an emitting triangle.
     Area {
         /// The point.
         position: Vec3A,
-        /// The triangle's front-side normal (light leaves along it).
+        /// The triangle's front normal.
         normal: Vec3A,
         /// Its emitted radiance `Le`.
         radiance: Vec3A,
+        /// Whether light leaves both faces (else only the front).
+        two_sided: bool,
         /// Probability density of this point per unit area (selection included).
         pdf_area: f32,
     },
 }
+
+/// Points per triangle at which a textured emitter's radiance is averaged to
+/// estimate its power.
+const EMISSION_ESTIMATE_POINTS: u32 = 16;
 
 /// The emitting triangles and their power, for power-proportional selection.
 #[derive(Clone, Debug, Default)]
@@ -323,26 +865,77 @@ struct AreaLights {
 }
 
 impl AreaLights {
-    fn build(triangles: &[Triangle], emission: &[Vec3A]) -> Self {
-        let mut lights = Self {
-            per_prim: vec![(0.0, 0.0); triangles.len()],
-            ..Self::default()
-        };
-        for (i, (t, le)) in triangles.iter().zip(emission).enumerate() {
-            let area = t.area();
-            let power = PI * area * le.element_sum() / 3.0;
+    fn build(scene: &Scene) -> Self {
+        let emissive: Vec<bool> = scene
+            .materials
+            .iter()
+            .map(SurfaceMaterial::is_emissive)
+            .collect();
+        if !emissive.iter().any(|&e| e) {
+            return Self::default();
+        }
+        let per_prim: Vec<(f32, f32)> = (0..scene.triangles.len())
+            .into_par_iter()
+            .map(|i| {
+                let m = scene.material_of[i] as usize;
+                if !emissive[m] {
+                    return (0.0, 0.0);
+                }
+                let area = scene.triangles[i].area();
+                let le = mean_emission(scene, i as u32);
+                let sides = if scene.materials[m].emits_both_sides {
+                    2.0
+                } else {
+                    1.0
+                };
+                let power = PI * area * sides * le.element_sum() / 3.0;
+                if power > 0.0 && power.is_finite() {
+                    (power, area)
+                } else {
+                    (0.0, 0.0)
+                }
+            })
+            .collect();
+        let mut lights = Self::default();
+        for (i, &(power, _)) in per_prim.iter().enumerate() {
             if power > 0.0 {
                 lights.total += power;
                 lights.prims.push(i as u32);
                 lights.cdf.push(lights.total);
-                lights.per_prim[i] = (power, area);
             }
         }
-        if lights.prims.is_empty() {
-            lights.per_prim.clear();
+        if !lights.prims.is_empty() {
+            lights.per_prim = per_prim;
         }
         lights
     }
+}
+
+/// The mean emitted radiance over triangle `prim`: exact for untextured
+/// emission, else the average over a fixed set of points inside it.
+fn mean_emission(scene: &Scene, prim: u32) -> Vec3A {
+    let m = scene.material(prim);
+    if m.emission_texture.is_none() {
+        return m.emission;
+    }
+    let k = EMISSION_ESTIMATE_POINTS;
+    let mut sum = Vec3A::ZERO;
+    for s in 0..k {
+        // A stratified point of the triangle (the same warp as light sampling).
+        let u = Vec2::new(
+            (s as f32 + 0.5) / k as f32,
+            ((s * 7 % k) as f32 + 0.5) / k as f32,
+        );
+        let su = u.x.sqrt();
+        let hit = Hit {
+            t: 0.0,
+            prim,
+            b1: 1.0 - su,
+            b2: u.y * su,
+        };
+        sum += m.emitted(&scene.attributes(&hit), &scene.textures);
+    }
+    sum / k as f32
 }
 
 #[cfg(test)]

@@ -6,6 +6,7 @@ use clap::{Args, Parser, Subcommand};
 use glam::Vec3A;
 use raylab::Integrator;
 use raylab::scene::cornell::{self, MaterialChoice};
+use raylab::scene::load::SceneKind;
 
 /// Largest accepted image side, in pixels.
 pub const MAX_SIDE: u32 = 16_384;
@@ -67,19 +68,30 @@ pub struct BenchArgs {
 #[derive(Debug, Clone, Args)]
 pub struct SceneArgs {
     /// Scene to load: `cornell` (the lab's box, built in), `cornell-area` (the box
-    /// lit by a ceiling area light instead of the point light) or a Wavefront OBJ file.
+    /// lit by a ceiling area light instead of the point light), a Wavefront OBJ
+    /// file or a glTF 2.0 file (.gltf or .glb).
     #[arg(default_value = "cornell")]
     pub scene: String,
-    /// Image width in pixels.
-    #[arg(long, default_value_t = 500, value_name = "W", allow_hyphen_values = true, value_parser = parse_side)]
-    pub width: u32,
-    /// Image height in pixels (also the focal length in pixels).
-    #[arg(long, default_value_t = 500, value_name = "H", allow_hyphen_values = true, value_parser = parse_side)]
-    pub height: u32,
+    /// Image width in pixels [default: 500 for the box and OBJ meshes; for glTF
+    /// 600 × the camera's aspect ratio, else 800].
+    #[arg(long, value_name = "W", allow_hyphen_values = true, value_parser = parse_side)]
+    pub width: Option<u32>,
+    /// Image height in pixels [default: 500 for the box and OBJ meshes, 600 for glTF].
+    #[arg(long, value_name = "H", allow_hyphen_values = true, value_parser = parse_side)]
+    pub height: Option<u32>,
     /// How to light the image: `flat` (surface colour), `direct` (the lab's model)
-    /// or `path` (global illumination in physical units).
-    #[arg(long, default_value = "direct", value_parser = parse_integrator)]
-    pub integrator: Integrator,
+    /// or `path` (global illumination in physical units) [default: path for glTF,
+    /// direct otherwise].
+    #[arg(long, value_parser = parse_integrator)]
+    pub integrator: Option<Integrator>,
+    /// Which of a glTF file's cameras to look through (depth-first order of the
+    /// node tree, from 0).
+    #[arg(long, value_name = "N", allow_hyphen_values = true, value_parser = parse_camera)]
+    pub camera: Option<usize>,
+    /// Tone mapping of PNG output and the viewer: `clamp`, `aces` or
+    /// `khronos-pbr-neutral` [default: khronos-pbr-neutral for glTF, clamp otherwise].
+    #[arg(long, value_name = "OP", value_parser = parse_tonemap)]
+    pub tonemap: Option<raylab::film::ToneMap>,
     /// Longest path for `path`, in segments as in Mitsuba (1: emitters only, 2:
     /// direct light, ...) [default: unbounded; Russian roulette ends paths].
     #[arg(long, value_name = "N", allow_hyphen_values = true, value_parser = parse_max_depth)]
@@ -170,15 +182,20 @@ impl SceneArgs {
     /// The `path` integrator with the options given (for the viewer's key 3).
     pub fn integrator_for_path(&self) -> Integrator {
         Self {
-            integrator: Integrator::path(),
+            integrator: Some(Integrator::path()),
             ..self.clone()
         }
-        .integrator()
+        .integrator(SceneKind::Lab)
     }
 
-    /// The integrator with its options from the other arguments.
-    pub fn integrator(&self) -> Integrator {
-        match self.integrator {
+    /// The integrator with its options from the other arguments; without
+    /// `--integrator`, `path` for glTF scenes and `direct` for the others.
+    pub fn integrator(&self, kind: SceneKind) -> Integrator {
+        let default = match kind {
+            SceneKind::Gltf => Integrator::path(),
+            SceneKind::Lab | SceneKind::Mesh => Integrator::Direct,
+        };
+        match self.integrator.unwrap_or(default) {
             Integrator::Path(mut options) => {
                 if let Some(d) = self.max_depth {
                     options.max_depth = d;
@@ -206,15 +223,86 @@ impl SceneArgs {
                 self.scene
             ));
         }
-        let pixels = self.width as u64 * self.height as u64;
-        if pixels > MAX_PIXELS {
+        if self.camera.is_some() && !is_gltf(&self.scene) {
             return Err(format!(
-                "error: --width {} × --height {} is {pixels} pixels, more than the limit of {MAX_PIXELS}",
-                self.width, self.height
+                "error: --camera picks a camera of a glTF file; {} has none",
+                self.scene
             ));
+        }
+        if let (Some(w), Some(h)) = (self.width, self.height) {
+            check_pixels(w, h)?;
         }
         Ok(())
     }
+
+    /// The image size: the options, else the scene's defaults (500×500 for the
+    /// box and meshes; for glTF height 600 and the width from the camera's
+    /// aspect ratio, else 800×600); with only one side given, the other follows
+    /// the aspect ratio.
+    pub fn size(&self, kind: SceneKind, aspect_ratio: Option<f32>) -> Result<(u32, u32), String> {
+        let (default, aspect) = match kind {
+            SceneKind::Gltf => match aspect_ratio {
+                Some(a) => (
+                    ((600.0 * a).round().clamp(1.0, MAX_SIDE as f32) as u32, 600),
+                    a,
+                ),
+                None => ((800, 600), 4.0 / 3.0),
+            },
+            SceneKind::Lab | SceneKind::Mesh => ((500, 500), 1.0),
+        };
+        let side = |x: f32| x.round().clamp(1.0, MAX_SIDE as f32) as u32;
+        let (w, h) = match (self.width, self.height) {
+            (Some(w), Some(h)) => (w, h),
+            (Some(w), None) => (w, side(w as f32 / aspect)),
+            (None, Some(h)) => (side(h as f32 * aspect), h),
+            (None, None) => default,
+        };
+        check_pixels(w, h)?;
+        Ok((w, h))
+    }
+}
+
+/// Refuses images of more than [`MAX_PIXELS`].
+fn check_pixels(w: u32, h: u32) -> Result<(), String> {
+    let pixels = w as u64 * h as u64;
+    if pixels > MAX_PIXELS {
+        return Err(format!(
+            "error: --width {w} × --height {h} is {pixels} pixels, more than the limit of {MAX_PIXELS}"
+        ));
+    }
+    Ok(())
+}
+
+impl SceneArgs {
+    /// The library's load options from the arguments.
+    pub fn load_options(&self) -> raylab::scene::LoadOptions {
+        raylab::scene::LoadOptions {
+            add: self.add.clone(),
+            transforms: self.transform.clone(),
+            materials: self.material.clone(),
+            light_power: self.light_power,
+            light_pos: self.light_pos,
+            ambient: self.ambient,
+            camera: self.camera,
+        }
+    }
+}
+
+/// Whether a scene name is a glTF file.
+fn is_gltf(scene: &str) -> bool {
+    std::path::Path::new(scene)
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("gltf") || e.eq_ignore_ascii_case("glb"))
+}
+
+fn parse_camera(s: &str) -> Result<usize, String> {
+    s.parse::<usize>()
+        .map_err(|_| "expected a camera number from 0".to_string())
+}
+
+fn parse_tonemap(s: &str) -> Result<raylab::film::ToneMap, String> {
+    s.parse()
 }
 
 fn parse_side(s: &str) -> Result<u32, String> {

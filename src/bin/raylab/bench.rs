@@ -42,7 +42,10 @@ impl Query {
 const BUILD_RUNS: usize = 5;
 
 pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
-    let mesh = crate::load_mesh(&args.mesh)?;
+    let mesh = raylab::scene::obj::load_obj(&args.mesh)?;
+    for w in &mesh.warnings {
+        eprintln!("warning: {w}");
+    }
     let mut out = std::io::stdout().lock();
     let tris = &mesh.triangles;
 

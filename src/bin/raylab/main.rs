@@ -12,6 +12,8 @@ use clap::Parser;
 use clap::error::ErrorKind;
 
 use args::{Cli, Command, RenderArgs, SceneArgs};
+use raylab::film::{Display, ToneMap};
+use raylab::scene::load::SceneKind;
 
 fn main() -> ExitCode {
     let cli = match Cli::try_parse() {
@@ -73,9 +75,11 @@ fn run(cli: Cli) -> anyhow::Result<()> {
 fn run_default() -> anyhow::Result<()> {
     let scene = SceneArgs {
         scene: "cornell".into(),
-        width: 500,
-        height: 500,
-        integrator: raylab::Integrator::Direct,
+        width: None,
+        height: None,
+        integrator: None,
+        camera: None,
+        tonemap: None,
         max_depth: None,
         sampler: raylab::integrators::path::SamplerKind::DEFAULT,
         material: Vec::new(),
@@ -90,8 +94,8 @@ fn run_default() -> anyhow::Result<()> {
         ambient: None,
     };
     if let Ok(event_loop) = viewer::open_display() {
-        let (loaded, initial) = load(&scene)?;
-        return viewer::run_on(event_loop, loaded, initial, &scene);
+        let session = load(&scene, false)?;
+        return viewer::run_on(event_loop, session, &scene);
     }
     let args = RenderArgs {
         scene,
@@ -110,107 +114,97 @@ fn run_default() -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Factor applied to PNG values (not EXR) for `exposure` stops: `2^E`, and `π`
-/// more for `path`, so that a diffuse surface lit by the point light alone shows
-/// the lab's `ρ·D` (radiance is `ρ·E/π`, the lab's `D` is the irradiance `E`).
-pub fn png_scale(integrator: raylab::Integrator, exposure: f32) -> f32 {
-    let physical = if integrator.is_physical() {
-        std::f32::consts::PI
-    } else {
-        1.0
-    };
-    physical * exposure.exp2()
+/// A loaded scene with everything the commands need to show it.
+pub struct Session {
+    /// The scene.
+    pub scene: raylab::Scene,
+    /// What it was made from.
+    pub kind: SceneKind,
+    /// The starting view (camera, light, integrator).
+    pub view: raylab::controls::ViewState,
+    /// Image size.
+    pub size: (u32, u32),
+    /// Tone mapping for PNG output and the screen.
+    pub tonemap: ToneMap,
 }
 
-/// Reads a mesh file, telling the user what it had to guess (missing materials).
-fn load_mesh(path: &std::path::Path) -> anyhow::Result<raylab::scene::obj::Mesh> {
-    let mesh = raylab::scene::obj::load_obj(path)?;
-    for w in &mesh.warnings {
+/// How pixel values are shown (PNG, screen) for `exposure` stops. The lab's
+/// scenes and OBJ meshes: `2^E`, and `π` more for `path`, so that a diffuse
+/// surface lit by the point light alone shows the lab's `ρ·D` (radiance is
+/// `ρ·E/π`, the lab's `D` is the irradiance `E`). glTF scenes show radiance:
+/// `path` as it is, `direct`'s `ρ·(D + N)` divided by `π` (the radiance of a
+/// diffuse surface under that irradiance), `flat`'s base colour as it is.
+pub fn display(
+    kind: SceneKind,
+    integrator: raylab::Integrator,
+    exposure: f32,
+    tonemap: ToneMap,
+) -> Display {
+    let factor = match (kind, integrator) {
+        (SceneKind::Gltf, raylab::Integrator::Direct) => 1.0 / std::f32::consts::PI,
+        (SceneKind::Gltf, _) => 1.0,
+        (_, i) if i.is_physical() => std::f32::consts::PI,
+        _ => 1.0,
+    };
+    Display {
+        scale: factor * exposure.exp2(),
+        tonemap,
+    }
+}
+
+/// Loads the scene of the arguments through the library, prints its warnings
+/// and (unless `quiet`) a summary line for files, and sets up the view.
+fn load(args: &SceneArgs, quiet: bool) -> anyhow::Result<Session> {
+    let loaded = raylab::scene::load(&args.scene, &args.load_options())?;
+    for w in &loaded.warnings {
         eprintln!("warning: {w}");
     }
-    Ok(mesh)
-}
-
-/// Ambient term of mesh scenes unless the user gives one.
-const MESH_AMBIENT: f32 = 0.15;
-
-/// Builds the scene and the initial view from the shared arguments.
-fn load(args: &SceneArgs) -> anyhow::Result<(raylab::Scene, raylab::controls::ViewState)> {
-    use glam::{Mat3A, Vec3A};
-    use raylab::{Triangle, scene::cornell};
-    let is_obj = std::path::Path::new(&args.scene)
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("obj"));
-    let area = args.scene == "cornell-area";
-    let (mut scene, camera_pos, base, step) = if args.scene == "cornell" || area {
-        let (mut tris, mut rho) = cornell::triangles();
-        if area {
-            cornell::push_area_light(&mut tris, &mut rho);
-        }
-        for (i, path) in args.add.iter().enumerate() {
-            let mut mesh = load_mesh(path)?;
-            if let Some(t) = args.transform.get(i).or(args.transform.first()) {
-                t.apply(&mut mesh.triangles);
-            }
-            // OBJ faces are counter-clockwise seen from outside; the lab's one-sided
-            // normal wants the opposite order.
-            tris.extend(
-                mesh.triangles
-                    .iter()
-                    .map(|t| Triangle::new(t.v[0], t.v[2], t.v[1])),
-            );
-            rho.extend(mesh.reflectance);
-        }
-        // cornell-area's point light is off unless given a power.
-        let default_power = if area { 0.0 } else { cornell::LIGHT_POWER };
-        let light = raylab::PointLight {
-            position: cornell::LIGHT_POSITION,
-            power: Vec3A::splat(args.light_power.unwrap_or(default_power)),
+    let kind = loaded.kind;
+    if !quiet && kind != SceneKind::Lab {
+        let s = &loaded.summary;
+        let mib = |b: usize| b as f64 / (1024.0 * 1024.0);
+        let plural = |n: usize, what: &str| format!("{n} {what}{}", if n == 1 { "" } else { "s" });
+        let lights = if loaded.default_light {
+            "no lights in the file: a default key light".to_string()
+        } else {
+            plural(s.punctual_lights, "light")
         };
-        let mut scene = raylab::Scene::new(tris, rho, light, Vec3A::ZERO)?;
-        let default_ambient = if area { 0.0 } else { cornell::AMBIENT };
-        scene.ambient = Vec3A::splat(args.ambient.unwrap_or(default_ambient));
-        if area {
-            cornell::light_area_patch(&mut scene);
-        }
-        for (part, material) in &args.material {
-            let range = cornell::part(part).expect("validated by the argument parser");
-            material.apply(&mut scene, range);
-        }
-        let step = raylab::controls::LAB_STEP;
-        (scene, cornell::CAMERA_POSITION, Mat3A::IDENTITY, step)
-    } else if is_obj {
-        if !args.add.is_empty() {
-            anyhow::bail!(
-                "--add places meshes in the cornell scene; {} is a mesh",
-                args.scene
-            );
-        }
-        let mesh = load_mesh(std::path::Path::new(&args.scene))?;
-        let ambient = args.ambient.unwrap_or(MESH_AMBIENT);
-        let (mut scene, framing) = raylab::scene::framing::mesh_scene(mesh, ambient)
-            .map_err(|e| anyhow::anyhow!("{}: {e}", args.scene))?;
-        if let Some(p) = args.light_power {
-            scene.light.power = Vec3A::splat(p);
-        }
-        (scene, framing.camera_pos, framing.base, framing.step)
-    } else {
-        anyhow::bail!(
-            "scene '{}': unknown scene (built in: cornell, cornell-area; or a Wavefront .obj file)",
-            args.scene
+        eprintln!(
+            "loaded {}: {}, {}, {} ({:.1} MiB), {}, {}, geometry {:.1} MiB, {:.0} ms",
+            args.scene,
+            plural(s.triangles, "triangle"),
+            plural(s.materials, "material"),
+            plural(s.textures, "texture"),
+            mib(s.texture_bytes),
+            lights,
+            plural(s.emitters, "emitting triangle"),
+            mib(s.geometry_bytes),
+            s.time.as_secs_f64() * 1e3,
         );
-    };
-    if let Some(p) = args.light_pos {
-        scene.light.position = p;
     }
+    let size = args
+        .size(kind, loaded.view.aspect_ratio)
+        .map_err(|e| anyhow::anyhow!(e.trim_start_matches("error: ").to_string()))?;
+    let v = &loaded.view;
     let view = raylab::controls::ViewState {
-        camera_pos: args.camera_pos.unwrap_or(camera_pos),
-        base,
-        step,
+        camera_pos: args.camera_pos.unwrap_or(v.position),
+        base: v.rotation,
+        step: v.step,
         yaw_deg: args.yaw,
         pitch_deg: args.pitch,
-        light_pos: scene.light.position,
-        integrator: args.integrator(),
+        light_pos: loaded.scene.light.position,
+        integrator: args.integrator(kind),
+        lens: v.lens,
     };
-    Ok((scene, view))
+    let tonemap = args.tonemap.unwrap_or(match kind {
+        SceneKind::Gltf => ToneMap::KhronosPbrNeutral,
+        _ => ToneMap::Clamp,
+    });
+    Ok(Session {
+        scene: loaded.scene,
+        kind,
+        view,
+        size,
+        tonemap,
+    })
 }

@@ -7,7 +7,7 @@ use std::time::{Duration, Instant};
 
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use raylab::film::{Format, write_image_scaled};
+use raylab::film::{Format, write_image_with};
 use raylab::render::{Progressive, RenderSettings, render, render_for};
 
 use crate::args::{MAX_SPP, RenderArgs};
@@ -35,8 +35,9 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             dir.display()
         );
     }
-    let (scene, view) = crate::load(&args.scene)?;
-    let camera = view.camera(args.scene.width, args.scene.height);
+    let session = crate::load(&args.scene, args.quiet)?;
+    let (scene, view) = (&session.scene, &session.view);
+    let camera = view.camera(session.size.0, session.size.1);
     let integrator = view.integrator;
     if integrator.is_physical() && !scene.has_lights() && !args.quiet {
         eprintln!(
@@ -84,7 +85,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             bar.set_length(budget.as_millis() as u64);
             let max_spp = args.spp.unwrap_or(MAX_SPP);
             render_for(
-                &scene,
+                scene,
                 &camera,
                 integrator,
                 args.seed,
@@ -102,7 +103,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
                 seed: args.seed,
             };
             Progressive {
-                rendered: render(&scene, &camera, &settings, &rows_done),
+                rendered: render(scene, &camera, &settings, &rows_done),
                 spp,
             }
         }
@@ -118,8 +119,13 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let elapsed = start.elapsed();
     bar.finish_and_clear();
 
-    let png_scale = crate::png_scale(integrator, args.scene.exposure);
-    write_image_scaled(&done.rendered.film, &output, png_scale)?;
+    let display = crate::display(
+        session.kind,
+        integrator,
+        args.scene.exposure,
+        session.tonemap,
+    );
+    write_image_with(&done.rendered.film, &output, display)?;
     if !args.quiet {
         let secs = elapsed.as_secs_f64();
         let rays = done.rendered.rays;

@@ -7,8 +7,9 @@ use std::time::{Duration, Instant};
 
 use anyhow::{Context, anyhow};
 use raylab::controls::{Action, ViewState};
-use raylab::film::{Film, srgb8, write_image_scaled};
+use raylab::film::{Display, Film, ToneMap, write_image_with};
 use raylab::render::accumulate;
+use raylab::scene::load::SceneKind;
 use raylab::{Integrator, Scene};
 use rayon::prelude::*;
 use winit::application::ApplicationHandler;
@@ -18,6 +19,7 @@ use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
 use winit::keyboard::PhysicalKey;
 use winit::window::{Window, WindowId};
 
+use crate::Session;
 use crate::args::SceneArgs;
 use crate::keys::action_for_key;
 
@@ -46,25 +48,23 @@ pub fn open_display() -> anyhow::Result<EventLoop<()>> {
 
 /// Opens the viewer on the scene of `args`.
 pub fn run(args: &SceneArgs) -> anyhow::Result<()> {
-    let (scene, initial) = crate::load(args)?;
-    run_on(open_display()?, scene, initial, args)
+    let session = crate::load(args, false)?;
+    run_on(open_display()?, session, args)
 }
 
 /// Runs the viewer on an event loop already connected to a display.
-pub fn run_on(
-    event_loop: EventLoop<()>,
-    scene: Scene,
-    initial: ViewState,
-    args: &SceneArgs,
-) -> anyhow::Result<()> {
+pub fn run_on(event_loop: EventLoop<()>, session: Session, args: &SceneArgs) -> anyhow::Result<()> {
+    let (w, h) = session.size;
     let mut app = Viewer {
         path: args.integrator_for_path(),
         exposure: args.exposure,
-        scene,
-        initial,
-        state: initial,
-        size: (args.width, args.height),
-        sums: Film::new(args.width, args.height),
+        kind: session.kind,
+        tonemap: session.tonemap,
+        scene: session.scene,
+        initial: session.view,
+        state: session.view,
+        size: (w, h),
+        sums: Film::new(w, h),
         samples: 0,
         gfx: None,
         dragging: false,
@@ -92,6 +92,10 @@ struct Viewer {
     path: Integrator,
     /// PNG exposure in stops, also applied on screen.
     exposure: f32,
+    /// What the scene was made from (how values are shown).
+    kind: SceneKind,
+    /// Tone mapping on screen and in screenshots.
+    tonemap: ToneMap,
     scene: Scene,
     initial: ViewState,
     state: ViewState,
@@ -177,9 +181,14 @@ impl Viewer {
         }
     }
 
-    /// Factor from pixel values to display values (exposure; π for `path`).
-    fn display_scale(&self) -> f32 {
-        crate::png_scale(self.state.integrator, self.exposure)
+    /// How pixel values are shown (exposure, π for the lab's `path`, tone mapping).
+    fn display(&self) -> Display {
+        crate::display(
+            self.kind,
+            self.state.integrator,
+            self.exposure,
+            self.tonemap,
+        )
     }
 
     fn handle(&mut self, action: Action, event_loop: &ActiveEventLoop) -> anyhow::Result<()> {
@@ -218,7 +227,7 @@ impl Viewer {
             .expect("a free name");
         let mut frame = self.sums.clone();
         frame.average(self.samples);
-        write_image_scaled(&frame, Path::new(&path), self.display_scale())?;
+        write_image_with(&frame, Path::new(&path), self.display())?;
         Ok(path)
     }
 
@@ -263,7 +272,8 @@ impl Viewer {
 
     /// Shows the average of the samples so far, sRGB-encoded.
     fn present(&mut self) -> anyhow::Result<()> {
-        let scale = self.display_scale() / self.samples.max(1) as f32;
+        let mut display = self.display();
+        display.scale /= self.samples.max(1) as f32;
         let Some(gfx) = self.gfx.as_mut() else {
             return Ok(());
         };
@@ -276,8 +286,8 @@ impl Viewer {
             .zip(self.sums.pixels.par_chunks(4096))
             .for_each(|(out, sums)| {
                 for (o, s) in out.iter_mut().zip(sums) {
-                    let p = *s * scale;
-                    *o = (srgb8(p.x) as u32) << 16 | (srgb8(p.y) as u32) << 8 | srgb8(p.z) as u32;
+                    let [r, g, b] = display.srgb8(*s);
+                    *o = (r as u32) << 16 | (g as u32) << 8 | b as u32;
                 }
             });
         buffer.present().map_err(|e| anyhow!("cannot draw: {e}"))

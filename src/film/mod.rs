@@ -1,4 +1,9 @@
-//! The image buffer, its 8-bit sRGB encoding and atomic PNG/EXR output.
+//! The image buffer, its display transform (exposure, tone mapping, 8-bit sRGB)
+//! and atomic PNG/EXR output.
+
+pub mod tonemap;
+
+pub use tonemap::ToneMap;
 
 use std::fs::File;
 use std::io::{BufWriter, Write};
@@ -68,18 +73,48 @@ impl Film {
             .sum()
     }
 
-    /// 8-bit sRGB of every pixel times `scale`, clamped to `[0, 1]`, as RGB bytes.
-    pub fn to_srgb8(&self, scale: f32) -> Vec<u8> {
+    /// Every pixel through `display` as 8-bit sRGB RGB bytes.
+    pub fn to_srgb8(&self, display: Display) -> Vec<u8> {
         let mut out = vec![0u8; self.pixels.len() * 3];
         out.par_chunks_mut(3 * 4096)
             .zip(self.pixels.par_chunks(4096))
             .for_each(|(bytes, pixels)| {
                 for (b, p) in bytes.chunks_exact_mut(3).zip(pixels) {
-                    let p = *p * scale;
-                    b.copy_from_slice(&[srgb8(p.x), srgb8(p.y), srgb8(p.z)]);
+                    b.copy_from_slice(&display.srgb8(*p));
                 }
             });
         out
+    }
+}
+
+/// How linear values become a PNG's (or the viewer's) 8-bit sRGB: multiplied
+/// by `scale` (the exposure), tone mapped, sRGB-encoded.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Display {
+    /// Factor applied first (`2^exposure`, and π for the lab's `path` images).
+    pub scale: f32,
+    /// Tone mapping operator.
+    pub tonemap: ToneMap,
+}
+
+impl Display {
+    /// Values scaled by `scale` and clamped: the lab's scenes.
+    pub fn clamped(scale: f32) -> Self {
+        Self {
+            scale,
+            tonemap: ToneMap::Clamp,
+        }
+    }
+
+    /// The 8-bit sRGB code of linear colour `c`.
+    #[inline]
+    pub fn srgb8(&self, c: Vec3A) -> [u8; 3] {
+        let p = c * self.scale;
+        let p = match self.tonemap {
+            ToneMap::Clamp => p,
+            t => t.apply(if p.is_finite() { p } else { Vec3A::ZERO }),
+        };
+        [srgb8(p.x), srgb8(p.y), srgb8(p.z)]
     }
 }
 
@@ -197,14 +232,14 @@ impl Format {
 /// flushed to disk, then renamed over `path`. On failure `path` is untouched and
 /// the temporary file removed.
 pub fn write_image(film: &Film, path: &Path) -> Result<(), OutputError> {
-    write_image_scaled(film, path, 1.0)
+    write_image_with(film, path, Display::clamped(1.0))
 }
 
-/// [`write_image`] with PNG values multiplied by `png_scale` before clamping and
-/// sRGB encoding (the exposure); EXR always holds the values unchanged.
-pub fn write_image_scaled(film: &Film, path: &Path, png_scale: f32) -> Result<(), OutputError> {
+/// [`write_image`] with PNG values passed through `display` (exposure and tone
+/// mapping); EXR always holds the values unchanged.
+pub fn write_image_with(film: &Film, path: &Path, display: Display) -> Result<(), OutputError> {
     let format = Format::from_path(path)?;
-    write_atomic(path, |tmp| write_format(film, format, path, tmp, png_scale))
+    write_atomic(path, |tmp| write_format(film, format, path, tmp, display))
 }
 
 /// Writes `bytes` to `path` atomically (as [`write_image`] does).
@@ -252,7 +287,7 @@ fn write_format(
     format: Format,
     path: &Path,
     tmp: &Path,
-    png_scale: f32,
+    display: Display,
 ) -> Result<(), OutputError> {
     let io_err = |source| OutputError::Io {
         path: path.to_owned(),
@@ -267,7 +302,7 @@ fn write_format(
             let mut out = BufWriter::new(File::create(tmp).map_err(io_err)?);
             image::codecs::png::PngEncoder::new(&mut out)
                 .write_image(
-                    &film.to_srgb8(png_scale),
+                    &film.to_srgb8(display),
                     film.width,
                     film.height,
                     image::ExtendedColorType::Rgb8,

@@ -1,0 +1,306 @@
+//! Reading glTF accessors from buffers: every component type, normalized
+//! integers, interleaved views and sparse accessors. Every count, offset and
+//! stride is checked against the bytes actually present before anything is
+//! allocated.
+
+use gltf::json::{self, accessor::ComponentType, accessor::Type};
+
+use super::GltfError;
+
+/// Most elements an accessor may have (2^28: far above any real asset, well
+/// below what would exhaust memory).
+pub const MAX_ELEMENTS: u64 = 1 << 28;
+
+/// The loaded buffers, indexed like the file's `buffers`.
+pub struct Buffers<'a> {
+    /// The file's JSON.
+    pub root: &'a json::Root,
+    /// Bytes of each buffer (exactly `byteLength` of them).
+    pub data: &'a [Vec<u8>],
+}
+
+/// Bytes per component.
+fn component_size(c: ComponentType) -> usize {
+    match c {
+        ComponentType::I8 | ComponentType::U8 => 1,
+        ComponentType::I16 | ComponentType::U16 => 2,
+        ComponentType::U32 | ComponentType::F32 => 4,
+    }
+}
+
+/// Components per element.
+pub fn type_components(t: Type) -> usize {
+    match t {
+        Type::Scalar => 1,
+        Type::Vec2 => 2,
+        Type::Vec3 => 3,
+        Type::Vec4 | Type::Mat2 => 4,
+        Type::Mat3 => 9,
+        Type::Mat4 => 16,
+    }
+}
+
+/// One component at `bytes[0..]` as f32, normalized to `[0, 1]` / `[−1, 1]` if
+/// asked (glTF's rules: signed values clamp at −1).
+#[inline]
+fn component(bytes: &[u8], c: ComponentType, normalized: bool) -> f32 {
+    let b = |n: usize| -> [u8; 4] {
+        let mut a = [0u8; 4];
+        a[..n].copy_from_slice(&bytes[..n]);
+        a
+    };
+    match c {
+        ComponentType::F32 => f32::from_le_bytes(b(4)),
+        ComponentType::U32 => u32::from_le_bytes(b(4)) as f32,
+        ComponentType::U8 => {
+            let v = bytes[0] as f32;
+            if normalized { v / 255.0 } else { v }
+        }
+        ComponentType::I8 => {
+            let v = bytes[0] as i8 as f32;
+            if normalized { (v / 127.0).max(-1.0) } else { v }
+        }
+        ComponentType::U16 => {
+            let v = u16::from_le_bytes([bytes[0], bytes[1]]) as f32;
+            if normalized { v / 65535.0 } else { v }
+        }
+        ComponentType::I16 => {
+            let v = i16::from_le_bytes([bytes[0], bytes[1]]) as f32;
+            if normalized {
+                (v / 32767.0).max(-1.0)
+            } else {
+                v
+            }
+        }
+    }
+}
+
+/// An index component as u32 (unsigned integer types only).
+#[inline]
+fn index_component(bytes: &[u8], c: ComponentType) -> Option<u32> {
+    match c {
+        ComponentType::U8 => Some(bytes[0] as u32),
+        ComponentType::U16 => Some(u16::from_le_bytes([bytes[0], bytes[1]]) as u32),
+        ComponentType::U32 => Some(u32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]])),
+        _ => None,
+    }
+}
+
+/// The bytes of a buffer view after checking it lies inside its buffer.
+fn view_bytes<'b>(
+    buffers: &Buffers<'b>,
+    view: usize,
+    what: &str,
+) -> Result<(&'b [u8], Option<usize>), GltfError> {
+    let v =
+        buffers.root.buffer_views.get(view).ok_or_else(|| {
+            GltfError::invalid(format!("{what}: buffer view {view} does not exist"))
+        })?;
+    let buffer = buffers.data.get(v.buffer.value()).ok_or_else(|| {
+        GltfError::invalid(format!(
+            "buffer view {view}: buffer {} does not exist",
+            v.buffer.value()
+        ))
+    })?;
+    let offset = v.byte_offset.map_or(0, |o| o.0);
+    let end = offset.checked_add(v.byte_length.0);
+    match end {
+        Some(end) if end <= buffer.len() as u64 => Ok((
+            &buffer[offset as usize..end as usize],
+            v.byte_stride.map(|s| s.0),
+        )),
+        _ => Err(GltfError::invalid(format!(
+            "buffer view {view} (bytes {offset}..+{}) lies outside buffer {} of {} bytes",
+            v.byte_length.0,
+            v.buffer.value(),
+            buffer.len()
+        ))),
+    }
+}
+
+/// Element `i`'s bytes of `count` elements of `elem` bytes each, `stride` apart
+/// from `offset` in `bytes`, after checking that the last one fits.
+fn checked_layout(
+    bytes_len: usize,
+    offset: u64,
+    count: u64,
+    elem: usize,
+    stride: usize,
+    what: &str,
+) -> Result<(), GltfError> {
+    if count == 0 {
+        return Ok(());
+    }
+    let end = (count - 1)
+        .checked_mul(stride as u64)
+        .and_then(|x| x.checked_add(offset))
+        .and_then(|x| x.checked_add(elem as u64));
+    match end {
+        Some(end) if end <= bytes_len as u64 => Ok(()),
+        _ => Err(GltfError::invalid(format!(
+            "{what}: {count} elements of {elem} bytes (stride {stride}, offset {offset}) do not fit the buffer view's {bytes_len} bytes"
+        ))),
+    }
+}
+
+/// Reads accessor `index` as `N` floats per element (converting integer and
+/// normalized types), with sparse substitution applied. `what` names the use
+/// in errors (e.g. "mesh 0 primitive 1 POSITION").
+pub fn read_floats<const N: usize>(
+    buffers: &Buffers,
+    index: usize,
+    what: &str,
+) -> Result<Vec<[f32; N]>, GltfError> {
+    let acc = accessor(buffers, index, what)?;
+    let (c, t) = kinds(acc, index)?;
+    let n = type_components(t);
+    if n != N && !(N == 4 && n == 3) {
+        return Err(GltfError::invalid(format!(
+            "{what}: accessor {index} has {n} components per element, expected {N}"
+        )));
+    }
+    let count = acc.count.0;
+    let csize = component_size(c);
+    let elem = n * csize;
+    // Check the layout before allocating anything sized by the count.
+    let mut dense = None;
+    if let Some(view) = acc.buffer_view {
+        let (bytes, stride) = view_bytes(buffers, view.value(), what)?;
+        let stride = stride.unwrap_or(elem);
+        if stride < elem {
+            return Err(GltfError::invalid(format!(
+                "{what}: byte stride {stride} is smaller than an element ({elem} bytes)"
+            )));
+        }
+        let offset = acc.byte_offset.map_or(0, |o| o.0);
+        checked_layout(bytes.len(), offset, count, elem, stride, what)?;
+        dense = Some((bytes, stride, offset as usize));
+    }
+    let mut out = vec![[0.0f32; N]; count as usize];
+    if N == 4 && n == 3 {
+        // A colour without alpha: alpha 1.
+        for v in &mut out {
+            v[3] = 1.0;
+        }
+    }
+    let read = |bytes: &[u8], v: &mut [f32; N]| {
+        for (k, slot) in v.iter_mut().take(n).enumerate() {
+            *slot = component(&bytes[k * csize..], c, acc.normalized);
+        }
+    };
+    if let Some((bytes, stride, offset)) = dense {
+        for (i, v) in out.iter_mut().enumerate() {
+            read(&bytes[offset + i * stride..], v);
+        }
+    }
+    if let Some(sparse) = &acc.sparse {
+        let k = sparse.count.0;
+        if k > count {
+            return Err(GltfError::invalid(format!(
+                "{what}: sparse accessor {index} replaces {k} of {count} elements"
+            )));
+        }
+        let ic = super::valid(&sparse.indices.component_type).map(|c| c.0);
+        let Some(ic) = ic.filter(|c| {
+            matches!(
+                c,
+                ComponentType::U8 | ComponentType::U16 | ComponentType::U32
+            )
+        }) else {
+            return Err(GltfError::invalid(format!(
+                "{what}: sparse indices must be unsigned integers"
+            )));
+        };
+        let isize = component_size(ic);
+        let (ibytes, _) = view_bytes(buffers, sparse.indices.buffer_view.value(), what)?;
+        let ioff = sparse.indices.byte_offset.0;
+        checked_layout(ibytes.len(), ioff, k, isize, isize, what)?;
+        let (vbytes, _) = view_bytes(buffers, sparse.values.buffer_view.value(), what)?;
+        let voff = sparse.values.byte_offset.0;
+        checked_layout(vbytes.len(), voff, k, elem, elem, what)?;
+        for j in 0..k as usize {
+            let target =
+                index_component(&ibytes[ioff as usize + j * isize..], ic).unwrap_or(u32::MAX);
+            let Some(v) = out.get_mut(target as usize) else {
+                return Err(GltfError::invalid(format!(
+                    "{what}: sparse index {target} is outside the accessor's {count} elements"
+                )));
+            };
+            read(&vbytes[voff as usize + j * elem..], v);
+        }
+    }
+    Ok(out)
+}
+
+/// Reads accessor `index` as vertex indices (unsigned integer scalars).
+pub fn read_indices(buffers: &Buffers, index: usize, what: &str) -> Result<Vec<u32>, GltfError> {
+    let acc = accessor(buffers, index, what)?;
+    let (c, t) = kinds(acc, index)?;
+    if t != Type::Scalar
+        || !matches!(
+            c,
+            ComponentType::U8 | ComponentType::U16 | ComponentType::U32
+        )
+    {
+        return Err(GltfError::invalid(format!(
+            "{what}: index accessor {index} must hold unsigned integer scalars"
+        )));
+    }
+    // Sparse indices are rare but legal: read through the float path only when
+    // exact (u32 above 2^24 would round), else directly.
+    if acc.sparse.is_some() {
+        let values = read_floats::<1>(buffers, index, what)?;
+        return Ok(values.into_iter().map(|[v]| v as u32).collect());
+    }
+    let count = acc.count.0;
+    let size = component_size(c);
+    let Some(view) = acc.buffer_view else {
+        return Ok(vec![0; count as usize]);
+    };
+    let (bytes, stride) = view_bytes(buffers, view.value(), what)?;
+    let stride = stride.unwrap_or(size).max(size);
+    let offset = acc.byte_offset.map_or(0, |o| o.0);
+    checked_layout(bytes.len(), offset, count, size, stride, what)?;
+    let offset = offset as usize;
+    Ok((0..count as usize)
+        .map(|i| index_component(&bytes[offset + i * stride..], c).unwrap_or(0))
+        .collect())
+}
+
+/// The accessor, with its count checked against the ceiling.
+fn accessor<'r>(
+    buffers: &Buffers<'r>,
+    index: usize,
+    what: &str,
+) -> Result<&'r json::Accessor, GltfError> {
+    let acc =
+        buffers.root.accessors.get(index).ok_or_else(|| {
+            GltfError::invalid(format!("{what}: accessor {index} does not exist"))
+        })?;
+    if acc.count.0 > MAX_ELEMENTS {
+        return Err(GltfError::invalid(format!(
+            "{what}: accessor {index} claims {} elements (the limit is {MAX_ELEMENTS})",
+            acc.count.0
+        )));
+    }
+    // An accessor without a buffer view is all zeros (plus sparse values): no
+    // bytes back its count, so it may not exceed what the buffers could hold.
+    let total: u64 = buffers.data.iter().map(|d| d.len() as u64).sum();
+    if acc.buffer_view.is_none() && acc.count.0 > total.max(1 << 16) {
+        return Err(GltfError::invalid(format!(
+            "{what}: accessor {index} claims {} elements with no buffer view behind them",
+            acc.count.0
+        )));
+    }
+    Ok(acc)
+}
+
+/// The component type and element type of an accessor.
+fn kinds(acc: &json::Accessor, index: usize) -> Result<(ComponentType, Type), GltfError> {
+    let c = super::valid(&acc.component_type)
+        .ok_or_else(|| GltfError::invalid(format!("accessor {index}: unknown component type")))?
+        .0;
+    let t = *super::valid(&acc.type_)
+        .ok_or_else(|| GltfError::invalid(format!("accessor {index}: unknown element type")))?;
+    Ok((c, t))
+}

@@ -1,0 +1,1010 @@
+//! glTF 2.0 scenes (`.gltf` with external or data-URI buffers and images, and
+//! `.glb`), read into [`SceneParts`] following
+//! `../shared/specs/scene-conventions.md`.
+//!
+//! The JSON is parsed by `gltf-json` (plain serde structures, no validation
+//! pass that could index out of range); every reference, count, offset and
+//! stride is checked here before use, so a bad file is refused with one line
+//! naming it and what is wrong, never a panic or an allocation sized by an
+//! unchecked number.
+
+pub mod accessor;
+mod tangents;
+
+use std::collections::{HashMap, HashSet};
+use std::path::{Path, PathBuf};
+
+use glam::{Affine3A, Mat3A, Mat4, Quat, Vec2, Vec3, Vec3A, Vec4};
+use gltf::json::{self, validation::Checked};
+use thiserror::Error;
+
+use accessor::{Buffers, read_floats, read_indices};
+
+use super::mesh::{Instance, MeshData, Tangents};
+use super::{NO_INSTANCE, PointLight, SceneParts};
+use crate::camera::{Lens, SceneCamera};
+use crate::geometry::triangle::Triangle;
+use crate::lights::Light;
+use crate::materials::surface::{AlphaMode, GltfMaterial, MaterialKind, SurfaceMaterial};
+use crate::textures::{TextureRef, TextureStore, TextureTransform, Wrap};
+
+/// Extensions raylab reads; a file that requires any other is refused.
+pub const SUPPORTED_EXTENSIONS: [&str; 8] = [
+    "KHR_lights_punctual",
+    "KHR_materials_emissive_strength",
+    "KHR_materials_ior",
+    "KHR_materials_specular",
+    "KHR_materials_transmission",
+    "KHR_materials_volume",
+    "KHR_texture_transform",
+    "KHR_mesh_quantization",
+];
+
+/// Deepest node hierarchy accepted.
+pub const MAX_NODE_DEPTH: usize = 1024;
+/// Largest file (JSON, GLB, buffer or image) read, in bytes.
+pub const MAX_FILE_BYTES: u64 = 1 << 32;
+/// Most triangles a scene may have after instancing.
+pub const MAX_TRIANGLES: u64 = 1 << 28;
+
+/// Why a glTF file cannot be loaded.
+#[derive(Debug, Error)]
+pub enum GltfError {
+    /// A file could not be read.
+    #[error("{path}: {cause}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// What the system said.
+        cause: std::io::Error,
+    },
+    /// The content is malformed or inconsistent.
+    #[error("{0}")]
+    Invalid(String),
+}
+
+impl GltfError {
+    /// An [`GltfError::Invalid`] with this message.
+    pub fn invalid(message: impl Into<String>) -> Self {
+        GltfError::Invalid(message.into())
+    }
+}
+
+/// What [`load_gltf`] returns: the scene's parts and what to tell the user.
+#[derive(Debug)]
+pub struct GltfScene {
+    /// Geometry, materials, textures, lights and cameras.
+    pub parts: SceneParts,
+    /// Whether the file had any punctual light.
+    pub has_punctual_lights: bool,
+    /// Things worth telling that do not stop the load (skipped primitives,
+    /// ignored extensions), each once.
+    pub warnings: Vec<String>,
+}
+
+/// Reads a glTF or GLB file. Errors carry the file's name.
+pub fn load_gltf(path: &Path) -> Result<GltfScene, GltfError> {
+    let name = path.display().to_string();
+    load_gltf_inner(path).map_err(|e| match e {
+        GltfError::Invalid(m) => GltfError::Invalid(format!("{name}: {m}")),
+        io => io,
+    })
+}
+
+fn read_file(path: &Path) -> Result<Vec<u8>, GltfError> {
+    let io = |cause| GltfError::Io {
+        path: path.to_owned(),
+        cause,
+    };
+    let len = std::fs::metadata(path).map_err(io)?.len();
+    if len > MAX_FILE_BYTES {
+        return Err(GltfError::invalid(format!(
+            "{} is {len} bytes, more than the limit of {MAX_FILE_BYTES}",
+            path.display()
+        )));
+    }
+    std::fs::read(path).map_err(io)
+}
+
+/// Splits a GLB container into its JSON and binary chunks.
+fn split_glb(bytes: &[u8]) -> Result<(&[u8], Option<&[u8]>), GltfError> {
+    let u32_at = |o: usize| -> Option<u32> {
+        bytes
+            .get(o..o + 4)
+            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+    };
+    let version = u32_at(4).ok_or_else(|| GltfError::invalid("GLB header is truncated"))?;
+    if version != 2 {
+        return Err(GltfError::invalid(format!(
+            "GLB version {version}, expected 2"
+        )));
+    }
+    let total = u32_at(8).unwrap_or(0) as usize;
+    if total > bytes.len() {
+        return Err(GltfError::invalid(format!(
+            "GLB header claims {total} bytes but the file has {}",
+            bytes.len()
+        )));
+    }
+    let bytes = &bytes[..total];
+    let mut offset = 12;
+    let mut json = None;
+    let mut bin = None;
+    while offset + 8 <= bytes.len() {
+        let len = u32_at(offset).unwrap_or(0) as usize;
+        let kind = u32_at(offset + 4).unwrap_or(0);
+        let start = offset + 8;
+        let end = start
+            .checked_add(len)
+            .filter(|&e| e <= bytes.len())
+            .ok_or_else(|| {
+                GltfError::invalid(format!(
+                    "GLB chunk at byte {offset} claims {len} bytes past the end"
+                ))
+            })?;
+        match kind {
+            0x4E4F_534A if json.is_none() => json = Some(&bytes[start..end]),
+            0x004E_4942 if bin.is_none() => bin = Some(&bytes[start..end]),
+            _ => {}
+        }
+        offset = end;
+    }
+    let json = json.ok_or_else(|| GltfError::invalid("GLB has no JSON chunk"))?;
+    Ok((json, bin))
+}
+
+fn load_gltf_inner(path: &Path) -> Result<GltfScene, GltfError> {
+    let bytes = read_file(path)?;
+    let (json_bytes, glb_bin) = if bytes.starts_with(b"glTF") {
+        split_glb(&bytes)?
+    } else {
+        (&bytes[..], None)
+    };
+    let root = json::Root::from_slice(json_bytes)
+        .map_err(|e| GltfError::invalid(format!("not valid glTF JSON: {e}")))?;
+    let mut warnings = Vec::new();
+    if let Some(ext) = root
+        .extensions_required
+        .iter()
+        .find(|e| !SUPPORTED_EXTENSIONS.contains(&e.as_str()))
+    {
+        return Err(GltfError::invalid(format!(
+            "requires the extension {ext}, which raylab does not support (supported: {})",
+            SUPPORTED_EXTENSIONS.join(", ")
+        )));
+    }
+    for ext in root
+        .extensions_used
+        .iter()
+        .filter(|e| !SUPPORTED_EXTENSIONS.contains(&e.as_str()))
+    {
+        warnings.push(format!("{}: ignoring the extension {ext}", path.display()));
+    }
+    let base = path.parent().unwrap_or(Path::new("."));
+    let buffer_data = load_buffers(&root, base, glb_bin)?;
+    let buffers = Buffers {
+        root: &root,
+        data: &buffer_data,
+    };
+    let mut loader = Loader {
+        root: &root,
+        buffers: &buffers,
+        base,
+        parts: SceneParts {
+            two_sided: true,
+            ..SceneParts::default()
+        },
+        mesh_ids: HashMap::new(),
+        material_ids: HashMap::new(),
+        image_ids: HashMap::new(),
+        image_sources: Vec::new(),
+        warned: HashSet::new(),
+        warnings,
+        point_lights: Vec::new(),
+    };
+    loader.walk_scene()?;
+    loader.finish()
+}
+
+/// Reads every buffer: the GLB's binary chunk, a data URI or a file beside the
+/// glTF. Each must hold at least `byteLength` bytes.
+fn load_buffers(
+    root: &json::Root,
+    base: &Path,
+    glb_bin: Option<&[u8]>,
+) -> Result<Vec<Vec<u8>>, GltfError> {
+    let mut out = Vec::with_capacity(root.buffers.len().min(1024));
+    for (i, b) in root.buffers.iter().enumerate() {
+        let want = b.byte_length.0;
+        let data = match &b.uri {
+            None if i == 0 => glb_bin
+                .ok_or_else(|| {
+                    GltfError::invalid("buffer 0 has no URI and the file has no GLB binary chunk")
+                })?
+                .to_vec(),
+            None => return Err(GltfError::invalid(format!("buffer {i} has no URI"))),
+            Some(uri) => read_uri(uri, base, &format!("buffer {i}"))?,
+        };
+        if (data.len() as u64) < want {
+            return Err(GltfError::invalid(format!(
+                "buffer {i} declares {want} bytes but only {} are there",
+                data.len()
+            )));
+        }
+        let mut data = data;
+        data.truncate(want as usize);
+        out.push(data);
+    }
+    Ok(out)
+}
+
+/// The bytes behind a URI: a base64 data URI or a relative file path.
+fn read_uri(uri: &str, base: &Path, what: &str) -> Result<Vec<u8>, GltfError> {
+    if let Some(rest) = uri.strip_prefix("data:") {
+        let (header, payload) = rest
+            .split_once(',')
+            .ok_or_else(|| GltfError::invalid(format!("{what}: malformed data URI")))?;
+        if !header.ends_with(";base64") {
+            return Err(GltfError::invalid(format!(
+                "{what}: data URI is not base64"
+            )));
+        }
+        return decode_base64(payload)
+            .ok_or_else(|| GltfError::invalid(format!("{what}: data URI is not valid base64")));
+    }
+    if uri.contains("://") {
+        return Err(GltfError::invalid(format!(
+            "{what}: URI {uri} is not a local file"
+        )));
+    }
+    let file = base.join(percent_decode(uri));
+    match read_file(&file) {
+        Err(GltfError::Io { cause, .. }) => Err(GltfError::invalid(format!(
+            "{what}: cannot read {}: {cause}",
+            file.display()
+        ))),
+        other => other,
+    }
+}
+
+/// Decodes standard base64 (padding optional, whitespace refused); `None` if
+/// malformed.
+pub fn decode_base64(text: &str) -> Option<Vec<u8>> {
+    let text = text.trim_end_matches('=').as_bytes();
+    let value = |c: u8| -> Option<u32> {
+        Some(match c {
+            b'A'..=b'Z' => c - b'A',
+            b'a'..=b'z' => c - b'a' + 26,
+            b'0'..=b'9' => c - b'0' + 52,
+            b'+' | b'-' => 62,
+            b'/' | b'_' => 63,
+            _ => return None,
+        } as u32)
+    };
+    if text.len() % 4 == 1 {
+        return None;
+    }
+    let mut out = Vec::with_capacity(text.len() / 4 * 3 + 3);
+    for chunk in text.chunks(4) {
+        let mut acc = 0u32;
+        for (k, &c) in chunk.iter().enumerate() {
+            acc |= value(c)? << (18 - 6 * k);
+        }
+        let bytes = acc.to_be_bytes();
+        out.extend_from_slice(&bytes[1..chunk.len()]);
+    }
+    Some(out)
+}
+
+/// `%XX` escapes of a URI decoded (invalid escapes are kept as they are).
+fn percent_decode(uri: &str) -> String {
+    let b = uri.as_bytes();
+    let mut out = Vec::with_capacity(b.len());
+    let mut i = 0;
+    while i < b.len() {
+        if b[i] == b'%'
+            && i + 2 < b.len()
+            && let Ok(v) =
+                u8::from_str_radix(std::str::from_utf8(&b[i + 1..i + 3]).unwrap_or("zz"), 16)
+        {
+            out.push(v);
+            i += 3;
+        } else {
+            out.push(b[i]);
+            i += 1;
+        }
+    }
+    String::from_utf8_lossy(&out).into_owned()
+}
+
+struct Loader<'a> {
+    root: &'a json::Root,
+    buffers: &'a Buffers<'a>,
+    base: &'a Path,
+    parts: SceneParts,
+    /// (mesh, primitive) → mesh data index.
+    mesh_ids: HashMap<(usize, usize), u32>,
+    /// glTF material (None: the default material) → table index.
+    material_ids: HashMap<Option<usize>, u32>,
+    /// glTF image → texture store index.
+    image_ids: HashMap<usize, u32>,
+    /// Images to decode, in store order: (name, bytes source).
+    image_sources: Vec<(String, usize)>,
+    warned: HashSet<String>,
+    warnings: Vec<String>,
+    /// Point lights in node order; the first becomes the key light.
+    point_lights: Vec<(Vec3A, Vec3A)>,
+}
+
+impl Loader<'_> {
+    fn warn_once(&mut self, key: &str, message: String) {
+        if self.warned.insert(key.to_string()) {
+            self.warnings.push(message);
+        }
+    }
+
+    /// Walks the default scene's node tree depth first (children in array
+    /// order), composing transforms parent × child.
+    fn walk_scene(&mut self) -> Result<(), GltfError> {
+        let root = self.root;
+        let roots: Vec<usize> = match root
+            .scene
+            .map(|s| s.value())
+            .or((!root.scenes.is_empty()).then_some(0))
+        {
+            Some(s) => root
+                .scenes
+                .get(s)
+                .ok_or_else(|| GltfError::invalid(format!("the default scene {s} does not exist")))?
+                .nodes
+                .iter()
+                .map(|n| n.value())
+                .collect(),
+            None => {
+                // No scenes: every node that is nobody's child.
+                let children: HashSet<usize> = root
+                    .nodes
+                    .iter()
+                    .flat_map(|n| n.children.iter().flatten().map(|c| c.value()))
+                    .collect();
+                (0..root.nodes.len())
+                    .filter(|i| !children.contains(i))
+                    .collect()
+            }
+        };
+        let mut visited = vec![false; root.nodes.len()];
+        // (node, parent transform, depth), popped in depth-first pre-order.
+        let mut stack: Vec<(usize, Mat4, usize)> = roots
+            .iter()
+            .rev()
+            .map(|&n| (n, Mat4::IDENTITY, 0))
+            .collect();
+        while let Some((index, parent, depth)) = stack.pop() {
+            let node = root
+                .nodes
+                .get(index)
+                .ok_or_else(|| GltfError::invalid(format!("node {index} does not exist")))?;
+            if std::mem::replace(&mut visited[index], true) {
+                return Err(GltfError::invalid(format!(
+                    "node {index} appears twice in the scene's node tree (a cycle or a shared child)"
+                )));
+            }
+            if depth >= MAX_NODE_DEPTH {
+                return Err(GltfError::invalid(format!(
+                    "the node tree is deeper than {MAX_NODE_DEPTH} levels"
+                )));
+            }
+            let world = parent * local_transform(node, index)?;
+            if let Some(cam) = node.camera {
+                self.camera(cam.value(), &world)?;
+            }
+            if let Some(light) = node
+                .extensions
+                .as_ref()
+                .and_then(|e| e.khr_lights_punctual.as_ref())
+            {
+                self.light(light.light.value(), &world)?;
+            }
+            if let Some(mesh) = node.mesh {
+                self.mesh_instance(mesh.value(), &world)?;
+            }
+            for child in node.children.iter().flatten().rev() {
+                stack.push((child.value(), world, depth + 1));
+            }
+        }
+        Ok(())
+    }
+
+    fn camera(&mut self, index: usize, world: &Mat4) -> Result<(), GltfError> {
+        let cam = self
+            .root
+            .cameras
+            .get(index)
+            .ok_or_else(|| GltfError::invalid(format!("camera {index} does not exist")))?;
+        let position = Vec3A::from(world.transform_point3(Vec3::ZERO));
+        let forward = Vec3A::from(world.transform_vector3(Vec3::NEG_Z)).normalize_or_zero();
+        let right = Vec3A::from(world.transform_vector3(Vec3::X));
+        let right = (right - forward * forward.dot(right)).normalize_or_zero();
+        if forward == Vec3A::ZERO || right == Vec3A::ZERO || !position.is_finite() {
+            return Err(GltfError::invalid(format!(
+                "camera {index}'s node transform is degenerate"
+            )));
+        }
+        let down = forward.cross(right);
+        let (lens, aspect_ratio) = match (&cam.perspective, &cam.orthographic) {
+            (Some(p), _) => {
+                if !(p.yfov > 0.0 && p.yfov < std::f32::consts::PI) {
+                    return Err(GltfError::invalid(format!(
+                        "camera {index}: yfov {} is not between 0 and π",
+                        p.yfov
+                    )));
+                }
+                (
+                    Lens::from_yfov(p.yfov),
+                    p.aspect_ratio.filter(|a| a.is_finite() && *a > 0.0),
+                )
+            }
+            (None, Some(o)) => {
+                if !(o.ymag.is_finite() && o.ymag != 0.0) {
+                    return Err(GltfError::invalid(format!(
+                        "camera {index}: ymag {} must be non-zero",
+                        o.ymag
+                    )));
+                }
+                let aspect = (o.xmag / o.ymag).abs();
+                (
+                    Lens::Orthographic {
+                        half_height: o.ymag.abs(),
+                    },
+                    (aspect.is_finite() && aspect > 0.0).then_some(aspect),
+                )
+            }
+            (None, None) => {
+                return Err(GltfError::invalid(format!(
+                    "camera {index} is neither perspective nor orthographic"
+                )));
+            }
+        };
+        self.parts.cameras.push(SceneCamera {
+            name: cam.name.clone().unwrap_or_default(),
+            position,
+            rotation: Mat3A::from_cols(right, down, forward),
+            lens,
+            aspect_ratio,
+        });
+        Ok(())
+    }
+
+    fn light(&mut self, index: usize, world: &Mat4) -> Result<(), GltfError> {
+        use json::extensions::scene::khr_lights_punctual::Type;
+        let light = self
+            .root
+            .extensions
+            .as_ref()
+            .and_then(|e| e.khr_lights_punctual.as_ref())
+            .and_then(|l| l.lights.get(index))
+            .ok_or_else(|| GltfError::invalid(format!("light {index} does not exist")))?;
+        let color = Vec3A::from(light.color);
+        let value = color * light.intensity;
+        if !(value.is_finite() && value.min_element() >= 0.0) {
+            return Err(GltfError::invalid(format!(
+                "light {index}: colour × intensity {value} must be finite and >= 0"
+            )));
+        }
+        let position = Vec3A::from(world.transform_point3(Vec3::ZERO));
+        let direction = Vec3A::from(world.transform_vector3(Vec3::NEG_Z)).normalize_or_zero();
+        let kind = valid(&light.type_)
+            .ok_or_else(|| GltfError::invalid(format!("light {index}: unknown type")))?;
+        if light.range.is_some() {
+            self.warn_once(
+                "range",
+                "glTF light `range` is ignored (inverse-square falloff everywhere)".into(),
+            );
+        }
+        match kind {
+            Type::Point => self.point_lights.push((position, value)),
+            Type::Directional => {
+                if direction == Vec3A::ZERO {
+                    return Err(GltfError::invalid(format!(
+                        "light {index}: degenerate direction"
+                    )));
+                }
+                self.parts.lights.push(Light::Directional {
+                    direction,
+                    irradiance: value,
+                })
+            }
+            Type::Spot => {
+                let spot = light.spot.as_ref();
+                let inner = spot.map_or(0.0, |s| s.inner_cone_angle);
+                let outer = spot.map_or(std::f32::consts::FRAC_PI_4, |s| s.outer_cone_angle);
+                if direction == Vec3A::ZERO || !(inner.is_finite() && outer.is_finite()) {
+                    return Err(GltfError::invalid(format!(
+                        "light {index}: degenerate spot light"
+                    )));
+                }
+                self.parts.lights.push(Light::Spot {
+                    position,
+                    direction,
+                    intensity: value,
+                    cos_inner: inner.cos(),
+                    cos_outer: outer.cos(),
+                })
+            }
+        }
+        Ok(())
+    }
+
+    fn mesh_instance(&mut self, mesh_index: usize, world: &Mat4) -> Result<(), GltfError> {
+        let mesh = self
+            .root
+            .meshes
+            .get(mesh_index)
+            .ok_or_else(|| GltfError::invalid(format!("mesh {mesh_index} does not exist")))?;
+        let to_world = Affine3A::from_mat4(*world);
+        if !to_world.is_finite() {
+            return Err(GltfError::invalid(format!(
+                "mesh {mesh_index}'s node transform is not finite"
+            )));
+        }
+        for p in 0..mesh.primitives.len() {
+            let Some(id) = self.primitive(mesh_index, p)? else {
+                continue;
+            };
+            let data = &self.parts.meshes[id as usize];
+            let first = self.parts.triangles.len();
+            if (first + data.indices.len()) as u64 > MAX_TRIANGLES {
+                return Err(GltfError::invalid(format!(
+                    "the scene has more than {MAX_TRIANGLES} triangles after instancing"
+                )));
+            }
+            let instance = Instance::new(id, first as u32, to_world);
+            let sign = if instance.mirrors { -1.0 } else { 1.0 };
+            let instance_id = self.parts.instances.len() as u32;
+            for idx in &data.indices {
+                let [a, b, c] = idx.map(|i| instance.point(data.positions[i as usize]));
+                self.parts.triangles.push(Triangle::new(a, b, c));
+                self.parts
+                    .normals
+                    .push(sign * (b - a).cross(c - a).normalize_or_zero());
+                self.parts.material_of.push(data.material);
+                self.parts.instance_of.push(instance_id);
+            }
+            self.parts.instances.push(instance);
+        }
+        Ok(())
+    }
+
+    /// Reads primitive `p` of mesh `m` once (instances share it); `None` when
+    /// it is skipped (points, lines).
+    fn primitive(&mut self, m: usize, p: usize) -> Result<Option<u32>, GltfError> {
+        use json::mesh::{Mode, Semantic};
+        if let Some(&id) = self.mesh_ids.get(&(m, p)) {
+            return Ok(Some(id));
+        }
+        let prim = &self.root.meshes[m].primitives[p];
+        let what = format!("mesh {m} primitive {p}");
+        let mode = *valid(&prim.mode)
+            .ok_or_else(|| GltfError::invalid(format!("{what}: unknown mode")))?;
+        if !matches!(
+            mode,
+            Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+        ) {
+            self.warn_once(
+                &format!("{mode:?}"),
+                format!("skipping primitives of mode {mode:?} (only triangles are rendered)"),
+            );
+            return Ok(None);
+        }
+        let attr = |s: Semantic| prim.attributes.get(&Checked::Valid(s)).map(|a| a.value());
+        let positions_acc = attr(Semantic::Positions)
+            .ok_or_else(|| GltfError::invalid(format!("{what} has no POSITION")))?;
+        let positions: Vec<Vec3> =
+            read_floats::<3>(self.buffers, positions_acc, &format!("{what} POSITION"))?
+                .into_iter()
+                .map(Vec3::from)
+                .collect();
+        if let Some(i) = positions.iter().position(|v| !v.is_finite()) {
+            return Err(GltfError::invalid(format!(
+                "{what}: POSITION {i} is not finite (NaN or infinite)"
+            )));
+        }
+        let n = positions.len();
+        let read_attr = |name: &str, s: Semantic| -> Result<Option<usize>, GltfError> {
+            match attr(s) {
+                None => Ok(None),
+                Some(a) => {
+                    let count = self.root.accessors.get(a).map_or(0, |x| x.count.0);
+                    if count != n as u64 {
+                        return Err(GltfError::invalid(format!(
+                            "{what}: {name} has {count} elements but POSITION has {n}"
+                        )));
+                    }
+                    Ok(Some(a))
+                }
+            }
+        };
+        let mut data = MeshData {
+            positions,
+            ..MeshData::default()
+        };
+        if let Some(a) = read_attr("NORMAL", Semantic::Normals)? {
+            data.normals = read_floats::<3>(self.buffers, a, &format!("{what} NORMAL"))?
+                .into_iter()
+                .map(|v| Vec3::from(v).normalize_or_zero())
+                .collect();
+            if data.normals.iter().any(|v| !v.is_finite()) {
+                data.normals.clear();
+            }
+        }
+        for set in 0..2u32 {
+            if let Some(a) = read_attr(&format!("TEXCOORD_{set}"), Semantic::TexCoords(set))? {
+                data.uvs[set as usize] =
+                    read_floats::<2>(self.buffers, a, &format!("{what} TEXCOORD_{set}"))?
+                        .into_iter()
+                        .map(|v| {
+                            let v = Vec2::from(v);
+                            if v.is_finite() { v } else { Vec2::ZERO }
+                        })
+                        .collect();
+            }
+        }
+        if let Some(a) = read_attr("COLOR_0", Semantic::Colors(0))? {
+            data.colors = read_floats::<4>(self.buffers, a, &format!("{what} COLOR_0"))?
+                .into_iter()
+                .map(|v| Vec4::from(v).clamp(Vec4::ZERO, Vec4::ONE))
+                .collect();
+        }
+        // Triangles from the index list (or 0..n) by the primitive's mode.
+        let indices = match prim.indices {
+            Some(a) => read_indices(self.buffers, a.value(), &format!("{what} indices"))?,
+            None => (0..n as u32).collect(),
+        };
+        if let Some(&bad) = indices.iter().find(|&&i| i as usize >= n) {
+            return Err(GltfError::invalid(format!(
+                "{what}: index {bad} is out of range (the primitive has {n} vertices)"
+            )));
+        }
+        data.indices = match mode {
+            Mode::Triangles => indices
+                .chunks_exact(3)
+                .map(|c| [c[0], c[1], c[2]])
+                .collect(),
+            Mode::TriangleStrip => (0..indices.len().saturating_sub(2))
+                .map(|i| {
+                    // glTF: p_i = {v_i, v_(i+(1+i%2)), v_(i+(2−i%2))}.
+                    let k = i % 2;
+                    [indices[i], indices[i + 1 + k], indices[i + 2 - k]]
+                })
+                .collect(),
+            _ => (0..indices.len().saturating_sub(2))
+                // glTF: p_i = {v_(i+1), v_(i+2), v_0}.
+                .map(|i| [indices[i + 1], indices[i + 2], indices[0]])
+                .collect(),
+        };
+        data.material = self.material(prim.material.map(|m| m.value()))?;
+        let material = &self.parts.materials[data.material as usize];
+        if let Some((normal_map, _)) = material.normal_texture() {
+            let set = normal_map.tex_coord as usize;
+            data.tangents = match read_attr("TANGENT", Semantic::Tangents)? {
+                Some(a) => Tangents::PerVertex(
+                    read_floats::<4>(self.buffers, a, &format!("{what} TANGENT"))?
+                        .into_iter()
+                        .map(Vec4::from)
+                        .collect(),
+                ),
+                None if !data.uvs[set.min(1)].is_empty() => tangents::generate(&data, set.min(1)),
+                None => Tangents::None,
+            };
+        }
+        let id = self.parts.meshes.len() as u32;
+        self.parts.meshes.push(data);
+        self.mesh_ids.insert((m, p), id);
+        Ok(Some(id))
+    }
+
+    /// The table index of glTF material `index` (None: the default material).
+    fn material(&mut self, index: Option<usize>) -> Result<u32, GltfError> {
+        if let Some(&id) = self.material_ids.get(&index) {
+            return Ok(id);
+        }
+        let material = match index {
+            None => SurfaceMaterial {
+                name: "default".into(),
+                reflectance: Vec3A::ONE,
+                kind: MaterialKind::Gltf(Box::default()),
+                emission: Vec3A::ZERO,
+                emission_texture: None,
+                emits_both_sides: false,
+                alpha: AlphaMode::Opaque,
+            },
+            Some(i) => self.convert_material(i)?,
+        };
+        let id = self.parts.materials.len() as u32;
+        self.parts.materials.push(material);
+        self.material_ids.insert(index, id);
+        Ok(id)
+    }
+
+    fn convert_material(&mut self, i: usize) -> Result<SurfaceMaterial, GltfError> {
+        use json::material::AlphaMode as Mode;
+        let m = self
+            .root
+            .materials
+            .get(i)
+            .ok_or_else(|| GltfError::invalid(format!("material {i} does not exist")))?;
+        let what = format!("material {i}");
+        let pbr = &m.pbr_metallic_roughness;
+        let ext = m.extensions.as_ref();
+        if let Some(e) = ext {
+            for name in e.others.keys() {
+                self.warn_once(name, format!("ignoring the material extension {name}"));
+            }
+        }
+        let finite = |v: f32, name: &str| -> Result<f32, GltfError> {
+            if v.is_finite() {
+                Ok(v)
+            } else {
+                Err(GltfError::invalid(format!("{what}: {name} is not finite")))
+            }
+        };
+        let mut g = GltfMaterial {
+            base_color: Vec4::from(pbr.base_color_factor.0).clamp(Vec4::ZERO, Vec4::ONE),
+            base_color_texture: self.texture(pbr.base_color_texture.as_ref(), &what)?,
+            metallic: finite(pbr.metallic_factor.0, "metallicFactor")?.clamp(0.0, 1.0),
+            roughness: finite(pbr.roughness_factor.0, "roughnessFactor")?.clamp(0.0, 1.0),
+            metallic_roughness_texture: self
+                .texture(pbr.metallic_roughness_texture.as_ref(), &what)?,
+            ..GltfMaterial::default()
+        };
+        if let Some(n) = &m.normal_texture {
+            let transform = n
+                .extensions
+                .as_ref()
+                .and_then(|e| e.others.get("KHR_texture_transform"))
+                .and_then(|v| serde_json::from_value(v.clone()).ok());
+            g.normal_texture =
+                self.texture_parts(n.index.value(), n.tex_coord, transform.as_ref(), &what)?;
+            g.normal_scale = finite(n.scale, "normalTexture.scale")?;
+        }
+        if let Some(e) = ext {
+            if let Some(ior) = &e.ior {
+                let v = finite(ior.ior.0, "ior")?;
+                // glTF: ior 0 means an infinitely dense (fully reflective) medium; keep sane.
+                g.ior = if v == 0.0 { 1e4 } else { v.max(1.0) };
+            }
+            if let Some(s) = &e.specular {
+                g.specular = finite(s.specular_factor.0, "specularFactor")?.clamp(0.0, 1.0);
+                g.specular_texture = self.texture(s.specular_texture.as_ref(), &what)?;
+                g.specular_color = Vec3A::from(s.specular_color_factor.0).max(Vec3A::ZERO);
+                g.specular_color_texture =
+                    self.texture(s.specular_color_texture.as_ref(), &what)?;
+            }
+            if let Some(t) = &e.transmission {
+                g.transmission =
+                    finite(t.transmission_factor.0, "transmissionFactor")?.clamp(0.0, 1.0);
+                g.transmission_texture = self.texture(t.transmission_texture.as_ref(), &what)?;
+            }
+            if let Some(v) = &e.volume {
+                g.thin_walled = v.thickness_factor.0.is_nan() || v.thickness_factor.0 <= 0.0;
+                let color =
+                    Vec3A::from(v.attenuation_color.0).clamp(Vec3A::splat(1e-6), Vec3A::ONE);
+                let distance = v.attenuation_distance.0;
+                if distance.is_finite() && distance > 0.0 {
+                    g.attenuation =
+                        -Vec3A::new(color.x.ln(), color.y.ln(), color.z.ln()) / distance;
+                }
+            }
+        }
+        let strength = ext
+            .and_then(|e| e.emissive_strength.as_ref())
+            .map_or(1.0, |s| s.emissive_strength.0);
+        let emission = Vec3A::from(m.emissive_factor.0) * finite(strength, "emissiveStrength")?;
+        if !(emission.is_finite() && emission.min_element() >= 0.0) {
+            return Err(GltfError::invalid(format!(
+                "{what}: emission {emission} must be finite and >= 0"
+            )));
+        }
+        let emission_texture = self.texture(m.emissive_texture.as_ref(), &what)?;
+        let alpha = match valid(&m.alpha_mode) {
+            Some(Mode::Opaque) | None => AlphaMode::Opaque,
+            Some(Mode::Mask) => AlphaMode::Mask(m.alpha_cutoff.map_or(0.5, |c| c.0)),
+            Some(Mode::Blend) => AlphaMode::Blend,
+        };
+        Ok(SurfaceMaterial {
+            name: m.name.clone().unwrap_or_default(),
+            reflectance: Vec3A::from(g.base_color.truncate()),
+            kind: MaterialKind::Gltf(Box::new(g)),
+            emission,
+            emission_texture,
+            emits_both_sides: m.double_sided,
+            alpha,
+        })
+    }
+
+    /// A texture reference: its image (queued for decoding), sampler, texture
+    /// coordinate set and transform.
+    fn texture(
+        &mut self,
+        info: Option<&json::texture::Info>,
+        what: &str,
+    ) -> Result<Option<TextureRef>, GltfError> {
+        let Some(info) = info else {
+            return Ok(None);
+        };
+        let transform = info
+            .extensions
+            .as_ref()
+            .and_then(|e| e.texture_transform.as_ref());
+        self.texture_parts(info.index.value(), info.tex_coord, transform, what)
+    }
+
+    fn texture_parts(
+        &mut self,
+        t: usize,
+        tex_coord: u32,
+        transform: Option<&json::extensions::texture::TextureTransform>,
+        what: &str,
+    ) -> Result<Option<TextureRef>, GltfError> {
+        let texture = self
+            .root
+            .textures
+            .get(t)
+            .ok_or_else(|| GltfError::invalid(format!("{what}: texture {t} does not exist")))?;
+        let (mut wrap_s, mut wrap_t) = (Wrap::Repeat, Wrap::Repeat);
+        if let Some(s) = texture.sampler {
+            let sampler = self.root.samplers.get(s.value()).ok_or_else(|| {
+                GltfError::invalid(format!("texture {t}: sampler {} does not exist", s.value()))
+            })?;
+            let wrap = |w: &Checked<json::texture::WrappingMode>| match w {
+                Checked::Valid(json::texture::WrappingMode::ClampToEdge) => Wrap::ClampToEdge,
+                Checked::Valid(json::texture::WrappingMode::MirroredRepeat) => Wrap::MirroredRepeat,
+                _ => Wrap::Repeat,
+            };
+            wrap_s = wrap(&sampler.wrap_s);
+            wrap_t = wrap(&sampler.wrap_t);
+        }
+        let image = texture.source.value();
+        if image >= self.root.images.len() {
+            return Err(GltfError::invalid(format!(
+                "texture {t}: image {image} does not exist"
+            )));
+        }
+        let id = match self.image_ids.get(&image) {
+            Some(&id) => id,
+            None => {
+                let id = self.image_sources.len() as u32;
+                let name = self.root.images[image]
+                    .uri
+                    .clone()
+                    .filter(|u| !u.starts_with("data:"))
+                    .unwrap_or_else(|| format!("image {image}"));
+                self.image_sources.push((name, image));
+                self.image_ids.insert(image, id);
+                id
+            }
+        };
+        let mut tex_coord = tex_coord;
+        let mut transform_out = TextureTransform::default();
+        if let Some(tt) = transform {
+            transform_out = TextureTransform {
+                offset: Vec2::from(tt.offset.0),
+                rotation: tt.rotation.0,
+                scale: Vec2::from(tt.scale.0),
+            };
+            if let Some(tc) = tt.tex_coord {
+                tex_coord = tc;
+            }
+        }
+        if tex_coord > 1 {
+            self.warn_once(
+                "texcoord",
+                format!("{what}: texture coordinate sets above 1 are not read; using set 1"),
+            );
+        }
+        Ok(Some(TextureRef {
+            image: id,
+            wrap_s,
+            wrap_t,
+            tex_coord: tex_coord.min(1) as u8,
+            transform: transform_out,
+        }))
+    }
+
+    /// Reads and decodes the queued images (in parallel), picks the key light,
+    /// and returns the parts.
+    fn finish(mut self) -> Result<GltfScene, GltfError> {
+        let mut sources = Vec::with_capacity(self.image_sources.len());
+        for (name, image) in &self.image_sources {
+            let img = &self.root.images[*image];
+            let bytes = match (&img.uri, img.buffer_view) {
+                (Some(uri), _) => read_uri(uri, self.base, &format!("image {image}"))?,
+                (None, Some(view)) => {
+                    let v = view.value();
+                    let view = self.root.buffer_views.get(v).ok_or_else(|| {
+                        GltfError::invalid(format!("image {image}: buffer view {v} does not exist"))
+                    })?;
+                    let buffer = self.buffers.data.get(view.buffer.value()).ok_or_else(|| {
+                        GltfError::invalid(format!(
+                            "image {image}: buffer {} does not exist",
+                            view.buffer.value()
+                        ))
+                    })?;
+                    let start = view.byte_offset.map_or(0, |o| o.0);
+                    let end = start
+                        .checked_add(view.byte_length.0)
+                        .filter(|&e| e <= buffer.len() as u64);
+                    let Some(end) = end else {
+                        return Err(GltfError::invalid(format!(
+                            "image {image}: buffer view {v} lies outside its buffer"
+                        )));
+                    };
+                    buffer[start as usize..end as usize].to_vec()
+                }
+                (None, None) => {
+                    return Err(GltfError::invalid(format!(
+                        "image {image} has neither a URI nor a buffer view"
+                    )));
+                }
+            };
+            sources.push((name.clone(), bytes));
+        }
+        self.parts.textures =
+            TextureStore::decode_all(sources).map_err(|e| GltfError::invalid(e.to_string()))?;
+        let has_punctual_lights = !self.point_lights.is_empty() || !self.parts.lights.is_empty();
+        let mut points = self.point_lights.into_iter();
+        if let Some((position, intensity)) = points.next() {
+            self.parts.light = PointLight {
+                position,
+                power: intensity * (4.0 * std::f32::consts::PI),
+            };
+        }
+        let rest: Vec<Light> = points
+            .map(|(position, intensity)| Light::Point {
+                position,
+                intensity,
+            })
+            .collect();
+        self.parts.lights.splice(0..0, rest);
+        if self.parts.instance_of.iter().all(|&i| i == NO_INSTANCE) {
+            self.parts.instance_of.clear();
+        }
+        Ok(GltfScene {
+            parts: self.parts,
+            has_punctual_lights,
+            warnings: self.warnings,
+        })
+    }
+}
+
+/// The value of a field the JSON parser could read, `None` for an invalid one.
+pub(crate) fn valid<T>(c: &Checked<T>) -> Option<&T> {
+    match c {
+        Checked::Valid(v) => Some(v),
+        Checked::Invalid => None,
+    }
+}
+
+/// A node's local transform: its matrix, or T·R·S.
+fn local_transform(node: &json::Node, index: usize) -> Result<Mat4, GltfError> {
+    let m = if let Some(m) = node.matrix {
+        Mat4::from_cols_array(&m)
+    } else {
+        let t = Vec3::from(node.translation.unwrap_or([0.0; 3]));
+        let r = node.rotation.map_or([0.0, 0.0, 0.0, 1.0], |q| q.0);
+        let s = Vec3::from(node.scale.unwrap_or([1.0; 3]));
+        let q = Quat::from_array(r);
+        let q = if q.length_squared() > 0.0 {
+            q.normalize()
+        } else {
+            Quat::IDENTITY
+        };
+        Mat4::from_scale_rotation_translation(s, q, t)
+    };
+    if !m.is_finite() {
+        return Err(GltfError::invalid(format!(
+            "node {index}'s transform is not finite"
+        )));
+    }
+    Ok(m)
+}

@@ -1,0 +1,71 @@
+//! Tangents for normal mapping when a mesh has none: MikkTSpace, as the glTF
+//! specification requires, run on `(u, 1 − v)` so that the bitangent points
+//! toward decreasing v (up in the image), the convention of
+//! `../shared/specs/scene-conventions.md` (three.js and Filament correct the
+//! raw-UV sign the same way).
+
+use glam::{Vec3, Vec4};
+
+use crate::scene::mesh::{MeshData, Tangents};
+
+struct Input<'a> {
+    mesh: &'a MeshData,
+    set: usize,
+    out: Vec<[Vec4; 3]>,
+}
+
+impl Input<'_> {
+    fn vertex(&self, face: usize, vert: usize) -> usize {
+        self.mesh.indices[face][vert] as usize
+    }
+
+    fn face_normal(&self, face: usize) -> Vec3 {
+        let [a, b, c] = self.mesh.indices[face].map(|i| self.mesh.positions[i as usize]);
+        (b - a).cross(c - a).normalize_or_zero()
+    }
+}
+
+impl mikktspace::Geometry for Input<'_> {
+    fn num_faces(&self) -> usize {
+        self.mesh.indices.len()
+    }
+
+    fn num_vertices_of_face(&self, _face: usize) -> usize {
+        3
+    }
+
+    fn position(&self, face: usize, vert: usize) -> [f32; 3] {
+        self.mesh.positions[self.vertex(face, vert)].to_array()
+    }
+
+    fn normal(&self, face: usize, vert: usize) -> [f32; 3] {
+        match self.mesh.normals.get(self.vertex(face, vert)) {
+            Some(n) => n.to_array(),
+            None => self.face_normal(face).to_array(),
+        }
+    }
+
+    fn tex_coord(&self, face: usize, vert: usize) -> [f32; 2] {
+        let uv = self.mesh.uvs[self.set][self.vertex(face, vert)];
+        [uv.x, 1.0 - uv.y]
+    }
+
+    fn set_tangent_encoded(&mut self, tangent: [f32; 4], face: usize, vert: usize) {
+        self.out[face][vert] = Vec4::from(tangent);
+    }
+}
+
+/// MikkTSpace tangents of `mesh` from texture coordinate set `set`, one per
+/// triangle corner; `Tangents::None` if the generator gives up.
+pub fn generate(mesh: &MeshData, set: usize) -> Tangents {
+    let mut input = Input {
+        mesh,
+        set,
+        out: vec![[Vec4::new(1.0, 0.0, 0.0, 1.0); 3]; mesh.indices.len()],
+    };
+    if mikktspace::generate_tangents(&mut input) {
+        Tangents::PerCorner(input.out)
+    } else {
+        Tangents::None
+    }
+}

@@ -1,0 +1,311 @@
+//! Loading a scene by name or file: the built-in boxes, Wavefront OBJ and glTF
+//! 2.0, with what the command line can add (meshes placed in the box, light
+//! overrides, box materials). A program using the crate gets exactly what
+//! `raylab render` gets.
+
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use glam::{Mat3A, Vec3A};
+use thiserror::Error;
+
+use super::cornell::{self, MaterialChoice};
+use super::framing;
+use super::gltf::{GltfError, load_gltf};
+use super::obj::{ObjError, load_obj};
+use super::transform::Transform;
+use super::{PointLight, Scene, SceneError};
+use crate::camera::{Lens, Y_UP_TOWARDS_MINUS_Z};
+use crate::geometry::triangle::Triangle;
+
+/// What a scene was made from; decides defaults (integrator, image size, tone
+/// mapping) that differ between the lab's scenes and real ones.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SceneKind {
+    /// `cornell` or `cornell-area`.
+    Lab,
+    /// A Wavefront OBJ mesh.
+    Mesh,
+    /// A glTF 2.0 file.
+    Gltf,
+}
+
+/// Options of [`load`].
+#[derive(Clone, Debug, Default)]
+pub struct LoadOptions {
+    /// OBJ meshes to place in the built-in box.
+    pub add: Vec<PathBuf>,
+    /// Their placement: one for all, or one per mesh.
+    pub transforms: Vec<Transform>,
+    /// Materials of the box's parts.
+    pub materials: Vec<(String, MaterialChoice)>,
+    /// The key point light's power per channel, replacing the scene's.
+    pub light_power: Option<f32>,
+    /// The key point light's position, replacing the scene's.
+    pub light_pos: Option<Vec3A>,
+    /// The lab's ambient term, replacing the default.
+    pub ambient: Option<f32>,
+    /// Which of the file's cameras to start from (depth-first order).
+    pub camera: Option<usize>,
+}
+
+/// Where the view starts and how far the viewer's keys move it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct InitialView {
+    /// Camera position.
+    pub position: Vec3A,
+    /// Camera-to-world rotation (columns: right, down, forward).
+    pub rotation: Mat3A,
+    /// Projection.
+    pub lens: Lens,
+    /// Width over height the scene's camera asks for, if any.
+    pub aspect_ratio: Option<f32>,
+    /// Viewer travel per key press.
+    pub step: f32,
+}
+
+/// How big the loaded scene is.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LoadSummary {
+    /// Triangles after instancing.
+    pub triangles: usize,
+    /// Entries in the material table.
+    pub materials: usize,
+    /// Decoded images.
+    pub textures: usize,
+    /// Bytes of decoded images.
+    pub texture_bytes: usize,
+    /// Bytes of geometry, attributes and BVH.
+    pub geometry_bytes: usize,
+    /// Punctual lights (the key light included when it has power).
+    pub punctual_lights: usize,
+    /// Emitting triangles.
+    pub emitters: usize,
+    /// Time to read, decode and build.
+    pub time: Duration,
+}
+
+/// A loaded scene with its starting view.
+#[derive(Clone, Debug)]
+pub struct Loaded {
+    /// The scene.
+    pub scene: Scene,
+    /// What it was made from.
+    pub kind: SceneKind,
+    /// The starting view.
+    pub view: InitialView,
+    /// Its size and load time.
+    pub summary: LoadSummary,
+    /// Things worth telling that did not stop the load.
+    pub warnings: Vec<String>,
+    /// Whether raylab added its default light (a glTF file without punctual lights).
+    pub default_light: bool,
+}
+
+/// Why a scene cannot be loaded; the message names the file.
+#[derive(Debug, Error)]
+pub enum LoadError {
+    /// A Wavefront OBJ file is unreadable or malformed.
+    #[error(transparent)]
+    Obj(#[from] ObjError),
+    /// A glTF file is unreadable or malformed.
+    #[error(transparent)]
+    Gltf(#[from] GltfError),
+    /// The scene's content is invalid.
+    #[error("{name}: {source}")]
+    Scene {
+        /// The scene.
+        name: String,
+        /// What is wrong.
+        source: SceneError,
+    },
+    /// The name is neither a built-in scene nor a known file type.
+    #[error(
+        "scene '{0}': unknown scene (built in: cornell, cornell-area; or a Wavefront .obj, glTF .gltf or .glb file)"
+    )]
+    Unknown(String),
+    /// An option does not fit the scene.
+    #[error("{0}")]
+    Usage(String),
+}
+
+/// Ambient term of mesh and glTF scenes unless the user gives one.
+pub const MESH_AMBIENT: f32 = 0.15;
+
+/// Irradiance (W/m²) of the default light at the centre of a glTF scene that
+/// has no punctual light: a white diffuse surface there has radiance 3/π ≈ 0.95.
+pub const DEFAULT_LIGHT_IRRADIANCE: f32 = 3.0;
+
+/// The kind of file `name` is, by extension.
+fn file_kind(name: &str) -> Option<SceneKind> {
+    let ext = Path::new(name).extension()?.to_str()?.to_ascii_lowercase();
+    match ext.as_str() {
+        "obj" => Some(SceneKind::Mesh),
+        "gltf" | "glb" => Some(SceneKind::Gltf),
+        _ => None,
+    }
+}
+
+/// Loads `name`: `cornell`, `cornell-area`, a `.obj`, `.gltf` or `.glb` file.
+pub fn load(name: &str, options: &LoadOptions) -> Result<Loaded, LoadError> {
+    let start = Instant::now();
+    let scene_err = |source| LoadError::Scene {
+        name: name.to_string(),
+        source,
+    };
+    let kind = match name {
+        "cornell" | "cornell-area" => SceneKind::Lab,
+        _ => file_kind(name).ok_or_else(|| LoadError::Unknown(name.to_string()))?,
+    };
+    if kind != SceneKind::Lab && !options.add.is_empty() {
+        return Err(LoadError::Usage(format!(
+            "--add places meshes in the cornell scene; {name} is a file"
+        )));
+    }
+    if kind != SceneKind::Lab && !options.materials.is_empty() {
+        return Err(LoadError::Usage(format!(
+            "--material names parts of the built-in box, not of {name}"
+        )));
+    }
+    let mut warnings = Vec::new();
+    let mut default_light = false;
+    let (mut scene, view) = match kind {
+        SceneKind::Lab => {
+            let area = name == "cornell-area";
+            let (mut tris, mut rho) = cornell::triangles();
+            if area {
+                cornell::push_area_light(&mut tris, &mut rho);
+            }
+            for (i, path) in options.add.iter().enumerate() {
+                let mut mesh = load_obj(path)?;
+                warnings.append(&mut mesh.warnings);
+                if let Some(t) = options.transforms.get(i).or(options.transforms.first()) {
+                    t.apply(&mut mesh.triangles);
+                }
+                // OBJ faces are counter-clockwise seen from outside; the lab's
+                // one-sided normal wants the opposite order.
+                tris.extend(
+                    mesh.triangles
+                        .iter()
+                        .map(|t| Triangle::new(t.v[0], t.v[2], t.v[1])),
+                );
+                rho.extend(mesh.reflectance);
+            }
+            // cornell-area's point light is off unless given a power.
+            let default_power = if area { 0.0 } else { cornell::LIGHT_POWER };
+            let light = PointLight {
+                position: cornell::LIGHT_POSITION,
+                power: Vec3A::splat(options.light_power.unwrap_or(default_power)),
+            };
+            let default_ambient = if area { 0.0 } else { cornell::AMBIENT };
+            let ambient = Vec3A::splat(options.ambient.unwrap_or(default_ambient));
+            let mut scene = Scene::new(tris, rho, light, ambient).map_err(scene_err)?;
+            if area {
+                cornell::light_area_patch(&mut scene);
+            }
+            for (part, material) in &options.materials {
+                let range = cornell::part(part)
+                    .ok_or_else(|| LoadError::Usage(format!("unknown part '{part}' of the box")))?;
+                material.apply(&mut scene, range);
+            }
+            let view = InitialView {
+                position: cornell::CAMERA_POSITION,
+                rotation: Mat3A::IDENTITY,
+                lens: Lens::LAB,
+                aspect_ratio: None,
+                step: crate::controls::LAB_STEP,
+            };
+            (scene, view)
+        }
+        SceneKind::Mesh => {
+            let mut mesh = load_obj(Path::new(name))?;
+            warnings.append(&mut mesh.warnings);
+            let ambient = options.ambient.unwrap_or(MESH_AMBIENT);
+            let (mut scene, framing) = framing::mesh_scene(mesh, ambient).map_err(scene_err)?;
+            if let Some(p) = options.light_power {
+                scene.light.power = Vec3A::splat(p);
+            }
+            let view = InitialView {
+                position: framing.camera_pos,
+                rotation: framing.base,
+                lens: Lens::LAB,
+                aspect_ratio: None,
+                step: framing.step,
+            };
+            (scene, view)
+        }
+        SceneKind::Gltf => {
+            let loaded = load_gltf(Path::new(name))?;
+            warnings.extend(loaded.warnings);
+            let mut parts = loaded.parts;
+            parts.ambient = Vec3A::splat(options.ambient.unwrap_or(MESH_AMBIENT));
+            let cameras = parts.cameras.len();
+            let mut scene = Scene::from_parts(parts).map_err(scene_err)?;
+            let (lo, hi) = scene.bounds();
+            let framing = framing::frame(lo, hi);
+            let view = match options.camera {
+                Some(i) if i >= cameras => {
+                    return Err(LoadError::Usage(format!(
+                        "--camera {i}: {name} has {cameras} camera{}",
+                        if cameras == 1 { "" } else { "s" }
+                    )));
+                }
+                _ => match scene.cameras.get(options.camera.unwrap_or(0)) {
+                    Some(c) => InitialView {
+                        position: c.position,
+                        rotation: c.rotation,
+                        lens: c.lens,
+                        aspect_ratio: c.aspect_ratio,
+                        step: framing.step,
+                    },
+                    None => InitialView {
+                        position: framing.camera_pos,
+                        rotation: Y_UP_TOWARDS_MINUS_Z,
+                        lens: Lens::LAB,
+                        aspect_ratio: None,
+                        step: framing.step,
+                    },
+                },
+            };
+            if !loaded.has_punctual_lights {
+                // A key light above and to the right of the starting camera,
+                // giving DEFAULT_LIGHT_IRRADIANCE at the scene's centre.
+                let centre = (lo + hi) * 0.5;
+                let radius = scene.radius().max(1e-3);
+                let offset = view.rotation * Vec3A::new(0.5, -0.7, 0.0) * radius;
+                let position = view.position + offset;
+                let r2 = (position - centre).length_squared().max(1e-6);
+                scene.light = PointLight {
+                    position,
+                    power: Vec3A::splat(DEFAULT_LIGHT_IRRADIANCE * 4.0 * std::f32::consts::PI * r2),
+                };
+                default_light = true;
+            }
+            if let Some(p) = options.light_power {
+                scene.light.power = Vec3A::splat(p);
+            }
+            (scene, view)
+        }
+    };
+    if let Some(p) = options.light_pos {
+        scene.light.position = p;
+    }
+    let summary = LoadSummary {
+        triangles: scene.triangles().len(),
+        materials: scene.materials().len(),
+        textures: scene.textures().len(),
+        texture_bytes: scene.textures().memory_bytes(),
+        geometry_bytes: scene.geometry_bytes(),
+        punctual_lights: scene.lights().len() + usize::from(scene.point_power() > 0.0),
+        emitters: scene.emitter_count(),
+        time: start.elapsed(),
+    };
+    Ok(Loaded {
+        scene,
+        kind,
+        view,
+        summary,
+        warnings,
+        default_light,
+    })
+}

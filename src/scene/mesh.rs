@@ -1,0 +1,96 @@
+//! Triangle meshes with vertex attributes, and their instances.
+//!
+//! A mesh keeps its attributes in its own (object) space once, however many
+//! nodes instance it; the BVH gets world-space copies of the positions only,
+//! and attributes are looked up from a hit (triangle, barycentrics) and
+//! transformed by the instance.
+
+use glam::{Affine3A, Mat3A, Vec2, Vec3, Vec3A, Vec4};
+
+/// Tangents of a mesh: from the file (per vertex) or generated (MikkTSpace gives
+/// one per triangle corner).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub enum Tangents {
+    /// None (no normal map needs them).
+    #[default]
+    None,
+    /// `TANGENT` per vertex: xyz and the bitangent sign w.
+    PerVertex(Vec<Vec4>),
+    /// One per triangle corner, in the order of the triangle's indices.
+    PerCorner(Vec<[Vec4; 3]>),
+}
+
+/// A triangle mesh in object space.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct MeshData {
+    /// Vertex positions.
+    pub positions: Vec<Vec3>,
+    /// Triangles as vertex indices, counter-clockwise seen from the front.
+    pub indices: Vec<[u32; 3]>,
+    /// Shading normals per vertex (empty: flat shading with the face normal).
+    pub normals: Vec<Vec3>,
+    /// Tangents for normal mapping.
+    pub tangents: Tangents,
+    /// Texture coordinate sets 0 and 1 (each empty when absent).
+    pub uvs: [Vec<Vec2>; 2],
+    /// `COLOR_0` per vertex (empty when absent).
+    pub colors: Vec<Vec4>,
+    /// Index of the material in the scene's table.
+    pub material: u32,
+}
+
+impl MeshData {
+    /// Bytes held by the mesh's arrays.
+    pub fn memory_bytes(&self) -> usize {
+        use std::mem::size_of_val;
+        let tangents = match &self.tangents {
+            Tangents::None => 0,
+            Tangents::PerVertex(t) => size_of_val(t.as_slice()),
+            Tangents::PerCorner(t) => size_of_val(t.as_slice()),
+        };
+        size_of_val(self.positions.as_slice())
+            + size_of_val(self.indices.as_slice())
+            + size_of_val(self.normals.as_slice())
+            + tangents
+            + size_of_val(self.uvs[0].as_slice())
+            + size_of_val(self.uvs[1].as_slice())
+            + size_of_val(self.colors.as_slice())
+    }
+}
+
+/// A mesh placed in the world.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Instance {
+    /// Index of the mesh.
+    pub mesh: u32,
+    /// The scene's index of the instance's first triangle (its triangles are
+    /// consecutive, in the mesh's order).
+    pub first_triangle: u32,
+    /// Object to world.
+    pub to_world: Affine3A,
+    /// The inverse transpose of the linear part, for normals.
+    pub normal_to_world: Mat3A,
+    /// Whether the transform mirrors (negative determinant): the winding, and so
+    /// the front face and tangents' handedness, flip.
+    pub mirrors: bool,
+}
+
+impl Instance {
+    /// An instance of mesh `mesh` whose triangles start at `first_triangle`.
+    pub fn new(mesh: u32, first_triangle: u32, to_world: Affine3A) -> Self {
+        let linear = to_world.matrix3;
+        Self {
+            mesh,
+            first_triangle,
+            to_world,
+            normal_to_world: linear.inverse().transpose(),
+            mirrors: linear.determinant() < 0.0,
+        }
+    }
+
+    /// A point in world space.
+    #[inline]
+    pub fn point(&self, p: Vec3) -> Vec3A {
+        self.to_world.transform_point3a(p.into())
+    }
+}

@@ -1,0 +1,116 @@
+//! PNG and JPEG decoding into [`Image`]s, with the size checked before any
+//! texel is allocated.
+
+use std::io::Cursor;
+
+use image::{DynamicImage, ImageDecoder, ImageError, ImageFormat, ImageReader, Limits};
+
+use super::{Image, MAX_SIDE, MAX_TEXELS, TextureError};
+
+/// The PNG file signature.
+const PNG_SIGNATURE: &[u8] = b"\x89PNG\r\n\x1a\n";
+/// A JPEG file's start-of-image marker and the first byte of the next marker.
+const JPEG_SIGNATURE: &[u8] = &[0xFF, 0xD8, 0xFF];
+
+/// The decoder's limits: at most [`MAX_SIDE`] texels a side (checked by the
+/// decoders on the header, before they allocate), and allocations bounded by
+/// the largest image allowed in the widest format (RGBA, 16 bits) plus slack
+/// for the decoders' own buffers.
+fn limits() -> Limits {
+    let mut limits = Limits::default();
+    limits.max_image_width = Some(MAX_SIDE);
+    limits.max_image_height = Some(MAX_SIDE);
+    limits.max_alloc = Some(MAX_TEXELS * 8 + (256 << 20));
+    limits
+}
+
+/// The size a header announces, read again for the message of a refused image
+/// (no texel is allocated): a PNG's from its IHDR, which is always the first
+/// chunk and which the decoder has already validated; a JPEG's from its frame
+/// header, through a decoder without limits (which only reads the headers).
+fn header_size(bytes: &[u8], format: ImageFormat) -> Option<(u32, u32)> {
+    if format == ImageFormat::Png {
+        // Signature (8 bytes), chunk length (4), "IHDR", width, height.
+        let field = |at: usize| Some(u32::from_be_bytes(bytes.get(at..at + 4)?.try_into().ok()?));
+        (bytes.get(12..16)? == b"IHDR").then_some((field(16)?, field(20)?))
+    } else {
+        let mut probe = ImageReader::with_format(Cursor::new(bytes), format);
+        probe.no_limits();
+        probe.into_dimensions().ok()
+    }
+}
+
+impl Image {
+    /// Decodes a PNG or JPEG image, telling them apart by their signatures (not
+    /// by a file name); `name` (a file name, a glTF image index…) only labels
+    /// errors.
+    ///
+    /// PNGs of 8 or 16 bits per channel keep their depth; smaller depths and
+    /// palettes are expanded to 8 bits (grey, grey + alpha, RGB or RGBA as the
+    /// file says, a palette with transparency to RGBA). JPEGs decode to 8-bit
+    /// grey or RGB. Colour-space information in the file (ICC profiles, gamma
+    /// chunks) is ignored, as glTF requires: the material slot that uses the
+    /// image decides ([`ColorSpace`](super::ColorSpace)); so is EXIF orientation.
+    ///
+    /// Images wider or taller than [`MAX_SIDE`] or of more than [`MAX_TEXELS`]
+    /// texels are refused from their header, before their texels are allocated.
+    pub fn decode(bytes: &[u8], name: &str) -> Result<Image, TextureError> {
+        let format = if bytes.starts_with(PNG_SIGNATURE) {
+            ImageFormat::Png
+        } else if bytes.starts_with(JPEG_SIGNATURE) {
+            ImageFormat::Jpeg
+        } else {
+            return Err(TextureError::UnknownFormat { name: name.into() });
+        };
+        let decode_error = |cause| TextureError::Decode {
+            name: name.into(),
+            cause,
+        };
+        let too_large = |width, height| TextureError::TooLarge {
+            name: name.into(),
+            width,
+            height,
+        };
+
+        let mut reader = ImageReader::with_format(Cursor::new(bytes), format);
+        reader.limits(limits());
+        let decoder = match reader.into_decoder() {
+            Ok(decoder) => decoder,
+            Err(ImageError::Limits(cause)) => {
+                // Refused from the header; the message names the size it gives.
+                return Err(match header_size(bytes, format) {
+                    Some((width, height)) => too_large(width, height),
+                    None => decode_error(ImageError::Limits(cause)),
+                });
+            }
+            Err(cause) => return Err(decode_error(cause)),
+        };
+        let (width, height) = decoder.dimensions();
+        if width == 0 || height == 0 {
+            return Err(TextureError::Empty { name: name.into() });
+        }
+        if u64::from(width) * u64::from(height) > MAX_TEXELS {
+            return Err(too_large(width, height));
+        }
+        let decoded = DynamicImage::from_decoder(decoder).map_err(decode_error)?;
+        Ok(Self::from_dynamic(decoded))
+    }
+
+    /// Takes over a decoded image's buffer as is (no copy) when its layout is
+    /// one of ours; anything else (not produced by the PNG and JPEG decoders)
+    /// becomes 16-bit RGBA.
+    fn from_dynamic(decoded: DynamicImage) -> Image {
+        let (w, h) = (decoded.width(), decoded.height());
+        match decoded {
+            DynamicImage::ImageLuma8(b) => Self::from_u8(w, h, 1, b.into_raw()),
+            DynamicImage::ImageLumaA8(b) => Self::from_u8(w, h, 2, b.into_raw()),
+            DynamicImage::ImageRgb8(b) => Self::from_u8(w, h, 3, b.into_raw()),
+            DynamicImage::ImageRgba8(b) => Self::from_u8(w, h, 4, b.into_raw()),
+            DynamicImage::ImageLuma16(b) => Self::from_u16(w, h, 1, b.into_raw()),
+            DynamicImage::ImageLumaA16(b) => Self::from_u16(w, h, 2, b.into_raw()),
+            DynamicImage::ImageRgb16(b) => Self::from_u16(w, h, 3, b.into_raw()),
+            DynamicImage::ImageRgba16(b) => Self::from_u16(w, h, 4, b.into_raw()),
+            other => Self::from_u16(w, h, 4, other.into_rgba16().into_raw()),
+        }
+    }
+}
