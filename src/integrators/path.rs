@@ -208,7 +208,8 @@ pub fn radiance_from(
 
         let material = scene.material(prim);
         // Surfaces of two-sided scenes face the ray; one-sided ones (the lab box)
-        // reflect nothing from behind, except glass, which has two sides.
+        // reflect nothing from behind, except glass and the glTF BSDF, which
+        // handle both sides themselves.
         let two_sided_material = two_sided(material);
         let n = if scene.two_sided && !two_sided_material && cos_out < 0.0 {
             -n
@@ -314,9 +315,10 @@ pub fn power_heuristic(a: f32, b: f32) -> f32 {
     }
 }
 
-/// Whether a material scatters light arriving at either side (glass); the others
-/// are one-sided and face the side their normal points to.
+/// Whether a material handles light arriving at either side itself (glass, the
+/// glTF BSDF), so its normal must not be flipped; the others are one-sided and
+/// face the side their normal points to.
 #[inline]
 fn two_sided(material: &Material) -> bool {
-    matches!(material, Material::Dielectric { .. })
+    matches!(material, Material::Dielectric { .. } | Material::Pbr(_))
 }

@@ -16,6 +16,10 @@
 //! * [`Material::Dielectric`] is two-sided and must **not** have its normal flipped:
 //!   `wo.z > 0` means `wo` is outside (in the medium of index 1 the normal points
 //!   into), `wo.z < 0` means inside (the medium of index `ior`).
+//! * [`Material::Pbr`] (the glTF metallic–roughness BSDF, [`pbr`]) decides its
+//!   sides itself and must **not** have its normal flipped either: without a
+//!   refracting volume it is two-sided (mirrored to `+z` for `wo.z < 0`), with
+//!   one it is an interface like [`Material::Dielectric`].
 //!
 //! # Estimator
 //!
@@ -25,6 +29,10 @@
 //! probability of the lobe that was chosen, `specular` is set, and
 //! [`Material::eval`] / [`Material::pdf`] are zero for every direction (a delta lobe
 //! can never be hit by a direction chosen elsewhere, e.g. by light sampling).
+//! A material may mix both kinds ([`Material::Pbr`] when smooth but with a
+//! diffuse part): `eval` and `pdf` then cover its non-delta lobes only, a sample
+//! from a non-delta lobe has the mixture density of those as its `pdf`, and one
+//! from a delta lobe is flagged `specular` as above.
 //!
 //! # Dielectrics and radiance scaling
 //!
@@ -51,8 +59,11 @@
 use glam::{Vec2, Vec3A};
 use std::f32::consts::{FRAC_1_PI, FRAC_PI_4, PI};
 
+pub mod pbr;
 #[cfg(test)]
 pub(crate) mod test_util;
+
+pub use pbr::PbrBsdf;
 
 /// Conductors with `alpha` below this are treated as perfectly smooth (a delta
 /// lobe): GGX at such roughness is numerically a spike that f32 cannot resolve.
@@ -130,6 +141,9 @@ pub enum Material {
         /// channel makes that channel a perfect conductor (Fresnel exactly 1).
         k: Vec3A,
     },
+    /// The glTF 2.0 metallic–roughness BSDF (with the specular, ior, transmission
+    /// and volume extensions); see [`pbr`]. Two-sided: never flip its normal.
+    Pbr(PbrBsdf),
 }
 
 /// One direction drawn by [`Material::sample`].
@@ -347,13 +361,15 @@ impl Material {
     }
 
     /// Whether the material has only delta lobes (mirror, glass, smooth
-    /// conductors): next-event estimation cannot hit them, so an integrator should
-    /// only follow [`Material::sample`].
+    /// conductors, a smooth [`Material::Pbr`] without a diffuse part):
+    /// next-event estimation cannot hit them, so an integrator should only follow
+    /// [`Material::sample`].
     pub fn is_specular(&self) -> bool {
         match *self {
             Material::Diffuse { .. } => false,
             Material::Mirror { .. } | Material::Dielectric { .. } => true,
             Material::RoughConductor { alpha, .. } => Self::is_smooth(alpha),
+            Material::Pbr(ref p) => p.is_specular(),
         }
     }
 
@@ -390,6 +406,7 @@ impl Material {
                 // subnormal cos θo next to G2 = 0 gives 0, not 0 · ∞.
                 finite_or_zero(f * (d * g2) / (4.0 * wo.z))
             }
+            Material::Pbr(ref p) => p.eval(wo, wi),
         }
     }
 
@@ -418,14 +435,15 @@ impl Material {
                 let p = (g1 * ggx_d(alpha, m)) / (4.0 * wo.z);
                 if p.is_finite() { p } else { 0.0 }
             }
+            Material::Pbr(ref p) => p.pdf(wo, wi),
         }
     }
 
     /// Draws `wi` for the outgoing direction `wo` (both local). `u_lobe` chooses
-    /// between reflection and refraction for [`Material::Dielectric`] (unused by the
-    /// others); `u` is a 2D sample in `[0, 1)²`. `None` when nothing is scattered
-    /// (back side of a one-sided material, a sample below the horizon, or a
-    /// degenerate configuration).
+    /// between reflection and refraction for [`Material::Dielectric`] and the lobe
+    /// of [`Material::Pbr`] (unused by the others); `u` is a 2D sample in
+    /// `[0, 1)²`. `None` when nothing is scattered (back side of a one-sided
+    /// material, a sample below the horizon, or a degenerate configuration).
     pub fn sample(&self, wo: Vec3A, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
         match *self {
             Material::Diffuse { reflectance } => {
@@ -499,6 +517,7 @@ impl Material {
                     specular: false,
                 })
             }
+            Material::Pbr(ref p) => p.sample(wo, u_lobe, u),
         }
     }
 
