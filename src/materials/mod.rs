@@ -16,6 +16,10 @@
 //! * [`Material::Dielectric`] is two-sided and must **not** have its normal flipped:
 //!   `wo.z > 0` means `wo` is outside (in the medium of index 1 the normal points
 //!   into), `wo.z < 0` means inside (the medium of index `ior`).
+//! * [`Material::Pbr`] (the glTF metallic–roughness BSDF, [`pbr`]) decides its
+//!   sides itself and must **not** have its normal flipped either: without a
+//!   refracting volume it is two-sided (mirrored to `+z` for `wo.z < 0`), with
+//!   one it is an interface like [`Material::Dielectric`].
 //!
 //! # Estimator
 //!
@@ -25,6 +29,10 @@
 //! probability of the lobe that was chosen, `specular` is set, and
 //! [`Material::eval`] / [`Material::pdf`] are zero for every direction (a delta lobe
 //! can never be hit by a direction chosen elsewhere, e.g. by light sampling).
+//! A material may mix both kinds ([`Material::Pbr`] when smooth but with a
+//! diffuse part): `eval` and `pdf` then cover its non-delta lobes only, a sample
+//! from a non-delta lobe has the mixture density of those as its `pdf`, and one
+//! from a delta lobe is flagged `specular` as above.
 //!
 //! # Dielectrics and radiance scaling
 //!
@@ -48,11 +56,13 @@
 //!
 //! Nothing here allocates.
 
-pub mod pbr;
-pub mod surface;
-
 use glam::{Vec2, Vec3A};
 use std::f32::consts::{FRAC_1_PI, FRAC_PI_4, PI};
+
+pub mod pbr;
+pub mod surface;
+#[cfg(test)]
+pub(crate) mod test_util;
 
 pub use pbr::PbrBsdf;
 
@@ -132,7 +142,8 @@ pub enum Material {
         /// channel makes that channel a perfect conductor (Fresnel exactly 1).
         k: Vec3A,
     },
-    /// The glTF 2.0 metallic–roughness BSDF (see [`pbr`]).
+    /// The glTF 2.0 metallic–roughness BSDF (with the specular, ior, transmission
+    /// and volume extensions); see [`pbr`]. Two-sided: never flip its normal.
     Pbr(PbrBsdf),
 }
 
@@ -351,8 +362,9 @@ impl Material {
     }
 
     /// Whether the material has only delta lobes (mirror, glass, smooth
-    /// conductors): next-event estimation cannot hit them, so an integrator should
-    /// only follow [`Material::sample`].
+    /// conductors, a smooth [`Material::Pbr`] without a diffuse part):
+    /// next-event estimation cannot hit them, so an integrator should only follow
+    /// [`Material::sample`].
     pub fn is_specular(&self) -> bool {
         match *self {
             Material::Diffuse { .. } => false,
@@ -372,7 +384,6 @@ impl Material {
     /// directions on the wrong side and for one-sided materials seen from below.
     pub fn eval(&self, wo: Vec3A, wi: Vec3A) -> Vec3A {
         match *self {
-            Material::Pbr(ref p) => p.eval(wo, wi),
             Material::Diffuse { reflectance } => {
                 if !above(wo) || !above(wi) {
                     return Vec3A::ZERO;
@@ -396,6 +407,7 @@ impl Material {
                 // subnormal cos θo next to G2 = 0 gives 0, not 0 · ∞.
                 finite_or_zero(f * (d * g2) / (4.0 * wo.z))
             }
+            Material::Pbr(ref p) => p.eval(wo, wi),
         }
     }
 
@@ -403,7 +415,6 @@ impl Material {
     /// delta lobes and wherever [`Material::eval`] is zero).
     pub fn pdf(&self, wo: Vec3A, wi: Vec3A) -> f32 {
         match *self {
-            Material::Pbr(ref p) => p.pdf(wo, wi),
             Material::Diffuse { .. } => {
                 if !above(wo) || !above(wi) {
                     return 0.0;
@@ -425,17 +436,17 @@ impl Material {
                 let p = (g1 * ggx_d(alpha, m)) / (4.0 * wo.z);
                 if p.is_finite() { p } else { 0.0 }
             }
+            Material::Pbr(ref p) => p.pdf(wo, wi),
         }
     }
 
     /// Draws `wi` for the outgoing direction `wo` (both local). `u_lobe` chooses
-    /// between reflection and refraction for [`Material::Dielectric`] (unused by the
-    /// others); `u` is a 2D sample in `[0, 1)²`. `None` when nothing is scattered
-    /// (back side of a one-sided material, a sample below the horizon, or a
-    /// degenerate configuration).
+    /// between reflection and refraction for [`Material::Dielectric`] and the lobe
+    /// of [`Material::Pbr`] (unused by the others); `u` is a 2D sample in
+    /// `[0, 1)²`. `None` when nothing is scattered (back side of a one-sided
+    /// material, a sample below the horizon, or a degenerate configuration).
     pub fn sample(&self, wo: Vec3A, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
         match *self {
-            Material::Pbr(ref p) => p.sample(wo, u_lobe, u),
             Material::Diffuse { reflectance } => {
                 if !above(wo) {
                     return None;
@@ -507,6 +518,7 @@ impl Material {
                     specular: false,
                 })
             }
+            Material::Pbr(ref p) => p.sample(wo, u_lobe, u),
         }
     }
 
@@ -548,36 +560,11 @@ impl Material {
 
 #[cfg(test)]
 mod tests {
+    use super::test_util::*;
     use super::*;
-    use crate::sampling::sampler::Rng;
-    use std::f64::consts::PI as PI64;
 
-    fn rng(key: u64) -> Rng {
-        Rng::new(0x5eed, key)
-    }
-
-    fn u2(r: &mut Rng) -> Vec2 {
-        Vec2::new(r.next_f32(), r.next_f32())
-    }
-
-    /// A uniformly distributed unit vector.
-    fn sphere(r: &mut Rng) -> Vec3A {
-        let z = 1.0 - 2.0 * r.next_f32();
-        let s = (1.0 - z * z).max(0.0).sqrt();
-        let (sp, cp) = (2.0 * PI * r.next_f32()).sin_cos();
-        Vec3A::new(s * cp, s * sp, z)
-    }
-
-    /// The direction at polar angle `theta_deg` and azimuth `phi` (radians).
-    fn dir(theta_deg: f32, phi: f32) -> Vec3A {
-        let (st, ct) = theta_deg.to_radians().sin_cos();
-        let (sp, cp) = phi.sin_cos();
-        Vec3A::new(st * cp, st * sp, ct)
-    }
-
-    fn rel_err(a: Vec3A, b: Vec3A) -> f32 {
-        ((a - b).abs() / b.abs().max(Vec3A::splat(1e-20))).max_element()
-    }
+    /// All χ² tests of this module, for the Šidák correction.
+    const CHI2_TESTS: u32 = 3 + 3 * 4;
 
     // ---------------------------------------------------------------- Frame
 
@@ -618,130 +605,6 @@ mod tests {
 
     // ------------------------------------------------- χ² goodness of fit
 
-    const COS_BINS: usize = 10;
-    const PHI_BINS: usize = 20;
-    /// All χ² tests of this module, for the Šidák correction.
-    const CHI2_TESTS: u32 = 3 + 3 * 4;
-    const CHI2_SAMPLES: usize = 500_000;
-
-    fn bin_of(w: Vec3A) -> usize {
-        let c = ((w.z.clamp(-1.0, 1.0) + 1.0) * 0.5 * COS_BINS as f32) as usize;
-        let mut phi = w.y.atan2(w.x);
-        if phi < 0.0 {
-            phi += 2.0 * PI;
-        }
-        let p = (phi / (2.0 * PI) * PHI_BINS as f32) as usize;
-        c.min(COS_BINS - 1) * PHI_BINS + p.min(PHI_BINS - 1)
-    }
-
-    /// ∫ pdf dω over each (cos θ, φ) bin (dω = d cos θ dφ): composite 3-point
-    /// Gauss–Legendre (open, so the pdf's jump at the horizon, a bin edge, is
-    /// never sampled), 48 × 96 panels per bin: fine in φ because near grazing
-    /// incidence the reflected lobe is narrow in azimuth (the half vector moves by
-    /// δφ / |wo + wi|, about α / 14 at θo = 88°).
-    fn integrate_bins(pdf: impl Fn(Vec3A) -> f32) -> Vec<f64> {
-        const GL_X: [f64; 3] = [-0.774_596_669_241_483_4, 0.0, 0.774_596_669_241_483_4];
-        const GL_W: [f64; 3] = [5.0 / 9.0, 8.0 / 9.0, 5.0 / 9.0];
-        const PC: usize = 48;
-        const PP: usize = 96;
-        let dc = 2.0 / COS_BINS as f64;
-        let dp = 2.0 * PI64 / PHI_BINS as f64;
-        let mut out = vec![0.0; COS_BINS * PHI_BINS];
-        for ci in 0..COS_BINS {
-            for pi in 0..PHI_BINS {
-                let (hc, hp) = (dc / PC as f64, dp / PP as f64);
-                let mut sum = 0.0;
-                for a in 0..PC {
-                    for (xa, wa) in GL_X.iter().zip(GL_W) {
-                        let c = -1.0 + ci as f64 * dc + (a as f64 + 0.5 + 0.5 * xa) * hc;
-                        let s = (1.0 - c * c).max(0.0).sqrt();
-                        for b in 0..PP {
-                            for (xb, wb) in GL_X.iter().zip(GL_W) {
-                                let p = pi as f64 * dp + (b as f64 + 0.5 + 0.5 * xb) * hp;
-                                let w = Vec3A::new(
-                                    (s * p.cos()) as f32,
-                                    (s * p.sin()) as f32,
-                                    c as f32,
-                                );
-                                sum += wa * wb * pdf(w) as f64;
-                            }
-                        }
-                    }
-                }
-                out[ci * PHI_BINS + pi] = sum * 0.25 * hc * hp;
-            }
-        }
-        out
-    }
-
-    /// ln Γ(x) for x > 0 (Lanczos, g = 7, n = 9).
-    fn ln_gamma(x: f64) -> f64 {
-        const C: [f64; 9] = [
-            0.999_999_999_999_809_9,
-            676.520_368_121_885_1,
-            -1_259.139_216_722_402_8,
-            771.323_428_777_653_1,
-            -176.615_029_162_140_6,
-            12.507_343_278_686_905,
-            -0.138_571_095_265_720_12,
-            9.984_369_578_019_572e-6,
-            1.505_632_735_149_311_6e-7,
-        ];
-        let x = x - 1.0;
-        let mut a = C[0];
-        let t = x + 7.5;
-        for (i, c) in C.iter().enumerate().skip(1) {
-            a += c / (x + i as f64);
-        }
-        0.5 * (2.0 * PI64).ln() + (x + 0.5) * t.ln() - t + a.ln()
-    }
-
-    /// Regularised upper incomplete gamma Q(a, x) (Numerical Recipes §6.2).
-    fn gamma_q(a: f64, x: f64) -> f64 {
-        if x <= 0.0 {
-            return 1.0;
-        }
-        let lg = ln_gamma(a);
-        if x < a + 1.0 {
-            let (mut ap, mut del) = (a, 1.0 / a);
-            let mut sum = del;
-            for _ in 0..10_000 {
-                ap += 1.0;
-                del *= x / ap;
-                sum += del;
-                if del.abs() < sum.abs() * 1e-15 {
-                    break;
-                }
-            }
-            1.0 - sum * (-x + a * x.ln() - lg).exp()
-        } else {
-            let tiny = 1e-300;
-            let mut b = x + 1.0 - a;
-            let mut c = 1.0 / tiny;
-            let mut d = 1.0 / b;
-            let mut h = d;
-            for i in 1..10_000 {
-                let an = -(i as f64) * (i as f64 - a);
-                b += 2.0;
-                d = an * d + b;
-                if d.abs() < tiny {
-                    d = tiny;
-                }
-                c = b + an / c;
-                if c.abs() < tiny {
-                    c = tiny;
-                }
-                d = 1.0 / d;
-                let del = d * c;
-                h *= del;
-                if (del - 1.0).abs() < 1e-15 {
-                    break;
-                }
-            }
-            (-x + a * x.ln() - lg).exp() * h
-        }
-    }
-
     #[test]
     fn chi2_p_value_matches_known_quantiles() {
         // χ²(1) at 3.841459 and χ²(10) at 23.209251 have p = 0.05 and 0.01.
@@ -749,59 +612,6 @@ mod tests {
         assert!((gamma_q(5.0, 23.209_251 / 2.0) - 0.01).abs() < 1e-6);
         assert!((gamma_q(50.0, 135.807 / 2.0) - 0.01).abs() < 1e-5);
         assert!((gamma_q(15.0, 43.773 / 2.0) - 0.05).abs() < 1e-5);
-    }
-
-    /// Pearson's χ² test of `sample` against `pdf` (pbrt/Mitsuba style): cells of
-    /// expected count < 5 are pooled; draws that return `None` form one more cell
-    /// whose expected count is the probability mass the pdf misses. Returns the
-    /// p-value.
-    fn chi2_p_value(m: Material, wo: Vec3A, key: u64) -> f64 {
-        let expected_density = integrate_bins(|wi| m.pdf(wo, wi));
-        let n = CHI2_SAMPLES as f64;
-        let mut expected: Vec<f64> = expected_density.iter().map(|p| p * n).collect();
-        let covered: f64 = expected.iter().sum();
-        expected.push((n - covered).max(0.0));
-        let mut observed = vec![0.0f64; expected.len()];
-        let mut r = rng(key);
-        for _ in 0..CHI2_SAMPLES {
-            let ul = r.next_f32();
-            match m.sample(wo, ul, u2(&mut r)) {
-                Some(s) => observed[bin_of(s.wi)] += 1.0,
-                None => *observed.last_mut().unwrap() += 1.0,
-            }
-        }
-        let mut order: Vec<usize> = (0..expected.len()).collect();
-        order.sort_by(|&a, &b| expected[a].total_cmp(&expected[b]));
-        let (mut chi2, mut dof) = (0.0, 0i32);
-        let (mut pool_obs, mut pool_exp, mut pooled) = (0.0, 0.0, 0);
-        for i in order {
-            let (o, e) = (observed[i], expected[i]);
-            if e == 0.0 {
-                assert!(
-                    o <= n * 1e-5,
-                    "{m:?} wo {wo:?}: {o} samples in cell {i} of zero pdf"
-                );
-                pool_obs += o;
-            } else if e < 5.0 || (pooled > 0 && pool_exp < 5.0) {
-                pool_obs += o;
-                pool_exp += e;
-                pooled += 1;
-            } else {
-                chi2 += (o - e) * (o - e) / e;
-                dof += 1;
-            }
-        }
-        if pool_exp > 0.0 {
-            chi2 += (pool_obs - pool_exp) * (pool_obs - pool_exp) / pool_exp;
-            dof += 1;
-        }
-        dof -= 1;
-        assert!(dof > 0, "{m:?}: too few cells");
-        gamma_q(dof as f64 / 2.0, chi2 / 2.0)
-    }
-
-    fn sidak_threshold() -> f64 {
-        1.0 - (1.0 - 0.01f64).powf(1.0 / CHI2_TESTS as f64)
     }
 
     #[test]
@@ -813,7 +623,10 @@ mod tests {
         for (i, theta) in [0.0, 45.0, 89.0].into_iter().enumerate() {
             let p = chi2_p_value(m, dir(theta, 0.3), 100 + i as u64);
             eprintln!("chi2 diffuse theta_o={theta}: p = {p:.4}");
-            assert!(p > sidak_threshold(), "diffuse, θo = {theta}°: p = {p}");
+            assert!(
+                p > sidak_threshold(CHI2_TESTS),
+                "diffuse, θo = {theta}°: p = {p}"
+            );
             min_p = min_p.min(p);
         }
         eprintln!("chi2 diffuse: min p = {min_p:.4}");
@@ -828,7 +641,10 @@ mod tests {
                 key += 1;
                 let p = chi2_p_value(Material::gold(alpha), dir(theta, 0.3), key);
                 eprintln!("chi2 conductor alpha={alpha} theta_o={theta}: p = {p:.4}");
-                assert!(p > sidak_threshold(), "α = {alpha}, θo = {theta}°: p = {p}");
+                assert!(
+                    p > sidak_threshold(CHI2_TESTS),
+                    "α = {alpha}, θo = {theta}°: p = {p}"
+                );
                 min_p = min_p.min(p);
             }
         }
@@ -953,32 +769,6 @@ mod tests {
     }
 
     // -------------------------------------------------------- furnaces
-
-    /// Mean sample weight (the albedo estimate) and its standard error.
-    fn albedo(m: Material, wo: Vec3A, n: usize, key: u64) -> (f64, f64) {
-        let mut r = rng(key);
-        let (mut s1, mut s2) = (0.0f64, 0.0f64);
-        for _ in 0..n {
-            let ul = r.next_f32();
-            if let Some(s) = m.sample(wo, ul, u2(&mut r)) {
-                let w = s.weight.x as f64;
-                assert!(s.weight.is_finite() && s.weight.min_element() >= 0.0);
-                s1 += w;
-                s2 += w * w;
-            }
-        }
-        let mean = s1 / n as f64;
-        (
-            mean,
-            ((s2 / n as f64 - mean * mean).max(0.0) / n as f64).sqrt(),
-        )
-    }
-
-    /// ∫ eval dω over the upper hemisphere by quadrature (independent of sample()).
-    fn albedo_by_quadrature(m: Material, wo: Vec3A) -> f64 {
-        let f = integrate_bins(|wi| m.eval(wo, wi).x);
-        f.iter().sum()
-    }
 
     #[test]
     fn furnace_diffuse_and_mirror_are_exactly_one() {
