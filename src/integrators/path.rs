@@ -188,7 +188,21 @@ pub fn radiance_from(
     // Beer–Lambert attenuation per unit length of the medium the ray is in.
     let mut medium = Vec3A::ZERO;
     let textures = scene.textures();
-    while let Some(hit) = next_hit {
+    loop {
+        let Some(hit) = next_hit else {
+            // Escaped: the environment (a constant sky) is seen, weighted
+            // against having sampled it directly.
+            let env = scene.environment();
+            if env != Vec3A::ZERO {
+                let weight = if specular {
+                    1.0
+                } else {
+                    power_heuristic(bsdf_pdf, scene.environment_pdf())
+                };
+                l += beta * env * weight;
+            }
+            break;
+        };
         if medium != Vec3A::ZERO {
             beta *= (-medium * hit.t).exp();
         }
@@ -258,6 +272,12 @@ pub fn radiance_from(
                     irradiance,
                     distance,
                 } => (sp.p + to_light * distance, irradiance, None),
+                LightSample::Environment {
+                    to_light,
+                    radiance,
+                    pdf,
+                    distance,
+                } => (sp.p + to_light * distance, radiance / pdf, Some(pdf)),
                 LightSample::Area {
                     position,
                     normal,

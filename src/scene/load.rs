@@ -98,7 +98,8 @@ pub struct Loaded {
     pub summary: LoadSummary,
     /// Things worth telling that did not stop the load.
     pub warnings: Vec<String>,
-    /// Whether raylab added its default light (a glTF file without punctual lights).
+    /// Whether raylab added its default lighting (a key point light and a grey
+    /// sky: a glTF file without punctual lights).
     pub default_light: bool,
 }
 
@@ -132,9 +133,15 @@ pub enum LoadError {
 /// Ambient term of mesh and glTF scenes unless the user gives one.
 pub const MESH_AMBIENT: f32 = 0.15;
 
-/// Irradiance (W/m²) of the default light at the centre of a glTF scene that
-/// has no punctual light: a white diffuse surface there has radiance 3/π ≈ 0.95.
-pub const DEFAULT_LIGHT_IRRADIANCE: f32 = 3.0;
+/// Irradiance (W/m²) of the default key light at the centre of a glTF scene
+/// that has no punctual light: a white diffuse surface facing it has radiance
+/// 2/π ≈ 0.64 from it.
+pub const DEFAULT_LIGHT_IRRADIANCE: f32 = 2.0;
+
+/// Radiance of the default sky around a glTF scene without punctual lights (a
+/// white diffuse surface open to it has radiance 0.4 from it; it is also the
+/// grey background).
+pub const DEFAULT_SKY_RADIANCE: f32 = 0.4;
 
 /// The kind of file `name` is, by extension.
 fn file_kind(name: &str) -> Option<SceneKind> {
@@ -279,6 +286,7 @@ pub fn load(name: &str, options: &LoadOptions) -> Result<Loaded, LoadError> {
                     position,
                     power: Vec3A::splat(DEFAULT_LIGHT_IRRADIANCE * 4.0 * std::f32::consts::PI * r2),
                 };
+                scene.set_environment(Vec3A::splat(DEFAULT_SKY_RADIANCE));
                 default_light = true;
             }
             if let Some(p) = options.light_power {

@@ -141,6 +141,7 @@ pub struct Scene {
     light_powers: Vec<f32>,
     area_lights: AreaLights,
     has_alpha: bool,
+    environment: Vec3A,
     bounds: (Vec3A, Vec3A),
     bvh: Bvh,
     /// The key point light: the lab's light, `direct`'s light and the one the
@@ -323,6 +324,7 @@ impl Scene {
             light_powers: Vec::new(),
             area_lights: AreaLights::default(),
             has_alpha,
+            environment: Vec3A::ZERO,
             bounds,
             bvh,
             light: parts.light,
@@ -478,6 +480,42 @@ impl Scene {
         self.lights = lights;
     }
 
+    /// Radiance of the constant environment that surrounds the scene (rays that
+    /// escape see it; `path` samples it as a light); zero for none.
+    pub fn environment(&self) -> Vec3A {
+        self.environment
+    }
+
+    /// Surrounds the scene with a constant environment of radiance `radiance`
+    /// (finite, non-negative; zero removes it).
+    pub fn set_environment(&mut self, radiance: Vec3A) {
+        self.environment = if radiance.is_finite() {
+            radiance.max(Vec3A::ZERO)
+        } else {
+            Vec3A::ZERO
+        };
+    }
+
+    /// Selection weight of the environment: the power it sends into the
+    /// scene's bounding sphere, `4π² r² L` (a surface facing it gets `πL`).
+    #[inline]
+    fn environment_power(&self) -> f32 {
+        let r = self.radius().max(1e-3);
+        let p = 4.0 * PI * PI * r * r * (self.environment.element_sum() / 3.0);
+        if p.is_finite() && p > 0.0 { p } else { 0.0 }
+    }
+
+    /// The solid-angle density with which [`Scene::sample_light`] picks a
+    /// direction of the environment (selection included): uniform over the sphere.
+    #[inline]
+    pub fn environment_pdf(&self) -> f32 {
+        let total = self.total_power();
+        if total <= 0.0 {
+            return 0.0;
+        }
+        self.environment_power() / total / (4.0 * PI)
+    }
+
     /// Axis-aligned bounds of all triangles.
     pub fn bounds(&self) -> (Vec3A, Vec3A) {
         self.bounds
@@ -535,12 +573,16 @@ impl Scene {
         self.point_power() > 0.0
             || self.light_powers.iter().any(|&p| p > 0.0)
             || self.area_lights.total > 0.0
+            || self.environment_power() > 0.0
     }
 
     /// Sum of the selection weights of all lights.
     #[inline]
     fn total_power(&self) -> f32 {
-        self.point_power() + self.light_powers.iter().sum::<f32>() + self.area_lights.total
+        self.point_power()
+            + self.light_powers.iter().sum::<f32>()
+            + self.environment_power()
+            + self.area_lights.total
     }
 
     /// Picks a light in proportion to its power (the key light: `P`; other
@@ -556,7 +598,10 @@ impl Scene {
             return None;
         }
         let mut x = u_light * total;
-        if x < key || (self.light_powers.is_empty() && self.area_lights.prims.is_empty()) {
+        let env = self.environment_power();
+        if x < key
+            || (self.light_powers.is_empty() && env == 0.0 && self.area_lights.prims.is_empty())
+        {
             let pmf = key / total;
             return Some(LightSample::Point {
                 position: self.light.position,
@@ -575,7 +620,7 @@ impl Scene {
             }
             x -= power;
         }
-        if chosen.is_none() && self.area_lights.prims.is_empty() {
+        if chosen.is_none() && env == 0.0 && self.area_lights.prims.is_empty() {
             chosen = last;
         }
         if let Some(i) = chosen {
@@ -599,6 +644,19 @@ impl Scene {
                 },
             });
         }
+        if chosen.is_none() && env > 0.0 && (x < env || self.area_lights.prims.is_empty()) {
+            // A direction uniformly on the sphere.
+            let z = 1.0 - 2.0 * u.x;
+            let s = (1.0 - z * z).max(0.0).sqrt();
+            let (sin, cos) = (2.0 * PI * u.y).sin_cos();
+            return Some(LightSample::Environment {
+                to_light: Vec3A::new(s * cos, s * sin, z),
+                radiance: self.environment,
+                pdf: env / total / (4.0 * PI),
+                distance: 2.0 * self.radius() + (p - self.bounds.0).length() + 1.0,
+            });
+        }
+        x -= env;
         let lights = &self.area_lights;
         if lights.prims.is_empty() {
             return None;
@@ -828,6 +886,17 @@ pub enum LightSample {
         /// Irradiance on a surface facing it, divided by the probability of
         /// choosing it.
         irradiance: Vec3A,
+        /// How far a shadow ray must go to leave the scene.
+        distance: f32,
+    },
+    /// A direction of the constant environment.
+    Environment {
+        /// Unit direction towards the sky.
+        to_light: Vec3A,
+        /// The environment's radiance.
+        radiance: Vec3A,
+        /// Solid-angle density of the direction (selection included).
+        pdf: f32,
         /// How far a shadow ray must go to leave the scene.
         distance: f32,
     },

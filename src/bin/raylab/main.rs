@@ -165,7 +165,7 @@ fn load(args: &SceneArgs, quiet: bool) -> anyhow::Result<Session> {
         let mib = |b: usize| b as f64 / (1024.0 * 1024.0);
         let plural = |n: usize, what: &str| format!("{n} {what}{}", if n == 1 { "" } else { "s" });
         let lights = if loaded.default_light {
-            "no lights in the file: a default key light".to_string()
+            "no lights in the file: default key light and grey sky".to_string()
         } else {
             plural(s.punctual_lights, "light")
         };
