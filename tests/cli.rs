@@ -701,3 +701,113 @@ fn direct_without_a_point_light_warns() {
     assert!(out.status.success(), "{}", stderr(&out));
     assert!(stderr(&out).contains("--max-depth and --material only change `path`"));
 }
+
+/// The showcase glTF scene committed with the project.
+fn showcase() -> std::path::PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/showcase/showcase.gltf")
+}
+
+#[test]
+fn gltf_scenes_render_the_same_on_any_thread_count_with_a_summary() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = showcase();
+    let scene = scene.to_str().unwrap();
+    let mut images = Vec::new();
+    for threads in ["1", "3"] {
+        let out = format!("t{threads}.exr");
+        let o = raylab(
+            &[
+                "render",
+                scene,
+                "--width",
+                "48",
+                "--height",
+                "32",
+                "--spp",
+                "2",
+                "--threads",
+                threads,
+                "-o",
+                &out,
+            ],
+            dir.path(),
+        );
+        assert!(o.status.success(), "{}", stderr(&o));
+        let err = stderr(&o);
+        let lines: Vec<&str> = err.lines().collect();
+        assert_eq!(lines.len(), 2, "{err}");
+        assert!(
+            lines[0].starts_with("loaded ") && lines[0].contains("24012 triangles"),
+            "{err}"
+        );
+        assert!(lines[1].contains("48x32, path, 2 spp"), "{err}");
+        images.push(std::fs::read(dir.path().join(&out)).unwrap());
+    }
+    assert!(
+        images[0] == images[1],
+        "EXR differs between 1 and 3 threads"
+    );
+    // PNGs are tone mapped with Khronos PBR Neutral by default: brighter
+    // highlights than clamping keeps, so the two PNGs differ.
+    for (name, tonemap) in [("neutral.png", None), ("clamp.png", Some("clamp"))] {
+        let mut args = vec![
+            "render", scene, "--width", "48", "--height", "32", "--quiet", "-o", name,
+        ];
+        if let Some(t) = tonemap {
+            args.extend(["--tonemap", t]);
+        }
+        let o = raylab(&args, dir.path());
+        assert!(o.status.success() && o.stderr.is_empty(), "{}", stderr(&o));
+    }
+    let a = image::open(dir.path().join("neutral.png"))
+        .unwrap()
+        .to_rgb8();
+    let b = image::open(dir.path().join("clamp.png")).unwrap().to_rgb8();
+    assert_eq!(a.dimensions(), (48, 32));
+    assert_ne!(a.as_raw(), b.as_raw());
+}
+
+#[test]
+fn bad_gltf_files_and_cameras_exit_with_one_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let write = |name: &str, text: &str| std::fs::write(dir.path().join(name), text).unwrap();
+    write("broken.gltf", "{ \"asset\": ");
+    write(
+        "needs.gltf",
+        r#"{"asset":{"version":"2.0"},"extensionsRequired":["EXT_future"],"extensionsUsed":["EXT_future"]}"#,
+    );
+    write(
+        "nobuffer.gltf",
+        r#"{"asset":{"version":"2.0"},"buffers":[{"uri":"missing.bin","byteLength":12}]}"#,
+    );
+    let cases: &[(&str, &str)] = &[
+        ("absent.gltf", "absent.gltf"),
+        ("broken.gltf", "not valid glTF JSON"),
+        ("needs.gltf", "EXT_future"),
+        ("nobuffer.gltf", "missing.bin"),
+    ];
+    for (file, says) in cases {
+        let o = raylab(&["render", file, "-o", "x.png"], dir.path());
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{file}: {err}");
+        assert_eq!(err.lines().count(), 1, "{file}: {err}");
+        assert!(err.contains(file) && err.contains(says), "{file}: {err}");
+    }
+    assert!(!dir.path().join("x.png").exists());
+    // --camera belongs to glTF files, and must exist there.
+    let o = raylab(&["render", "--camera", "0"], dir.path());
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    let scene = showcase();
+    let o = raylab(
+        &[
+            "render",
+            scene.to_str().unwrap(),
+            "--camera",
+            "3",
+            "--quiet",
+        ],
+        dir.path(),
+    );
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("has 1 camera"), "{}", stderr(&o));
+}

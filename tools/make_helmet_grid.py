@@ -15,15 +15,16 @@ OUT_DIR/helmet-grid.gltf references the helmet's own buffer
 <shared>/models/DamagedHelmet/DamagedHelmet.bin and its five JPEG textures by relative URIs
 (forward slashes, percent-encoded), re-uses its accessors and buffer views unchanged, and places
 its mesh cols x rows times in a wall-like grid (default 5 x 4 = 20 nodes, 20 x 15,452 = 309,040
-triangles). The helmets use four material variants, one glTF mesh per variant (the four meshes
+triangles). The helmets use six material variants, one glTF mesh per variant (the six meshes
 share the helmet's accessors and differ only in material):
 
   variant 0: the helmet's own material and five JPEG images;
-  variants 1-3: five 1024 x 1024 PNG textures each, generated into OUT_DIR: base colour (tinted
+  variants 1-5: five 1024 x 1024 PNG textures each, generated into OUT_DIR: base colour (tinted
   noise with stripes), metallic-roughness, a normal map (flat with grooves), an emissive map
   (black with a few bright spots) and an occlusion map.
 
-So the scene has 5 + 15 = 20 distinct images. It also has a perspective camera that frames the
+So the scene has 5 + 25 = 30 distinct images, 24 of them used by the renderer (occlusion maps
+are read and ignored). It also has a perspective camera that frames the
 grid and one directional light (3 W/m^2, radiometric as in ../shared/specs/scene-conventions.md).
 Standard library only; the output is the same bytes on every run.
 """
@@ -126,6 +127,10 @@ VARIANTS = {
         "glow": (1.0, 0.45, 0.1), "metal_blocks": 0.6},
     3: {"c0": (0.08, 0.22, 0.08), "c1": (0.70, 0.82, 0.45), "slope": -2, "period": 128,
         "glow": (0.8, 1.0, 0.3), "metal_blocks": 0.15},
+    4: {"c0": (0.25, 0.08, 0.28), "c1": (0.85, 0.55, 0.90), "slope": 2, "period": 80,
+        "glow": (1.0, 0.3, 0.8), "metal_blocks": 0.45},
+    5: {"c0": (0.20, 0.20, 0.22), "c1": (0.90, 0.90, 0.85), "slope": -1, "period": 112,
+        "glow": (1.0, 1.0, 0.6), "metal_blocks": 0.25},
 }
 
 
@@ -175,7 +180,7 @@ def make_metallic_roughness(variant, rng):
 def make_normal(variant, rng):
     """Mostly flat (128, 128, 255); V-grooves along grid lines (every `pitch` pixels), the
     vertical ones tilting x, the horizontal ones tilting y (up in the image is +y)."""
-    pitch = (128, 96, 160)[variant - 1]
+    pitch = (128, 96, 160, 112, 144)[variant - 1]
     half = 6      # groove half-width in pixels
     tilt = 0.45   # sine of the groove walls' tilt
 
@@ -354,7 +359,7 @@ def build(out_dir, shared, cols, rows):
     t0 = time.time()
     generated = {}
     variant_tex = {}
-    for variant in (1, 2, 3):
+    for variant in sorted(VARIANTS):
         variant_tex[variant] = {}
         for k, (kind, make) in enumerate(MAPS):
             name = "helmet-grid-v%d-%s.png" % (variant, kind)
@@ -370,7 +375,7 @@ def build(out_dir, shared, cols, rows):
     mat0 = json.loads(json.dumps(hmat))
     mat0["name"] = "variant 0: DamagedHelmet"
     materials = [mat0]
-    for variant in (1, 2, 3):
+    for variant in sorted(VARIANTS):
         t = variant_tex[variant]
         materials.append({
             "name": "variant %d: generated" % variant,
@@ -384,7 +389,7 @@ def build(out_dir, shared, cols, rows):
         })
 
     meshes = []
-    for v in range(4):
+    for v in range(len(VARIANTS) + 1):
         prim = {"attributes": dict(hprim["attributes"]), "indices": hprim["indices"],
                 "material": v, "mode": 4}
         meshes.append({"name": "helmet variant %d" % v, "primitives": [prim]})
@@ -400,7 +405,7 @@ def build(out_dir, shared, cols, rows):
             y = ((rows - 1) / 2 - j) * spacing
             yaw = math.radians(25.0 * math.sin(1.7 * n + 0.5))
             q_yaw = (0.0, math.sin(yaw / 2), 0.0, math.cos(yaw / 2))
-            nodes.append({"name": "helmet %d" % n, "mesh": n % 4,
+            nodes.append({"name": "helmet %d" % n, "mesh": n % (len(VARIANTS) + 1),
                           "translation": r6((x, y, 0.0)),
                           "rotation": r6(quat_mul(q_yaw, helmet_rot))})
 

@@ -354,25 +354,31 @@ pub fn radiance_from(
     l
 }
 
-/// The shading normal `ns` adjusted so that `wo` lies on the same side of it as
-/// of the geometric normal `ng` (interpolated and normal-mapped normals can
-/// tilt past `wo`, which would make the surface black or leak light): if not,
-/// `ns` is turned within the plane of `ns` and `wo` until `wo` is just above
-/// (or below) it.
+/// The shading normal `ns` (on the front side, like `ng`) adjusted so that the
+/// mirror reflection of `wo` about it stays above the geometric surface
+/// (Keller et al. 2017, "Towards Consistent Normal Mapping"): interpolated and
+/// normal-mapped normals can tilt so far that `wo` falls below the shading
+/// horizon or its reflection below the surface, which would turn the surface
+/// black or leak light. If so, the reflection is moved just above the
+/// geometric horizon and the shading normal becomes the half vector between
+/// `wo` and it.
 #[inline]
 pub fn consistent_normal(ns: Vec3A, ng: Vec3A, wo: Vec3A) -> Vec3A {
-    /// How far above the shading horizon `wo` ends up (a cosine).
+    /// How far above the geometric horizon the corrected reflection lies (a cosine).
     const MARGIN: f32 = 0.01;
-    let side = if wo.dot(ng) >= 0.0 { 1.0 } else { -1.0 };
-    let d = wo.dot(ns);
-    if d * side >= MARGIN {
+    let flip = wo.dot(ng) < 0.0;
+    let (ng_side, ns_side) = if flip { (-ng, -ns) } else { (ng, ns) };
+    let r = 2.0 * wo.dot(ns_side) * ns_side - wo;
+    let d = r.dot(ng_side);
+    if d >= MARGIN {
         return ns;
     }
-    let perp = (ns - wo * d).normalize_or_zero();
-    if perp == Vec3A::ZERO {
+    let tangent = (r - ng_side * d).normalize_or_zero();
+    let h = (wo + tangent * (1.0 - MARGIN * MARGIN).sqrt() + ng_side * MARGIN).normalize_or_zero();
+    if tangent == Vec3A::ZERO || h == Vec3A::ZERO {
         return ng;
     }
-    (perp * (1.0 - MARGIN * MARGIN).sqrt() + wo * (MARGIN * side)).normalize()
+    if flip { -h } else { h }
 }
 
 /// The power heuristic (β = 2) weight of a strategy with density `a` against one
