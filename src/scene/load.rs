@@ -47,6 +47,35 @@ pub struct LoadOptions {
     pub ambient: Option<f32>,
     /// Which of the file's cameras to start from (depth-first order).
     pub camera: Option<usize>,
+    /// When a glTF scene gets raylab's default lighting.
+    pub default_light: DefaultLight,
+}
+
+/// When a glTF scene gets raylab's default lighting (a key light and a grey sky).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum DefaultLight {
+    /// When the file has no punctual light and its emitting surfaces are too
+    /// weak to light it (see [`DEFAULT_LIGHT_EMITTER_RATIO`]): an emitter-lit
+    /// room renders as the file says, a model with a few glowing details gets
+    /// light.
+    #[default]
+    Auto,
+    /// Always (punctual lights and emitters in the file shine too).
+    On,
+    /// Never: only the file's own lights.
+    Off,
+}
+
+impl std::str::FromStr for DefaultLight {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s {
+            "auto" => Ok(Self::Auto),
+            "on" => Ok(Self::On),
+            "off" => Ok(Self::Off),
+            _ => Err(format!("unknown choice '{s}' (expected auto, on or off)")),
+        }
+    }
 }
 
 /// Where the view starts and how far the viewer's keys move it.
@@ -99,7 +128,7 @@ pub struct Loaded {
     /// Things worth telling that did not stop the load.
     pub warnings: Vec<String>,
     /// Whether raylab added its default lighting (a key point light and a grey
-    /// sky: a glTF file without punctual lights).
+    /// sky; see [`DefaultLight`]).
     pub default_light: bool,
 }
 
@@ -137,6 +166,13 @@ pub const MESH_AMBIENT: f32 = 0.15;
 /// that has no punctual light: a white diffuse surface facing it has radiance
 /// 2/π ≈ 0.64 from it.
 pub const DEFAULT_LIGHT_IRRADIANCE: f32 = 2.0;
+
+/// `auto` adds the default lighting to a glTF file without punctual lights
+/// when its emitters' power spread over the scene's bounding sphere,
+/// `P / (4πr²)` (a mean irradiance, independent of the scene's scale), is below
+/// this fraction of [`DEFAULT_LIGHT_IRRADIANCE`]: the emitters are then details
+/// (the DamagedHelmet's lamps), not the scene's lighting.
+pub const DEFAULT_LIGHT_EMITTER_RATIO: f32 = 0.02;
 
 /// Radiance of the default sky around a glTF scene without punctual lights (a
 /// white diffuse surface open to it has radiance 0.4 from it; it is also the
@@ -274,7 +310,15 @@ pub fn load(name: &str, options: &LoadOptions) -> Result<Loaded, LoadError> {
                     },
                 },
             };
-            if !loaded.has_punctual_lights {
+            let r = scene.radius().max(1e-6);
+            let emitter_irradiance = scene.emitted_power() / (4.0 * std::f32::consts::PI * r * r);
+            let weak_emitters = emitter_irradiance < DEFAULT_LIGHT_EMITTER_RATIO * DEFAULT_LIGHT_IRRADIANCE;
+            let add = match options.default_light {
+                DefaultLight::On => true,
+                DefaultLight::Off => false,
+                DefaultLight::Auto => !loaded.has_punctual_lights && weak_emitters,
+            };
+            if add {
                 // A key light above and to the right of the starting camera,
                 // giving DEFAULT_LIGHT_IRRADIANCE at the scene's centre.
                 let centre = (lo + hi) * 0.5;

@@ -838,6 +838,12 @@ impl Scene {
             + self.bvh.memory_bytes()
     }
 
+    /// Total power emitted by the emitting triangles (the estimate they are
+    /// chosen by), W averaged over the colour channels.
+    pub fn emitted_power(&self) -> f32 {
+        self.area_lights.total
+    }
+
     /// How many triangles emit light.
     pub fn emitter_count(&self) -> usize {
         self.area_lights.prims.len()

@@ -88,6 +88,11 @@ pub struct SceneArgs {
     /// node tree, from 0).
     #[arg(long, value_name = "N", allow_hyphen_values = true, value_parser = parse_camera)]
     pub camera: Option<usize>,
+    /// glTF: when to add raylab's default lighting (a key light and a grey sky):
+    /// `auto` (when the file has no punctual light and no emitters strong enough
+    /// to light it), `on` or `off`.
+    #[arg(long, value_name = "WHEN", default_value = "auto", value_parser = parse_default_light)]
+    pub default_light: raylab::scene::load::DefaultLight,
     /// Tone mapping of PNG output and the viewer: `clamp`, `aces` or
     /// `khronos-pbr-neutral` [default: khronos-pbr-neutral for glTF, clamp otherwise].
     #[arg(long, value_name = "OP", value_parser = parse_tonemap)]
@@ -284,6 +289,7 @@ impl SceneArgs {
             light_pos: self.light_pos,
             ambient: self.ambient,
             camera: self.camera,
+            default_light: self.default_light,
         }
     }
 }
@@ -299,6 +305,10 @@ fn is_gltf(scene: &str) -> bool {
 fn parse_camera(s: &str) -> Result<usize, String> {
     s.parse::<usize>()
         .map_err(|_| "expected a camera number from 0".to_string())
+}
+
+fn parse_default_light(s: &str) -> Result<raylab::scene::load::DefaultLight, String> {
+    s.parse()
 }
 
 fn parse_tonemap(s: &str) -> Result<raylab::film::ToneMap, String> {

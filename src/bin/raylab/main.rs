@@ -79,6 +79,7 @@ fn run_default() -> anyhow::Result<()> {
         height: None,
         integrator: None,
         camera: None,
+        default_light: raylab::scene::load::DefaultLight::Auto,
         tonemap: None,
         max_depth: None,
         sampler: raylab::integrators::path::SamplerKind::DEFAULT,
