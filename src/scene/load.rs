@@ -98,7 +98,8 @@ pub struct Loaded {
     pub summary: LoadSummary,
     /// Things worth telling that did not stop the load.
     pub warnings: Vec<String>,
-    /// Whether raylab added its default light (a glTF file without punctual lights).
+    /// Whether raylab added its default light (a glTF file with no light at all:
+    /// neither punctual lights nor emitting surfaces).
     pub default_light: bool,
 }
 
@@ -267,7 +268,7 @@ pub fn load(name: &str, options: &LoadOptions) -> Result<Loaded, LoadError> {
                     },
                 },
             };
-            if !loaded.has_punctual_lights {
+            if !loaded.has_punctual_lights && scene.emitter_count() == 0 {
                 // A key light above and to the right of the starting camera,
                 // giving DEFAULT_LIGHT_IRRADIANCE at the scene's centre.
                 let centre = (lo + hi) * 0.5;
