@@ -312,7 +312,8 @@ pub fn load(name: &str, options: &LoadOptions) -> Result<Loaded, LoadError> {
             };
             let r = scene.radius().max(1e-6);
             let emitter_irradiance = scene.emitted_power() / (4.0 * std::f32::consts::PI * r * r);
-            let weak_emitters = emitter_irradiance < DEFAULT_LIGHT_EMITTER_RATIO * DEFAULT_LIGHT_IRRADIANCE;
+            let weak_emitters =
+                emitter_irradiance < DEFAULT_LIGHT_EMITTER_RATIO * DEFAULT_LIGHT_IRRADIANCE;
             let add = match options.default_light {
                 DefaultLight::On => true,
                 DefaultLight::Off => false,

@@ -193,40 +193,12 @@ pub fn read_floats<const N: usize>(
             read(&bytes[offset + i * stride..], v);
         }
     }
-    if let Some(sparse) = &acc.sparse {
-        let k = sparse.count.0;
-        if k > count {
-            return Err(GltfError::invalid(format!(
-                "{what}: sparse accessor {index} replaces {k} of {count} elements"
-            )));
-        }
-        let ic = super::valid(&sparse.indices.component_type).map(|c| c.0);
-        let Some(ic) = ic.filter(|c| {
-            matches!(
-                c,
-                ComponentType::U8 | ComponentType::U16 | ComponentType::U32
-            )
-        }) else {
-            return Err(GltfError::invalid(format!(
-                "{what}: sparse indices must be unsigned integers"
-            )));
-        };
-        let isize = component_size(ic);
-        let (ibytes, _) = view_bytes(buffers, sparse.indices.buffer_view.value(), what)?;
-        let ioff = sparse.indices.byte_offset.0;
-        checked_layout(ibytes.len(), ioff, k, isize, isize, what)?;
-        let (vbytes, _) = view_bytes(buffers, sparse.values.buffer_view.value(), what)?;
-        let voff = sparse.values.byte_offset.0;
-        checked_layout(vbytes.len(), voff, k, elem, elem, what)?;
-        for j in 0..k as usize {
-            let target =
-                index_component(&ibytes[ioff as usize + j * isize..], ic).unwrap_or(u32::MAX);
-            let Some(v) = out.get_mut(target as usize) else {
-                return Err(GltfError::invalid(format!(
-                    "{what}: sparse index {target} is outside the accessor's {count} elements"
-                )));
-            };
-            read(&vbytes[voff as usize + j * elem..], v);
+    if let Some(sparse) = sparse_part(buffers, acc, elem, what)? {
+        for (target, bytes) in sparse.entries() {
+            let v = out
+                .get_mut(target as usize)
+                .ok_or_else(|| sparse.outside(target))?;
+            read(bytes, v);
         }
     }
     Ok(out)
@@ -246,25 +218,109 @@ pub fn read_indices(buffers: &Buffers, index: usize, what: &str) -> Result<Vec<u
             "{what}: index accessor {index} must hold unsigned integer scalars"
         )));
     }
-    // Sparse indices are rare but legal: read through the float path only when
-    // exact (u32 above 2^24 would round), else directly.
-    if acc.sparse.is_some() {
-        let values = read_floats::<1>(buffers, index, what)?;
-        return Ok(values.into_iter().map(|[v]| v as u32).collect());
-    }
     let count = acc.count.0;
     let size = component_size(c);
-    let Some(view) = acc.buffer_view else {
-        return Ok(vec![0; count as usize]);
+    let mut out = match acc.buffer_view {
+        None => vec![0; count as usize],
+        Some(view) => {
+            let (bytes, stride) = view_bytes(buffers, view.value(), what)?;
+            let stride = stride.unwrap_or(size).max(size);
+            let offset = acc.byte_offset.map_or(0, |o| o.0);
+            checked_layout(bytes.len(), offset, count, size, stride, what)?;
+            let offset = offset as usize;
+            (0..count as usize)
+                .map(|i| index_component(&bytes[offset + i * stride..], c).unwrap_or(0))
+                .collect()
+        }
     };
-    let (bytes, stride) = view_bytes(buffers, view.value(), what)?;
-    let stride = stride.unwrap_or(size).max(size);
-    let offset = acc.byte_offset.map_or(0, |o| o.0);
-    checked_layout(bytes.len(), offset, count, size, stride, what)?;
-    let offset = offset as usize;
-    Ok((0..count as usize)
-        .map(|i| index_component(&bytes[offset + i * stride..], c).unwrap_or(0))
-        .collect())
+    // Sparse substitution, read as integers (a float path would round indices
+    // above 2^24).
+    if let Some(sparse) = sparse_part(buffers, acc, size, what)? {
+        for (target, bytes) in sparse.entries() {
+            let slot = out
+                .get_mut(target as usize)
+                .ok_or_else(|| sparse.outside(target))?;
+            *slot = index_component(bytes, c).unwrap_or(0);
+        }
+    }
+    Ok(out)
+}
+
+/// The sparse part of an accessor: which elements it replaces and the bytes of
+/// their new values, laid out and checked.
+struct SparsePart<'b> {
+    indices: &'b [u8],
+    index_type: ComponentType,
+    values: &'b [u8],
+    value_size: usize,
+    what: String,
+    count: u64,
+}
+
+impl SparsePart<'_> {
+    /// (element replaced, bytes of its new value), in order.
+    fn entries(&self) -> impl Iterator<Item = (u32, &[u8])> {
+        let index_size = component_size(self.index_type);
+        self.indices
+            .chunks_exact(index_size)
+            .zip(self.values.chunks_exact(self.value_size))
+            .map(|(i, v)| (index_component(i, self.index_type).unwrap_or(u32::MAX), v))
+    }
+
+    fn outside(&self, target: u32) -> GltfError {
+        GltfError::invalid(format!(
+            "{}: sparse index {target} is outside the accessor's {} elements",
+            self.what, self.count
+        ))
+    }
+}
+
+/// The checked sparse part of `acc` (values of `value_size` bytes), if any.
+fn sparse_part<'b>(
+    buffers: &Buffers<'b>,
+    acc: &json::Accessor,
+    value_size: usize,
+    what: &str,
+) -> Result<Option<SparsePart<'b>>, GltfError> {
+    let Some(sparse) = &acc.sparse else {
+        return Ok(None);
+    };
+    let (k, count) = (sparse.count.0, acc.count.0);
+    if k == 0 {
+        return Ok(None);
+    }
+    if k > count {
+        return Err(GltfError::invalid(format!(
+            "{what}: a sparse accessor replaces {k} of {count} elements"
+        )));
+    }
+    let index_type = super::valid(&sparse.indices.component_type)
+        .map(|c| c.0)
+        .filter(|c| {
+            matches!(
+                c,
+                ComponentType::U8 | ComponentType::U16 | ComponentType::U32
+            )
+        })
+        .ok_or_else(|| {
+            GltfError::invalid(format!("{what}: sparse indices must be unsigned integers"))
+        })?;
+    let index_size = component_size(index_type);
+    let (ibytes, _) = view_bytes(buffers, sparse.indices.buffer_view.value(), what)?;
+    let ioff = sparse.indices.byte_offset.0;
+    checked_layout(ibytes.len(), ioff, k, index_size, index_size, what)?;
+    let (vbytes, _) = view_bytes(buffers, sparse.values.buffer_view.value(), what)?;
+    let voff = sparse.values.byte_offset.0;
+    checked_layout(vbytes.len(), voff, k, value_size, value_size, what)?;
+    let (k, ioff, voff) = (k as usize, ioff as usize, voff as usize);
+    Ok(Some(SparsePart {
+        indices: &ibytes[ioff..ioff + k * index_size],
+        index_type,
+        values: &vbytes[voff..voff + k * value_size],
+        value_size,
+        what: what.to_string(),
+        count,
+    }))
 }
 
 /// The accessor, with its count checked against the ceiling.
