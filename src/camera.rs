@@ -224,6 +224,35 @@ mod tests {
     }
 
     #[test]
+    fn lenses_give_the_field_of_view_and_parallel_rays() {
+        // A perspective lens of yfov 60°: the top edge's ray is 30° up, the lab
+        // lens keeps f = H exactly.
+        let cam = Camera::with_lens(
+            Vec3A::ZERO,
+            Mat3A::IDENTITY,
+            Lens::from_yfov(60f32.to_radians()),
+            80,
+            40,
+        );
+        let top = cam.ray(40.0, 0.0).dir;
+        assert!(
+            (top.y.atan2(top.z).to_degrees() + 30.0).abs() < 1e-4,
+            "{top}"
+        );
+        assert_eq!(Camera::lab(Vec3A::ZERO, 0.0, 0.0, 7, 9).focal_px, 9.0);
+        // Orthographic with half height 2 on a 40×20 image: 0.2 units a pixel,
+        // every ray along the forward axis from its own point.
+        let rot = crate::camera::Y_UP_TOWARDS_MINUS_Z;
+        let pos = Vec3A::new(1.0, 2.0, 3.0);
+        let cam = Camera::with_lens(pos, rot, Lens::Orthographic { half_height: 2.0 }, 40, 20);
+        let corner = cam.ray(0.0, 0.0);
+        assert_eq!(corner.dir, Vec3A::NEG_Z);
+        assert!((corner.origin - (pos + Vec3A::new(-4.0, 2.0, 0.0))).length() < 1e-6);
+        let centre = cam.ray(20.0, 10.0);
+        assert!((centre.origin - pos).length() < 1e-6);
+    }
+
+    #[test]
     fn yaw_turns_right_and_pitch_looks_up() {
         let cam = Camera::lab(Vec3A::ZERO, 90.0, 0.0, 10, 10);
         assert!((cam.forward() - Vec3A::X).length() < 1e-6);

@@ -139,9 +139,13 @@ pub struct Scene {
     textures: TextureStore,
     lights: Vec<Light>,
     light_powers: Vec<f32>,
+    /// Sum of `light_powers` (kept: the light choice needs it per sample).
+    punctual_power: f32,
     area_lights: AreaLights,
     has_alpha: bool,
     environment: Vec3A,
+    /// The environment's selection weight (see [`Scene::set_environment`]).
+    environment_power: f32,
     bounds: (Vec3A, Vec3A),
     bvh: Bvh,
     /// The key point light: the lab's light, `direct`'s light and the one the
@@ -322,9 +326,11 @@ impl Scene {
             textures: parts.textures,
             lights: Vec::new(),
             light_powers: Vec::new(),
+            punctual_power: 0.0,
             area_lights: AreaLights::default(),
             has_alpha,
             environment: Vec3A::ZERO,
+            environment_power: 0.0,
             bounds,
             bvh,
             light: parts.light,
@@ -477,6 +483,7 @@ impl Scene {
     pub fn set_lights(&mut self, lights: Vec<Light>) {
         let radius = self.radius();
         self.light_powers = lights.iter().map(|l| l.power(radius)).collect();
+        self.punctual_power = self.light_powers.iter().sum();
         self.lights = lights;
     }
 
@@ -487,22 +494,18 @@ impl Scene {
     }
 
     /// Surrounds the scene with a constant environment of radiance `radiance`
-    /// (finite, non-negative; zero removes it).
+    /// (finite, non-negative; zero removes it). Its selection weight among the
+    /// lights is the power it sends into the scene's bounding sphere,
+    /// `4π² r² L` (a surface facing it gets `πL`).
     pub fn set_environment(&mut self, radiance: Vec3A) {
         self.environment = if radiance.is_finite() {
             radiance.max(Vec3A::ZERO)
         } else {
             Vec3A::ZERO
         };
-    }
-
-    /// Selection weight of the environment: the power it sends into the
-    /// scene's bounding sphere, `4π² r² L` (a surface facing it gets `πL`).
-    #[inline]
-    fn environment_power(&self) -> f32 {
         let r = self.radius().max(1e-3);
         let p = 4.0 * PI * PI * r * r * (self.environment.element_sum() / 3.0);
-        if p.is_finite() && p > 0.0 { p } else { 0.0 }
+        self.environment_power = if p.is_finite() && p > 0.0 { p } else { 0.0 };
     }
 
     /// The solid-angle density with which [`Scene::sample_light`] picks a
@@ -513,7 +516,7 @@ impl Scene {
         if total <= 0.0 {
             return 0.0;
         }
-        self.environment_power() / total / (4.0 * PI)
+        self.environment_power / total / (4.0 * PI)
     }
 
     /// Axis-aligned bounds of all triangles.
@@ -573,16 +576,13 @@ impl Scene {
         self.point_power() > 0.0
             || self.light_powers.iter().any(|&p| p > 0.0)
             || self.area_lights.total > 0.0
-            || self.environment_power() > 0.0
+            || self.environment_power > 0.0
     }
 
     /// Sum of the selection weights of all lights.
     #[inline]
     fn total_power(&self) -> f32 {
-        self.point_power()
-            + self.light_powers.iter().sum::<f32>()
-            + self.environment_power()
-            + self.area_lights.total
+        self.point_power() + self.punctual_power + self.environment_power + self.area_lights.total
     }
 
     /// Picks a light in proportion to its power (the key light: `P`; other
@@ -598,7 +598,7 @@ impl Scene {
             return None;
         }
         let mut x = u_light * total;
-        let env = self.environment_power();
+        let env = self.environment_power;
         if x < key
             || (self.light_powers.is_empty() && env == 0.0 && self.area_lights.prims.is_empty())
         {

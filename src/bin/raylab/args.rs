@@ -453,6 +453,43 @@ mod tests {
     use super::*;
 
     #[test]
+    fn image_size_defaults_follow_the_scene_and_the_camera() {
+        let args = |w: Option<u32>, h: Option<u32>| {
+            let mut a = Cli::try_parse_from(["raylab", "render"]).unwrap();
+            let Some(Command::Render(r)) = a.command.take() else {
+                unreachable!()
+            };
+            SceneArgs {
+                width: w,
+                height: h,
+                ..r.scene
+            }
+        };
+        let none = args(None, None);
+        assert_eq!(none.size(SceneKind::Lab, None), Ok((500, 500)));
+        assert_eq!(none.size(SceneKind::Gltf, None), Ok((800, 600)));
+        assert_eq!(none.size(SceneKind::Gltf, Some(1.5)), Ok((900, 600)));
+        assert_eq!(none.size(SceneKind::Gltf, Some(1.777)), Ok((1066, 600)));
+        assert_eq!(
+            args(Some(300), None).size(SceneKind::Gltf, Some(1.5)),
+            Ok((300, 200))
+        );
+        assert_eq!(
+            args(None, Some(100)).size(SceneKind::Gltf, None),
+            Ok((133, 100))
+        );
+        assert_eq!(
+            args(Some(64), Some(48)).size(SceneKind::Gltf, Some(1.5)),
+            Ok((64, 48))
+        );
+        assert!(
+            args(None, Some(16000))
+                .size(SceneKind::Gltf, Some(1.5))
+                .is_err()
+        );
+    }
+
+    #[test]
     fn vectors_need_three_finite_numbers() {
         assert_eq!(parse_vec3("-0.3,0.2,-2"), Ok(Vec3A::new(-0.3, 0.2, -2.0)));
         assert_eq!(parse_vec3(" 1, 2 ,3"), Ok(Vec3A::new(1.0, 2.0, 3.0)));
