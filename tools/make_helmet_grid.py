@@ -34,11 +34,11 @@ import json
 import math
 import os
 import random
-import struct
 import sys
 import time
 import urllib.parse
-import zlib
+
+from gltfgen import look_along, normalize, png_bytes, quat_mul, r6
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 DEFAULT_SHARED = os.path.join(os.path.dirname(ROOT), "shared")
@@ -52,22 +52,8 @@ REPEAT, LINEAR, LINEAR_MIPMAP_LINEAR = 10497, 9729, 9987
 # ---------------------------------------------------------------------------------------------
 # PNG writing (8-bit RGB, filter 0 on every row)
 
-def _png_chunk(kind, data):
-    return (struct.pack(">I", len(data)) + kind + data
-            + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF))
 
 
-def png_bytes(width, height, rows):
-    """PNG bytes of an 8-bit RGB image from `height` rows of width*3 bytes, top row first."""
-    raw = bytearray()
-    for row in rows:
-        assert len(row) == width * 3
-        raw += b"\x00"
-        raw += row
-    assert len(raw) == height * (width * 3 + 1)
-    ihdr = struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0)
-    return (b"\x89PNG\r\n\x1a\n" + _png_chunk(b"IHDR", ihdr)
-            + _png_chunk(b"IDAT", zlib.compress(bytes(raw), 6)) + _png_chunk(b"IEND", b""))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -152,7 +138,7 @@ def make_base_colour(variant, rng):
         line = rotate(base, look["slope"] * y)
         r_t, g_t, b_t = tables[int(row_wave[y] * (levels - 1) + 0.5)]
         rows.append(interleave(line.translate(r_t), line.translate(g_t), line.translate(b_t)))
-    return png_bytes(SIZE, SIZE, rows)
+    return png_bytes(SIZE, SIZE, rows, level=6)
 
 
 def make_metallic_roughness(variant, rng):
@@ -174,7 +160,7 @@ def make_metallic_roughness(variant, rng):
     for y in range(SIZE):
         g = col_b.translate(rough_tables[int(row_noise[y] * (levels - 1) + 0.5)])
         rows.append(interleave(red, g, metal_rows[y // block]))
-    return png_bytes(SIZE, SIZE, rows)
+    return png_bytes(SIZE, SIZE, rows, level=6)
 
 
 def make_normal(variant, rng):
@@ -211,7 +197,7 @@ def make_normal(variant, rng):
             rows.append(above * SIZE)
         else:
             rows.append(base)
-    return png_bytes(SIZE, SIZE, rows)
+    return png_bytes(SIZE, SIZE, rows, level=6)
 
 
 def make_emissive(variant, rng):
@@ -236,7 +222,7 @@ def make_emissive(variant, rng):
                     row = bytearray(black)
                 row[3 * x0:3 * x1] = colour * (x1 - x0)
         rows.append(bytes(row) if row is not None else black)
-    return png_bytes(SIZE, SIZE, rows)
+    return png_bytes(SIZE, SIZE, rows, level=6)
 
 
 def make_occlusion(variant, rng):
@@ -255,7 +241,7 @@ def make_occlusion(variant, rng):
         strength = max(0.0, row[y] - 0.45) / 0.55
         grey = col_b.translate(tables[int(strength * (levels - 1) + 0.5)])
         rows.append(interleave(grey, grey, grey))
-    return png_bytes(SIZE, SIZE, rows)
+    return png_bytes(SIZE, SIZE, rows, level=6)
 
 
 MAPS = [("basecolor", make_base_colour), ("metalrough", make_metallic_roughness),
@@ -265,60 +251,16 @@ MAPS = [("basecolor", make_base_colour), ("metalrough", make_metallic_roughness)
 # ---------------------------------------------------------------------------------------------
 # Geometry helpers
 
-def normalize(a):
-    n = math.sqrt(sum(c * c for c in a))
-    return tuple(c / n for c in a)
 
 
-def cross(a, b):
-    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
 
 
-def quat_from_axes(x, y, z):
-    """Unit quaternion (x, y, z, w), w >= 0, of the rotation matrix with columns x, y, z."""
-    m00, m10, m20 = x
-    m01, m11, m21 = y
-    m02, m12, m22 = z
-    tr = m00 + m11 + m22
-    if tr > 0:
-        s = math.sqrt(tr + 1.0) * 2
-        q = ((m21 - m12) / s, (m02 - m20) / s, (m10 - m01) / s, 0.25 * s)
-    elif m00 > m11 and m00 > m22:
-        s = math.sqrt(1.0 + m00 - m11 - m22) * 2
-        q = (0.25 * s, (m01 + m10) / s, (m02 + m20) / s, (m21 - m12) / s)
-    elif m11 > m22:
-        s = math.sqrt(1.0 + m11 - m00 - m22) * 2
-        q = ((m01 + m10) / s, 0.25 * s, (m12 + m21) / s, (m02 - m20) / s)
-    else:
-        s = math.sqrt(1.0 + m22 - m00 - m11) * 2
-        q = ((m02 + m20) / s, (m12 + m21) / s, 0.25 * s, (m10 - m01) / s)
-    q = normalize(q)
-    return q if q[3] >= 0 else tuple(-c for c in q)
 
 
-def look_along(direction, up=(0.0, 1.0, 0.0)):
-    """Rotation pointing a node's local -z along `direction` with local +y towards `up`."""
-    z = normalize(tuple(-c for c in direction))
-    x = normalize(cross(up, z))
-    y = cross(z, x)
-    return quat_from_axes(x, y, z)
 
 
-def quat_mul(a, b):
-    ax, ay, az, aw = a
-    bx, by, bz, bw = b
-    q = (aw * bx + ax * bw + ay * bz - az * by,
-         aw * by - ax * bz + ay * bw + az * bx,
-         aw * bz + ax * by - ay * bx + az * bw,
-         aw * bw - ax * bx - ay * by - az * bz)
-    return q if q[3] >= 0 else tuple(-c for c in q)
 
 
-def r6(v):
-    if isinstance(v, (list, tuple)):
-        return [r6(c) for c in v]
-    out = round(v, 6)
-    return 0.0 if out == 0 else out
 
 
 def uri_from(out_dir, target):
