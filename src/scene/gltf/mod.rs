@@ -44,8 +44,9 @@ pub const SUPPORTED_EXTENSIONS: [&str; 8] = [
 pub const MAX_NODE_DEPTH: usize = 1024;
 /// Largest file (JSON, GLB, buffer or image) read, in bytes.
 pub const MAX_FILE_BYTES: u64 = 1 << 32;
-/// Most triangles a scene may have after instancing.
-pub const MAX_TRIANGLES: u64 = 1 << 28;
+/// Most triangles a scene may have after instancing (2^26: about 10 GB with
+/// the BVH and per-triangle data, within a workstation's memory).
+pub const MAX_TRIANGLES: u64 = 1 << 26;
 
 /// Why a glTF file cannot be loaded.
 #[derive(Debug, Error)]
