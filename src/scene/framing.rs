@@ -29,11 +29,15 @@ pub const MESH_IRRADIANCE: f32 = 0.5;
 const HALF_FOV_TAN: f32 = 0.5;
 
 /// Frames the box `lo`–`hi` from the +z side, looking along −z with +y up, so that
-/// the box's bounding sphere fits the lab camera's vertical field of view.
+/// every corner of the box lies within 90 % of the lab camera's half field of
+/// view (vertically, and horizontally for images at least as wide as high).
 pub fn frame(lo: Vec3A, hi: Vec3A) -> Framing {
     let centre = (lo + hi) * 0.5;
     let radius = ((hi - lo).length() * 0.5).max(1e-6);
-    let distance = 1.1 * radius / (HALF_FOV_TAN / (1.0 + HALF_FOV_TAN * HALF_FOV_TAN).sqrt());
+    // The nearest corners (depth d − half.z) are the widest seen: their offset
+    // over depth must stay within tan(half field of view) / 1.1.
+    let half = (hi - lo) * 0.5;
+    let distance = half.z + 1.1 * half.x.max(half.y).max(1e-6) / HALF_FOV_TAN;
     let camera_pos = centre + Vec3A::new(0.0, 0.0, distance);
     let light_pos = camera_pos + Vec3A::new(0.5, 0.7, 0.0) * radius;
     let r2 = (light_pos - centre).length_squared();
