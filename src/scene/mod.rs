@@ -358,9 +358,16 @@ impl Scene {
     #[inline]
     pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
         if self.has_alpha {
-            return self.intersect(ray, t_max).is_some();
+            return self.occluded_through_holes(ray, t_max);
         }
         self.bvh.occluded(ray, t_max)
+    }
+
+    /// [`Scene::occluded`] in a scene with alpha holes.
+    #[cold]
+    #[inline(never)]
+    fn occluded_through_holes(&self, ray: &Ray, t_max: f32) -> bool {
+        self.intersect(ray, t_max).is_some()
     }
 
     /// The closest hits of four coherent rays (say, a 2×2 pixel quad), traced
@@ -369,9 +376,17 @@ impl Scene {
     #[inline]
     pub fn intersect4(&self, rays: &[Ray; 4], t_max: f32) -> [Option<Hit>; 4] {
         if self.has_alpha {
-            return rays.map(|r| self.intersect(&r, t_max));
+            return self.intersect4_one_by_one(rays, t_max);
         }
         self.bvh.intersect4(rays, t_max)
+    }
+
+    /// [`Scene::intersect4`] in a scene with alpha holes: ray by ray (kept out of
+    /// line so that the common path stays small).
+    #[cold]
+    #[inline(never)]
+    fn intersect4_one_by_one(&self, rays: &[Ray; 4], t_max: f32) -> [Option<Hit>; 4] {
+        rays.map(|r| self.intersect(&r, t_max))
     }
 
     /// Whether anything blocks each of four rays within its own `t_max`; lanes
@@ -379,14 +394,27 @@ impl Scene {
     #[inline]
     pub fn occluded4(&self, rays: &[Ray; 4], t_max: [f32; 4], active: [bool; 4]) -> [bool; 4] {
         if self.has_alpha {
-            return std::array::from_fn(|i| active[i] && self.occluded(&rays[i], t_max[i]));
+            return self.occluded4_one_by_one(rays, t_max, active);
         }
         self.bvh.occluded4(rays, t_max, active)
+    }
+
+    /// [`Scene::occluded4`] in a scene with alpha holes: ray by ray.
+    #[cold]
+    #[inline(never)]
+    fn occluded4_one_by_one(
+        &self,
+        rays: &[Ray; 4],
+        t_max: [f32; 4],
+        active: [bool; 4],
+    ) -> [bool; 4] {
+        std::array::from_fn(|i| active[i] && self.occluded(&rays[i], t_max[i]))
     }
 
     /// Follows a ray past alpha holes: `first` is its closest hit; returns the
     /// first hit that is not a hole, with `t` measured along the original ray.
     #[cold]
+    #[inline(never)]
     fn through_holes(&self, ray: &Ray, t_max: f32, first: Hit) -> Option<Hit> {
         let mut hit = first;
         let mut current = *ray;
