@@ -753,11 +753,19 @@ impl Scene {
         let m = self.material(hit.prim);
         match m.kind {
             crate::materials::surface::MaterialKind::Fixed(_) => m.reflectance,
-            _ => Vec3A::from(
-                m.base_color(&self.attributes(hit), &self.textures)
-                    .truncate(),
-            ),
+            _ => self.textured_base_color(hit),
         }
+    }
+
+    /// [`Scene::base_color`] of a glTF material (out of line: the lab's
+    /// `direct` loop stays small).
+    #[inline(never)]
+    fn textured_base_color(&self, hit: &Hit) -> Vec3A {
+        let m = self.material(hit.prim);
+        Vec3A::from(
+            m.base_color(&self.attributes(hit), &self.textures)
+                .truncate(),
+        )
     }
 
     /// Texture coordinates and colour at a hit (defaults for bare triangles).
