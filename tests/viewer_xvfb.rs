@@ -113,6 +113,56 @@ impl Session {
     }
 }
 
+/// Starts Xvfb and `raylab` with `args` on it, in a fresh folder, and finds and
+/// focuses its window.
+fn open_viewer(args: &[&str]) -> (Killed, Killed, Session, tempfile::TempDir) {
+    let (xvfb, display) = start_xvfb();
+    let dir = tempfile::tempdir().unwrap();
+    let log = std::fs::File::create(dir.path().join("viewer.log")).unwrap();
+    let viewer = Killed(
+        Command::new(env!("CARGO_BIN_EXE_raylab"))
+            .args(args)
+            .current_dir(dir.path())
+            .env("DISPLAY", &display)
+            .stdin(Stdio::null())
+            .stderr(log)
+            .spawn()
+            .unwrap(),
+    );
+    let mut s = Session {
+        display,
+        dir: dir.path().to_owned(),
+        window: String::new(),
+        shots: 0,
+    };
+    s.window = s
+        .xdotool(&["search", "--sync", "--name", "^raylab"])
+        .lines()
+        .next()
+        .unwrap()
+        .to_string();
+    s.xdotool(&["windowfocus", "--sync", &s.window]);
+    (xvfb, viewer, s, dir)
+}
+
+/// The viewer tests run one at a time: each starts its own Xvfb, and two
+/// starting together could settle on the same display.
+static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+/// Whether the viewer test may run: Xvfb and xdotool present, not skipped.
+fn viewer_test_enabled() -> bool {
+    if std::env::var_os("RAYLAB_SKIP_XVFB").is_some() {
+        eprintln!("RAYLAB_SKIP_XVFB is set: viewer test skipped");
+        return false;
+    }
+    assert!(
+        have("Xvfb") && have("xdotool"),
+        "the viewer test needs Xvfb and xdotool: apt-get install xvfb xdotool \
+         (or set RAYLAB_SKIP_XVFB=1 to skip it)"
+    );
+    true
+}
+
 /// Mean of one channel (0 = red ...) over a rectangle.
 fn mean(img: &RgbImage, x0: u32, x1: u32, y0: u32, y1: u32, channel: usize) -> f64 {
     let mut sum = 0.0;
@@ -139,41 +189,12 @@ fn blue_block(img: &RgbImage) -> (f64, usize) {
 
 #[test]
 fn viewer_under_xvfb_responds_to_keys_and_mouse() {
-    if std::env::var_os("RAYLAB_SKIP_XVFB").is_some() {
-        eprintln!("RAYLAB_SKIP_XVFB is set: viewer test skipped");
+    if !viewer_test_enabled() {
         return;
     }
-    assert!(
-        have("Xvfb") && have("xdotool"),
-        "the viewer test needs Xvfb and xdotool: apt-get install xvfb xdotool \
-         (or set RAYLAB_SKIP_XVFB=1 to skip it)"
-    );
-    let (_xvfb, display) = start_xvfb();
-    let dir = tempfile::tempdir().unwrap();
-    let log = std::fs::File::create(dir.path().join("viewer.log")).unwrap();
-    let mut viewer = Killed(
-        Command::new(env!("CARGO_BIN_EXE_raylab"))
-            .args(["view", "--width", "200", "--height", "200"])
-            .current_dir(dir.path())
-            .env("DISPLAY", &display)
-            .stdin(Stdio::null())
-            .stderr(log)
-            .spawn()
-            .unwrap(),
-    );
-    let mut s = Session {
-        display,
-        dir: dir.path().to_owned(),
-        window: String::new(),
-        shots: 0,
-    };
-    s.window = s
-        .xdotool(&["search", "--sync", "--name", "^raylab"])
-        .lines()
-        .next()
-        .unwrap()
-        .to_string();
-    s.xdotool(&["windowfocus", "--sync", &s.window]);
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let (_xvfb, mut viewer, mut s, dir) =
+        open_viewer(&["view", "--width", "200", "--height", "200"]);
 
     let base = s.screenshot();
     assert_eq!(base.dimensions(), (200, 200));
@@ -297,4 +318,81 @@ fn viewer_under_xvfb_responds_to_keys_and_mouse() {
     let log = std::fs::read_to_string(dir.path().join("viewer.log")).unwrap();
     assert!(status.success(), "viewer exited with {status}: {log}");
     assert!(log.contains("saved raylab-0001.png"), "{log}");
+}
+
+/// The samples per pixel the title shows so far.
+fn title_spp(s: &Session) -> u32 {
+    let title = s.xdotool(&["getwindowname", &s.window]);
+    title
+        .rsplit(" · ")
+        .next()
+        .unwrap()
+        .trim_end_matches(" spp")
+        .parse()
+        .unwrap_or(0)
+}
+
+#[test]
+fn viewer_opens_a_gltf_scene_through_its_camera() {
+    if !viewer_test_enabled() {
+        return;
+    }
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/showcase/showcase.gltf");
+    let scene = scene.to_str().unwrap();
+    let (_xvfb, mut viewer, mut s, dir) =
+        open_viewer(&["view", scene, "--width", "90", "--height", "60"]);
+    // glTF scenes start with `path`.
+    wait_for("path samples", Duration::from_secs(30), || {
+        title_spp(&s) >= 4
+    });
+    let title = s.xdotool(&["getwindowname", &s.window]);
+    assert!(title.contains("path") && title.contains("90×60"), "{title}");
+    // Key 1: `flat`, refined to its 64 samples, shows exactly what `raylab render`
+    // gives through the file's camera (the same samples, tone mapped alike).
+    s.keys(&["1"]);
+    wait_for("64 flat samples", Duration::from_secs(30), || {
+        s.xdotool(&["getwindowname", &s.window]).contains("flat") && title_spp(&s) >= 64
+    });
+    let shot = s.screenshot();
+    let render = Command::new(env!("CARGO_BIN_EXE_raylab"))
+        .args([
+            "render",
+            scene,
+            "--integrator",
+            "flat",
+            "--width",
+            "90",
+            "--height",
+            "60",
+        ])
+        .args(["--spp", "64", "--quiet", "-o", "flat.png"])
+        .current_dir(dir.path())
+        .status()
+        .unwrap();
+    assert!(render.success());
+    let want = image::open(dir.path().join("flat.png")).unwrap().to_rgb8();
+    assert_eq!(shot.dimensions(), (90, 60));
+    // f32 sums in the viewer, f64 in render: codes may differ by one.
+    let worst = shot
+        .as_raw()
+        .iter()
+        .zip(want.as_raw())
+        .map(|(a, b)| a.abs_diff(*b))
+        .max()
+        .unwrap();
+    assert!(
+        worst <= 1,
+        "screenshot differs from the render by {worst} codes"
+    );
+    assert!(mean(&shot, 0, 90, 0, 60, 0) > 40.0, "the view is dark");
+    s.xdotool(&["keydown", "--window", &s.window, "Escape"]);
+    let start = Instant::now();
+    while viewer.0.try_wait().unwrap().is_none() {
+        assert!(
+            start.elapsed() < Duration::from_secs(10),
+            "viewer did not quit on Esc"
+        );
+        std::thread::sleep(Duration::from_millis(50));
+    }
 }
