@@ -273,8 +273,7 @@ pub fn lookup(
     textures: &TextureStore,
     space: ColorSpace,
 ) -> Vec4 {
-    let uv = t.transform.apply(attrs.uv[(t.tex_coord as usize).min(1)]);
-    textures.get(t.image).lookup(uv, t.wrap_s, t.wrap_t, space)
+    textures.lookup(t, attrs.uv[(t.tex_coord as usize).min(1)], space)
 }
 
 /// Every texture a material refers to.

@@ -573,6 +573,23 @@ impl Scene {
         self.material(prim).emission
     }
 
+    /// Radiance emitted by triangle `prim` at barycentrics `(b1, b2)`, textures
+    /// applied (before the side test).
+    #[inline]
+    pub fn emission_at(&self, prim: u32, b1: f32, b2: f32) -> Vec3A {
+        let m = self.material(prim);
+        if m.emission_texture.is_none() {
+            return m.emission;
+        }
+        let hit = Hit {
+            t: 0.0,
+            prim,
+            b1,
+            b2,
+        };
+        m.emitted(&self.attributes(&hit), &self.textures)
+    }
+
     /// Makes triangle `prim` an area light emitting radiance `le` from its front
     /// side (zero turns it off), and updates the light tables.
     pub fn set_emission(&mut self, prim: usize, le: Vec3A) -> Result<(), SceneError> {
@@ -695,26 +712,13 @@ impl Scene {
             .min(lights.prims.len() - 1);
         let prim = lights.prims[i];
         let v = &self.triangles[prim as usize].v;
-        let su = u.x.sqrt();
-        let (b1, b2) = (1.0 - su, u.y * su);
+        let (b1, b2) = uniform_barycentrics(u);
         let position = (1.0 - b1 - b2) * v[0] + b1 * v[1] + b2 * v[2];
-        let material = self.material(prim);
-        let radiance = if material.emission_texture.is_some() {
-            let hit = Hit {
-                t: 0.0,
-                prim,
-                b1,
-                b2,
-            };
-            material.emitted(&self.attributes(&hit), &self.textures)
-        } else {
-            material.emission
-        };
         Some(LightSample::Area {
             position,
             normal: self.normals[prim as usize],
-            radiance,
-            two_sided: material.emits_both_sides,
+            radiance: self.emission_at(prim, b1, b2),
+            two_sided: self.material(prim).emits_both_sides,
             pdf_area: self.light_pdf_area(prim),
         })
     }
@@ -771,21 +775,10 @@ impl Scene {
     /// Texture coordinates and colour at a hit (defaults for bare triangles).
     #[inline]
     pub fn attributes(&self, hit: &Hit) -> HitAttributes {
-        let Some((inst, mesh, idx)) = self.mesh_of(hit.prim) else {
-            return HitAttributes::default();
-        };
-        let _ = inst;
-        let b = [1.0 - hit.b1 - hit.b2, hit.b1, hit.b2];
-        let mut attrs = HitAttributes::default();
-        for (set, uvs) in mesh.uvs.iter().enumerate() {
-            if !uvs.is_empty() {
-                attrs.uv[set] = interpolate(b, idx.map(|i| uvs[i as usize]));
-            }
+        match self.mesh_of(hit.prim) {
+            Some((_, mesh, idx)) => attributes_of(mesh, idx, barycentrics(hit)),
+            None => HitAttributes::default(),
         }
-        if !mesh.colors.is_empty() {
-            attrs.color = interpolate(b, idx.map(|i| mesh.colors[i as usize]));
-        }
-        attrs
     }
 
     /// The instance, mesh and vertex indices of triangle `prim`, if it has
@@ -817,8 +810,8 @@ impl Scene {
                 material,
             };
         };
-        let attrs = self.attributes(hit);
-        let b = [1.0 - hit.b1 - hit.b2, hit.b1, hit.b2];
+        let b = barycentrics(hit);
+        let attrs = attributes_of(mesh, idx, b);
         let mut ns = ng;
         if !mesh.normals.is_empty() {
             let n = interpolate(b, idx.map(|i| mesh.normals[i as usize]));
@@ -893,6 +886,36 @@ where
     T: std::ops::Mul<f32, Output = T> + std::ops::Add<Output = T> + Copy,
 {
     v[0] * b[0] + v[1] * b[1] + v[2] * b[2]
+}
+
+/// The weights of a hit's three vertices.
+#[inline]
+fn barycentrics(hit: &Hit) -> [f32; 3] {
+    [1.0 - hit.b1 - hit.b2, hit.b1, hit.b2]
+}
+
+/// A mesh's texture coordinates and colour at barycentrics `b` of the
+/// triangle with vertices `idx`.
+#[inline]
+fn attributes_of(mesh: &MeshData, idx: [u32; 3], b: [f32; 3]) -> HitAttributes {
+    let mut attrs = HitAttributes::default();
+    for (set, uvs) in mesh.uvs.iter().enumerate() {
+        if !uvs.is_empty() {
+            attrs.uv[set] = interpolate(b, idx.map(|i| uvs[i as usize]));
+        }
+    }
+    if !mesh.colors.is_empty() {
+        attrs.color = interpolate(b, idx.map(|i| mesh.colors[i as usize]));
+    }
+    attrs
+}
+
+/// Barycentrics `(b1, b2)` of a point distributed uniformly by area over a
+/// triangle, from `u` in `[0, 1)²`.
+#[inline]
+fn uniform_barycentrics(u: Vec2) -> (f32, f32) {
+    let su = u.x.sqrt();
+    (1.0 - su, u.y * su)
 }
 
 /// A number in `[0, 1)` that decides whether a ray passes a blended surface:
@@ -1025,11 +1048,10 @@ impl AreaLights {
 /// The mean emitted radiance over triangle `prim`: exact for untextured
 /// emission, else the average over a fixed set of points inside it.
 fn mean_emission(scene: &Scene, prim: u32) -> Vec3A {
-    let m = scene.material(prim);
-    if m.emission_texture.is_none() {
-        return m.emission;
-    }
     let k = EMISSION_ESTIMATE_POINTS;
+    if scene.material(prim).emission_texture.is_none() {
+        return scene.material(prim).emission;
+    }
     let mut sum = Vec3A::ZERO;
     for s in 0..k {
         // A stratified point of the triangle (the same warp as light sampling).
@@ -1037,14 +1059,8 @@ fn mean_emission(scene: &Scene, prim: u32) -> Vec3A {
             (s as f32 + 0.5) / k as f32,
             ((s * 7 % k) as f32 + 0.5) / k as f32,
         );
-        let su = u.x.sqrt();
-        let hit = Hit {
-            t: 0.0,
-            prim,
-            b1: 1.0 - su,
-            b2: u.y * su,
-        };
-        sum += m.emitted(&scene.attributes(&hit), &scene.textures);
+        let (b1, b2) = uniform_barycentrics(u);
+        sum += scene.emission_at(prim, b1, b2);
     }
     sum / k as f32
 }
