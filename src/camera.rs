@@ -154,6 +154,18 @@ impl Camera {
     }
 }
 
+/// The camera-to-world rotation (columns right, down, forward) of a camera at
+/// `position` looking at `target` with `up` pointing up in the image; `None`
+/// when the view direction is zero or parallel to `up`.
+pub fn look_at(position: Vec3A, target: Vec3A, up: Vec3A) -> Option<Mat3A> {
+    let forward = (target - position).normalize_or_zero();
+    let right = forward.cross(up).normalize_or_zero();
+    if forward == Vec3A::ZERO || right == Vec3A::ZERO || !right.is_finite() {
+        return None;
+    }
+    Some(Mat3A::from_cols(right, forward.cross(right), forward))
+}
+
 /// Camera frame for y-up scenes (OBJ, glTF) seen from the +z side: image right is
 /// +x, image down is −y, the view goes along −z.
 pub const Y_UP_TOWARDS_MINUS_Z: Mat3A = Mat3A::from_cols(Vec3A::X, Vec3A::NEG_Y, Vec3A::NEG_Z);

@@ -190,14 +190,14 @@ pub fn radiance_from(
     let textures = scene.textures();
     loop {
         let Some(hit) = next_hit else {
-            // Escaped: the environment (a constant sky) is seen, weighted
-            // against having sampled it directly.
-            let env = scene.environment();
-            if env != Vec3A::ZERO {
+            // Escaped: the environment is seen, weighted against having
+            // sampled it directly.
+            if !scene.environment().is_black() {
+                let env = scene.environment_radiance(ray.dir);
                 let weight = if specular {
                     1.0
                 } else {
-                    power_heuristic(bsdf_pdf, scene.environment_pdf())
+                    power_heuristic(bsdf_pdf, scene.environment_pdf(ray.dir))
                 };
                 l += beta * env * weight;
             }
@@ -252,12 +252,12 @@ pub fn radiance_from(
         let u_light_pos = sampler.next_2d();
         let u_bsdf = sampler.next_2d();
         let u_choice = sampler.next_2d_minor();
-        let (u_light, u_lobe) = (u_choice.x, u_choice.y);
+        let u_lobe = u_choice.y;
         let u_rr = sampler.next_1d();
 
         // Next-event estimation (nothing to gain on a delta lobe).
         if !bsdf.is_specular()
-            && let Some(light) = scene.sample_light(sp.p, u_light, u_light_pos)
+            && let Some(light) = scene.sample_light(sp.p, u_choice, u_light_pos)
         {
             let (target, li, light_pdf) = match light {
                 LightSample::Point {

@@ -2,6 +2,9 @@
 //! units (`../shared/specs/scene-conventions.md`). Area lights are emitting
 //! triangles; the scene samples them (see [`crate::scene::Scene::sample_light`]).
 
+pub mod environment;
+pub mod rgbe;
+
 use std::f32::consts::PI;
 
 use glam::Vec3A;

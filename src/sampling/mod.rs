@@ -1,5 +1,6 @@
 //! Sample values: PCG32 streams keyed by (seed, pixel, sample) and
 //! Owen-scrambled Sobol' points.
 
+pub mod distribution;
 pub mod sampler;
 pub mod sobol;

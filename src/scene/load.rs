@@ -17,6 +17,7 @@ use super::transform::Transform;
 use super::{PointLight, Scene, SceneError};
 use crate::camera::{Lens, Y_UP_TOWARDS_MINUS_Z};
 use crate::geometry::triangle::Triangle;
+use crate::lights::environment::{EnvError, Environment};
 
 /// What a scene was made from; decides defaults (integrator, image size, tone
 /// mapping) that differ between the lab's scenes and real ones.
@@ -49,6 +50,63 @@ pub struct LoadOptions {
     pub camera: Option<usize>,
     /// When a glTF scene gets raylab's default lighting.
     pub default_light: DefaultLight,
+    /// The environment around the scene.
+    pub environment: EnvironmentOptions,
+}
+
+/// Where an environment's radiance comes from.
+#[derive(Clone, Debug, PartialEq)]
+pub enum EnvSource {
+    /// An equirectangular Radiance `.hdr` or OpenEXR `.exr` map.
+    File(PathBuf),
+    /// The same radiance (RGB, W·sr⁻¹·m⁻²) from every direction.
+    Color(Vec3A),
+}
+
+/// The environment options (`--env`, `--env-color`, `--env-strength`,
+/// `--env-rotate`).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct EnvironmentOptions {
+    /// The map or colour; `None` keeps the scene's own (if any).
+    pub source: Option<EnvSource>,
+    /// Multiplies the radiance (default 1).
+    pub strength: Option<f32>,
+    /// Degrees about +y, counter-clockwise seen from above (default 0).
+    pub rotation: Option<f32>,
+}
+
+impl EnvironmentOptions {
+    /// Whether any option is given.
+    pub fn is_given(&self) -> bool {
+        self.source.is_some() || self.strength.is_some() || self.rotation.is_some()
+    }
+
+    /// The environment these options make of the scene's own `current`:
+    /// the source replaced if given, then strength and rotation applied.
+    /// Strength or rotation without any environment is a usage error.
+    pub fn apply(&self, current: &Environment) -> Result<Environment, LoadError> {
+        let mut env = match &self.source {
+            Some(EnvSource::File(path)) => Environment::load(path)?,
+            Some(EnvSource::Color(c)) => Environment::constant(*c),
+            None => current.clone(),
+        };
+        if self.source.is_none()
+            && env.is_black()
+            && (self.strength.is_some() || self.rotation.is_some())
+        {
+            return Err(LoadError::Usage(
+                "--env-strength and --env-rotate need an environment (--env FILE or --env-color R,G,B)"
+                    .into(),
+            ));
+        }
+        if let Some(s) = self.strength {
+            env = env.with_strength(s);
+        }
+        if let Some(r) = self.rotation {
+            env = env.with_rotation(r);
+        }
+        Ok(env)
+    }
 }
 
 /// When a glTF scene gets raylab's default lighting (a key light and a grey sky).
@@ -110,6 +168,13 @@ pub struct LoadSummary {
     pub punctual_lights: usize,
     /// Emitting triangles.
     pub emitters: usize,
+    /// The environment map's size in texels, if the environment is a map.
+    pub environment_size: Option<[usize; 2]>,
+    /// Bytes of the environment map and its sampling tables.
+    pub environment_bytes: usize,
+    /// Time to read the environment map and build its sampling tables
+    /// (included in `time`).
+    pub environment_time: Duration,
     /// Time to read, decode and build.
     pub time: Duration,
 }
@@ -157,6 +222,9 @@ pub enum LoadError {
     /// An option does not fit the scene.
     #[error("{0}")]
     Usage(String),
+    /// An environment map is unreadable or malformed.
+    #[error(transparent)]
+    Env(#[from] EnvError),
 }
 
 /// Ambient term of mesh and glTF scenes unless the user gives one.
@@ -212,6 +280,13 @@ pub fn load(name: &str, options: &LoadOptions) -> Result<Loaded, LoadError> {
     }
     let mut warnings = Vec::new();
     let mut default_light = false;
+    // The environment first: a scene lit by one gets no default lighting.
+    let env_start = Instant::now();
+    let environment = match &options.environment.source {
+        Some(_) => Some(options.environment.apply(&Environment::none())?),
+        None => None,
+    };
+    let environment_time = env_start.elapsed();
     let (mut scene, view) = match kind {
         SceneKind::Lab => {
             let area = name == "cornell-area";
@@ -317,7 +392,9 @@ pub fn load(name: &str, options: &LoadOptions) -> Result<Loaded, LoadError> {
             let add = match options.default_light {
                 DefaultLight::On => true,
                 DefaultLight::Off => false,
-                DefaultLight::Auto => !loaded.has_punctual_lights && weak_emitters,
+                DefaultLight::Auto => {
+                    !loaded.has_punctual_lights && weak_emitters && environment.is_none()
+                }
             };
             if add {
                 // A key light above and to the right of the starting camera,
@@ -331,7 +408,7 @@ pub fn load(name: &str, options: &LoadOptions) -> Result<Loaded, LoadError> {
                     position,
                     power: Vec3A::splat(DEFAULT_LIGHT_IRRADIANCE * 4.0 * std::f32::consts::PI * r2),
                 };
-                scene.set_environment(Vec3A::splat(DEFAULT_SKY_RADIANCE));
+                scene.set_environment(Environment::constant(Vec3A::splat(DEFAULT_SKY_RADIANCE)));
                 default_light = true;
             }
             if let Some(p) = options.light_power {
@@ -343,6 +420,14 @@ pub fn load(name: &str, options: &LoadOptions) -> Result<Loaded, LoadError> {
     if let Some(p) = options.light_pos {
         scene.light.position = p;
     }
+    match environment {
+        Some(env) => scene.set_environment(env),
+        None if options.environment.is_given() => {
+            let env = options.environment.apply(scene.environment())?;
+            scene.set_environment(env);
+        }
+        None => {}
+    }
     let summary = LoadSummary {
         triangles: scene.triangles().len(),
         materials: scene.materials().len(),
@@ -351,6 +436,15 @@ pub fn load(name: &str, options: &LoadOptions) -> Result<Loaded, LoadError> {
         geometry_bytes: scene.geometry_bytes(),
         punctual_lights: scene.lights().len() + usize::from(scene.point_power() > 0.0),
         emitters: scene.emitter_count(),
+        environment_size: scene
+            .environment()
+            .env_map()
+            .map(|m| [m.width(), m.height()]),
+        environment_bytes: scene
+            .environment()
+            .env_map()
+            .map_or(0, |m| m.memory_bytes()),
+        environment_time,
         time: start.elapsed(),
     };
     Ok(Loaded {

@@ -26,9 +26,11 @@ use crate::camera::SceneCamera;
 use crate::geometry::bvh::Bvh;
 use crate::geometry::ray::{Hit, Ray, SurfacePoint};
 use crate::geometry::triangle::Triangle;
+use crate::lights::environment::Environment;
 use crate::lights::{Incident, Light};
 use crate::materials::Material;
 use crate::materials::surface::{AlphaMode, HitAttributes, SurfaceMaterial};
+use crate::sampling::distribution::AliasTable;
 use crate::textures::TextureStore;
 pub use load::{LoadError, LoadOptions, Loaded, load};
 pub use mesh::{Instance, MeshData, Tangents};
@@ -138,14 +140,12 @@ pub struct Scene {
     materials: Vec<SurfaceMaterial>,
     textures: TextureStore,
     lights: Vec<Light>,
-    light_powers: Vec<f32>,
-    /// Sum of `light_powers` (kept: the light choice needs it per sample).
-    punctual_power: f32,
     area_lights: AreaLights,
     has_alpha: bool,
-    environment: Vec3A,
-    /// The environment's selection weight (see [`Scene::set_environment`]).
-    environment_power: f32,
+    environment: Environment,
+    selection: LightSelection,
+    /// The lights other than the key light, for choosing one.
+    light_table: LightTable,
     bounds: (Vec3A, Vec3A),
     bvh: Bvh,
     /// The key point light: the lab's light, `direct`'s light and the one the
@@ -325,12 +325,11 @@ impl Scene {
             materials: parts.materials,
             textures: parts.textures,
             lights: Vec::new(),
-            light_powers: Vec::new(),
-            punctual_power: 0.0,
             area_lights: AreaLights::default(),
             has_alpha,
-            environment: Vec3A::ZERO,
-            environment_power: 0.0,
+            environment: Environment::none(),
+            selection: LightSelection::Power,
+            light_table: LightTable::default(),
             bounds,
             bvh,
             light: parts.light,
@@ -338,8 +337,8 @@ impl Scene {
             two_sided: parts.two_sided,
             cameras: parts.cameras,
         };
-        scene.set_lights(parts.lights);
         scene.area_lights = AreaLights::build(&scene);
+        scene.set_lights(parts.lights);
         Ok(scene)
     }
 
@@ -509,42 +508,116 @@ impl Scene {
 
     /// Replaces the punctual lights other than the key light.
     pub fn set_lights(&mut self, lights: Vec<Light>) {
-        let radius = self.radius();
-        self.light_powers = lights.iter().map(|l| l.power(radius)).collect();
-        self.punctual_power = self.light_powers.iter().sum();
         self.lights = lights;
+        self.rebuild_light_table();
     }
 
-    /// Radiance of the constant environment that surrounds the scene (rays that
-    /// escape see it; `path` samples it as a light); zero for none.
-    pub fn environment(&self) -> Vec3A {
-        self.environment
+    /// The environment that surrounds the scene (rays that escape see it;
+    /// `path` samples it as a light).
+    pub fn environment(&self) -> &Environment {
+        &self.environment
     }
 
-    /// Surrounds the scene with a constant environment of radiance `radiance`
-    /// (finite, non-negative; zero removes it). Its selection weight among the
+    /// Surrounds the scene with `environment`. Its selection weight among the
     /// lights is the power it sends into the scene's bounding sphere,
-    /// `4π² r² L` (a surface facing it gets `πL`).
-    pub fn set_environment(&mut self, radiance: Vec3A) {
-        self.environment = if radiance.is_finite() {
-            radiance.max(Vec3A::ZERO)
-        } else {
-            Vec3A::ZERO
-        };
-        let r = self.radius().max(1e-3);
-        let p = 4.0 * PI * PI * r * r * (self.environment.element_sum() / 3.0);
-        self.environment_power = if p.is_finite() && p > 0.0 { p } else { 0.0 };
+    /// `π r² ∫ L dω` (`4π² r² L` for a constant `L`).
+    pub fn set_environment(&mut self, environment: Environment) {
+        self.environment = environment;
+        self.rebuild_light_table();
     }
 
-    /// The solid-angle density with which [`Scene::sample_light`] picks a
-    /// direction of the environment (selection included): uniform over the sphere.
+    /// How lights are chosen for next-event estimation.
+    pub fn light_selection(&self) -> LightSelection {
+        self.selection
+    }
+
+    /// Chooses lights as `selection` says (by power, the default, or uniformly:
+    /// for comparisons).
+    pub fn set_light_selection(&mut self, selection: LightSelection) {
+        self.selection = selection;
+        self.rebuild_light_table();
+    }
+
+    /// Radiance arriving from the environment along `dir` (unit, away from the
+    /// scene).
     #[inline]
-    pub fn environment_pdf(&self) -> f32 {
-        let total = self.total_power();
+    pub fn environment_radiance(&self, dir: Vec3A) -> Vec3A {
+        self.environment.radiance(dir)
+    }
+
+    /// The solid-angle density with which [`Scene::sample_light`] picks
+    /// direction `dir` of the environment (selection included).
+    #[inline]
+    pub fn environment_pdf(&self, dir: Vec3A) -> f32 {
+        let Some(entry) = self.light_table.environment else {
+            return 0.0;
+        };
+        self.entry_probability(entry as usize) * self.environment.pdf(dir)
+    }
+
+    /// Builds the table that chooses among the lights other than the key light:
+    /// punctual lights, the environment and the emitting triangles, weighted by
+    /// power (or equally).
+    fn rebuild_light_table(&mut self) {
+        let radius = self.radius().max(1e-3);
+        let mut entries = Vec::new();
+        let mut weights = Vec::new();
+        let weigh = |power: f32| match self.selection {
+            LightSelection::Power => power,
+            LightSelection::Uniform => 1.0,
+        };
+        for (i, l) in self.lights.iter().enumerate() {
+            let power = l.power(radius);
+            if power > 0.0 {
+                entries.push(LightRef::Punctual(i as u32));
+                weights.push(weigh(power));
+            }
+        }
+        let env_power = PI * radius * radius * self.environment.radiance_integral();
+        let mut environment = None;
+        if env_power.is_finite() && env_power > 0.0 {
+            environment = Some(entries.len() as u32);
+            entries.push(LightRef::Environment);
+            weights.push(weigh(env_power));
+        }
+        let mut prim_entry = Vec::new();
+        if !self.area_lights.prims.is_empty() {
+            prim_entry = vec![u32::MAX; self.triangles.len()];
+            for &prim in &self.area_lights.prims {
+                prim_entry[prim as usize] = entries.len() as u32;
+                entries.push(LightRef::Triangle(prim));
+                weights.push(weigh(self.area_lights.per_prim[prim as usize].0));
+            }
+        }
+        let alias = AliasTable::new(&weights);
+        self.light_table = LightTable {
+            total: alias.total() as f32,
+            alias,
+            entries,
+            environment,
+            prim_entry,
+        };
+    }
+
+    /// The key light's selection weight.
+    #[inline]
+    fn key_weight(&self) -> f32 {
+        let p = self.point_power();
+        match self.selection {
+            LightSelection::Power => p,
+            LightSelection::Uniform => f32::from(p > 0.0),
+        }
+    }
+
+    /// The probability that [`Scene::sample_light`] picks table entry `entry`.
+    #[inline]
+    fn entry_probability(&self, entry: usize) -> f32 {
+        let rest = self.light_table.total;
+        let total = self.key_weight() + rest;
         if total <= 0.0 {
             return 0.0;
         }
-        self.environment_power / total / (4.0 * PI)
+        self.light_table.alias.pmf(entry) * (rest / total)
     }
 
     /// Axis-aligned bounds of all triangles.
@@ -604,6 +677,7 @@ impl Scene {
         self.material_of[prim] = self.materials.len() as u32;
         self.materials.push(m);
         self.area_lights = AreaLights::build(self);
+        self.rebuild_light_table();
         Ok(())
     }
 
@@ -618,123 +692,100 @@ impl Scene {
 
     /// Whether anything emits light.
     pub fn has_lights(&self) -> bool {
-        self.point_power() > 0.0
-            || self.light_powers.iter().any(|&p| p > 0.0)
-            || self.area_lights.total > 0.0
-            || self.environment_power > 0.0
+        self.point_power() > 0.0 || !self.light_table.alias.is_empty()
     }
 
-    /// Sum of the selection weights of all lights.
+    /// Picks a light with `u_select` (by power: the key light `P`; other
+    /// punctual lights [`Light::power`]; the environment `π r² ∫ L dω`; each
+    /// emitting triangle `π·A·Le`, doubled for two-sided emitters; or uniformly,
+    /// see [`Scene::set_light_selection`]), then a point or direction on it with
+    /// `u` (uniform by area on a triangle, by the map's importance on the
+    /// environment), to light the point `p`. `u_select.x` chooses, `u_select.y`
+    /// settles the alias table's coin. `None` when the scene has no light or the
+    /// chosen one sends nothing to `p`.
     #[inline]
-    fn total_power(&self) -> f32 {
-        self.point_power() + self.punctual_power + self.environment_power + self.area_lights.total
-    }
-
-    /// Picks a light in proportion to its power (the key light: `P`; other
-    /// punctual lights: [`Light::power`]; area lights `π·A·Le`, doubled for
-    /// two-sided emitters, one triangle at a time, a point uniformly by area on
-    /// it) with `u_light`, and a point on it with `u`, to light the point `p`.
-    /// `None` when the scene has no light or the chosen one sends nothing to `p`.
-    #[inline]
-    pub fn sample_light(&self, p: Vec3A, u_light: f32, u: Vec2) -> Option<LightSample> {
-        let key = self.point_power();
-        let total = self.total_power();
+    pub fn sample_light(&self, p: Vec3A, u_select: Vec2, u: Vec2) -> Option<LightSample> {
+        let key = self.key_weight();
+        let rest = self.light_table.total;
+        let total = key + rest;
         if total <= 0.0 {
             return None;
         }
-        let mut x = u_light * total;
-        let env = self.environment_power;
-        if x < key
-            || (self.light_powers.is_empty() && env == 0.0 && self.area_lights.prims.is_empty())
-        {
-            let pmf = key / total;
+        let p_key = key / total;
+        if u_select.x < p_key || rest <= 0.0 {
             return Some(LightSample::Point {
                 position: self.light.position,
-                intensity: self.light.power * (1.0 / (4.0 * PI * pmf)),
+                intensity: self.light.power * (1.0 / (4.0 * PI * p_key)),
             });
         }
-        x -= key;
-        // The punctual light whose range holds x; rounding can push x past the
-        // last range when there are no area lights: the last light takes it.
-        let last = self.light_powers.iter().rposition(|&p| p > 0.0);
-        let mut chosen = None;
-        for (i, &power) in self.light_powers.iter().enumerate() {
-            if x < power {
-                chosen = Some(i);
-                break;
+        let x = ((u_select.x - p_key) / (1.0 - p_key)).min(1.0 - f32::EPSILON / 2.0);
+        let table = &self.light_table;
+        let entry = table.alias.sample(Vec2::new(x, u_select.y))?;
+        let probability = table.alias.pmf(entry) * (rest / total);
+        match table.entries[entry] {
+            LightRef::Punctual(i) => {
+                let scale = 1.0 / probability;
+                Some(match self.lights[i as usize].incident(p)? {
+                    Incident::FromPoint {
+                        position,
+                        intensity,
+                    } => LightSample::Point {
+                        position,
+                        intensity: intensity * scale,
+                    },
+                    Incident::FromDirection {
+                        to_light,
+                        irradiance,
+                    } => LightSample::Directional {
+                        to_light,
+                        irradiance: irradiance * scale,
+                        distance: self.escape_distance(p),
+                    },
+                })
             }
-            x -= power;
-        }
-        if chosen.is_none() && env == 0.0 && self.area_lights.prims.is_empty() {
-            chosen = last;
-        }
-        if let Some(i) = chosen {
-            let scale = total / self.light_powers[i];
-            return Some(match self.lights[i].incident(p)? {
-                Incident::FromPoint {
-                    position,
-                    intensity,
-                } => LightSample::Point {
-                    position,
-                    intensity: intensity * scale,
-                },
-                Incident::FromDirection {
+            LightRef::Environment => {
+                let (to_light, radiance, pdf) = self.environment.sample(u)?;
+                Some(LightSample::Environment {
                     to_light,
-                    irradiance,
-                } => LightSample::Directional {
-                    to_light,
-                    irradiance: irradiance * scale,
-                    // Far enough to leave the scene's bounds from anywhere in them.
-                    distance: 2.0 * self.radius() + (p - self.bounds.0).length() + 1.0,
-                },
-            });
+                    radiance,
+                    pdf: pdf * probability,
+                    distance: self.escape_distance(p),
+                })
+            }
+            LightRef::Triangle(prim) => {
+                let v = &self.triangles[prim as usize].v;
+                let (b1, b2) = uniform_barycentrics(u);
+                let position = (1.0 - b1 - b2) * v[0] + b1 * v[1] + b2 * v[2];
+                let area = self.area_lights.per_prim[prim as usize].1;
+                Some(LightSample::Area {
+                    position,
+                    normal: self.normals[prim as usize],
+                    radiance: self.emission_at(prim, b1, b2),
+                    two_sided: self.material(prim).emits_both_sides,
+                    pdf_area: probability / area,
+                })
+            }
         }
-        if chosen.is_none() && env > 0.0 && (x < env || self.area_lights.prims.is_empty()) {
-            // A direction uniformly on the sphere.
-            let z = 1.0 - 2.0 * u.x;
-            let s = (1.0 - z * z).max(0.0).sqrt();
-            let (sin, cos) = (2.0 * PI * u.y).sin_cos();
-            return Some(LightSample::Environment {
-                to_light: Vec3A::new(s * cos, s * sin, z),
-                radiance: self.environment,
-                pdf: env / total / (4.0 * PI),
-                distance: 2.0 * self.radius() + (p - self.bounds.0).length() + 1.0,
-            });
-        }
-        x -= env;
-        let lights = &self.area_lights;
-        if lights.prims.is_empty() {
-            return None;
-        }
-        let i = lights
-            .cdf
-            .partition_point(|&c| c <= x)
-            .min(lights.prims.len() - 1);
-        let prim = lights.prims[i];
-        let v = &self.triangles[prim as usize].v;
-        let (b1, b2) = uniform_barycentrics(u);
-        let position = (1.0 - b1 - b2) * v[0] + b1 * v[1] + b2 * v[2];
-        Some(LightSample::Area {
-            position,
-            normal: self.normals[prim as usize],
-            radiance: self.emission_at(prim, b1, b2),
-            two_sided: self.material(prim).emits_both_sides,
-            pdf_area: self.light_pdf_area(prim),
-        })
+    }
+
+    /// How far a shadow ray from `p` must go to leave the scene's bounds.
+    #[inline]
+    fn escape_distance(&self, p: Vec3A) -> f32 {
+        2.0 * self.radius() + (p - self.bounds.0).length() + 1.0
     }
 
     /// The density per unit area with which [`Scene::sample_light`] picks a point
     /// on emitting triangle `prim`: its selection probability over its area.
     #[inline]
     pub fn light_pdf_area(&self, prim: u32) -> f32 {
-        let Some(&(power, area)) = self.area_lights.per_prim.get(prim as usize) else {
+        let Some(&entry) = self.light_table.prim_entry.get(prim as usize) else {
             return 0.0;
         };
-        let total = self.total_power();
-        if total <= 0.0 || area <= 0.0 {
+        if entry == u32::MAX {
             return 0.0;
         }
-        power / (total * area)
+        let area = self.area_lights.per_prim[prim as usize].1;
+        self.entry_probability(entry as usize) / area
     }
 
     /// The hit point of a ray along `dir` with its error bound, for spawning rays
@@ -954,7 +1005,7 @@ pub enum LightSample {
         /// How far a shadow ray must go to leave the scene.
         distance: f32,
     },
-    /// A direction of the constant environment.
+    /// A direction of the environment.
     Environment {
         /// Unit direction towards the sky.
         to_light: Vec3A,
@@ -980,6 +1031,42 @@ pub enum LightSample {
     },
 }
 
+/// How [`Scene::sample_light`] chooses among the lights.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum LightSelection {
+    /// In proportion to each light's estimated power.
+    #[default]
+    Power,
+    /// Every light (every emitting triangle) equally: for comparisons.
+    Uniform,
+}
+
+/// A light other than the key light, as the light table names it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum LightRef {
+    /// Punctual light `i` of [`Scene::lights`].
+    Punctual(u32),
+    /// The environment.
+    Environment,
+    /// An emitting triangle.
+    Triangle(u32),
+}
+
+/// The lights other than the key light and an alias table that chooses among
+/// them by weight.
+#[derive(Clone, Debug, Default)]
+struct LightTable {
+    alias: AliasTable,
+    /// Sum of the weights (the table's, as `f32`: read per sample).
+    total: f32,
+    entries: Vec<LightRef>,
+    /// The environment's entry, if it is a light.
+    environment: Option<u32>,
+    /// Every triangle's entry (`u32::MAX` for non-emitters); empty when none
+    /// emits.
+    prim_entry: Vec<u32>,
+}
+
 /// Points per triangle at which a textured emitter's radiance is averaged to
 /// estimate its power.
 const EMISSION_ESTIMATE_POINTS: u32 = 16;
@@ -989,8 +1076,6 @@ const EMISSION_ESTIMATE_POINTS: u32 = 16;
 struct AreaLights {
     /// Emitting triangles.
     prims: Vec<u32>,
-    /// Running sums of their powers.
-    cdf: Vec<f32>,
     /// Sum of their powers.
     total: f32,
     /// Power and area of every triangle (zero power for non-emitters); empty
@@ -1035,7 +1120,6 @@ impl AreaLights {
             if power > 0.0 {
                 lights.total += power;
                 lights.prims.push(i as u32);
-                lights.cdf.push(lights.total);
             }
         }
         if !lights.prims.is_empty() {

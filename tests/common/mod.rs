@@ -1,4 +1,6 @@
 //! Helpers shared by the integration tests.
+// Each test binary uses a subset of these helpers.
+#![allow(dead_code)]
 
 use std::path::Path;
 
@@ -21,4 +23,79 @@ pub fn bit_identical(a: &Film, b: &Film) -> bool {
             .iter()
             .zip(&b.pixels)
             .all(|(p, q)| p.to_array().map(f32::to_bits) == q.to_array().map(f32::to_bits))
+}
+
+/// A UV sphere of `rings × segments` faces as triangles wound counter-clockwise
+/// seen from outside (no degenerate triangles at the poles).
+pub fn sphere_triangles(
+    centre: glam::Vec3A,
+    radius: f32,
+    segments: usize,
+    rings: usize,
+) -> Vec<raylab::Triangle> {
+    use std::f32::consts::PI;
+    let point = |ring: usize, seg: usize| {
+        let theta = PI * ring as f32 / rings as f32;
+        let phi = 2.0 * PI * seg as f32 / segments as f32;
+        centre
+            + radius
+                * glam::Vec3A::new(
+                    theta.sin() * phi.cos(),
+                    theta.cos(),
+                    theta.sin() * phi.sin(),
+                )
+    };
+    let mut tris = Vec::new();
+    for ring in 0..rings {
+        for seg in 0..segments {
+            let (a, b) = (point(ring, seg), point(ring, seg + 1));
+            let (c, d) = (point(ring + 1, seg), point(ring + 1, seg + 1));
+            if ring != 0 {
+                tris.push(raylab::Triangle::new(a, b, c));
+            }
+            if ring != rings - 1 {
+                tris.push(raylab::Triangle::new(b, d, c));
+            }
+        }
+    }
+    // Wind every triangle counter-clockwise seen from outside.
+    for t in &mut tris {
+        let n = (t.v[1] - t.v[0]).cross(t.v[2] - t.v[0]);
+        if n.dot((t.v[0] + t.v[1] + t.v[2]) / 3.0 - centre) < 0.0 {
+            *t = raylab::Triangle::new(t.v[0], t.v[2], t.v[1]);
+        }
+    }
+    tris
+}
+
+/// A two-sided scene of bare triangles, each with its material, front normals
+/// from the counter-clockwise winding.
+pub fn two_sided_scene(
+    triangles: Vec<raylab::Triangle>,
+    material_of: Vec<u32>,
+    materials: Vec<raylab::materials::surface::SurfaceMaterial>,
+) -> raylab::Scene {
+    let normals = triangles
+        .iter()
+        .map(|t| (t.v[1] - t.v[0]).cross(t.v[2] - t.v[0]).normalize_or_zero())
+        .collect();
+    raylab::Scene::from_parts(raylab::scene::SceneParts {
+        triangles,
+        normals,
+        material_of,
+        materials,
+        two_sided: true,
+        ..Default::default()
+    })
+    .unwrap()
+}
+
+/// A `path` render of `spp` samples per pixel with seed `seed`.
+pub fn path_film(scene: &raylab::Scene, camera: &raylab::Camera, spp: u32, seed: u64) -> Film {
+    let settings = raylab::render::RenderSettings {
+        integrator: raylab::Integrator::path(),
+        spp,
+        seed,
+    };
+    raylab::render::render(scene, camera, &settings, &|_| {}).film
 }

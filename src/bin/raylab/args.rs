@@ -131,6 +131,20 @@ pub struct SceneArgs {
     /// enough for a direct light of 0.5 at its centre].
     #[arg(long, value_name = "P", allow_hyphen_values = true, value_parser = parse_non_negative)]
     pub light_power: Option<f32>,
+    /// Light the scene with an equirectangular environment map (Radiance .hdr or
+    /// OpenEXR .exr, +y up), also seen as the background.
+    #[arg(long, value_name = "FILE.hdr|FILE.exr", conflicts_with = "env_color")]
+    pub env: Option<PathBuf>,
+    /// A constant sky of radiance R,G,B (W/sr/m²) instead of a map.
+    #[arg(long, value_name = "R,G,B", allow_hyphen_values = true, value_parser = parse_color)]
+    pub env_color: Option<Vec3A>,
+    /// Multiply the environment's radiance by S [default: 1].
+    #[arg(long, value_name = "S", allow_hyphen_values = true, value_parser = parse_non_negative)]
+    pub env_strength: Option<f32>,
+    /// Turn the environment about +y by DEG degrees (positive: counter-clockwise
+    /// seen from above).
+    #[arg(long, value_name = "DEG", allow_hyphen_values = true, value_parser = parse_angle)]
+    pub env_rotate: Option<f32>,
     /// Add a Wavefront OBJ mesh to the scene (repeatable), e.g. into the lab box.
     #[arg(long, value_name = "MESH.obj")]
     pub add: Vec<PathBuf>,
@@ -290,6 +304,15 @@ impl SceneArgs {
             ambient: self.ambient,
             camera: self.camera,
             default_light: self.default_light,
+            environment: raylab::scene::load::EnvironmentOptions {
+                source: match (&self.env, self.env_color) {
+                    (Some(path), _) => Some(raylab::scene::load::EnvSource::File(path.clone())),
+                    (None, Some(c)) => Some(raylab::scene::load::EnvSource::Color(c)),
+                    (None, None) => None,
+                },
+                strength: self.env_strength,
+                rotation: self.env_rotate,
+            },
         }
     }
 }
@@ -446,6 +469,13 @@ fn parse_vec3(s: &str) -> Result<Vec3A, String> {
         .collect::<Result<_, _>>()
         .map_err(|_| err())?;
     Ok(Vec3A::new(v[0], v[1], v[2]))
+}
+
+fn parse_color(s: &str) -> Result<Vec3A, String> {
+    match parse_vec3(s) {
+        Ok(c) if c.min_element() >= 0.0 => Ok(c),
+        _ => Err("expected three finite numbers >= 0, R,G,B".into()),
+    }
 }
 
 #[cfg(test)]

@@ -11,7 +11,7 @@ use std::process::ExitCode;
 use clap::Parser;
 use clap::error::ErrorKind;
 
-use args::{Cli, Command, RenderArgs, SceneArgs};
+use args::{Cli, Command, SceneArgs};
 use raylab::film::{Display, ToneMap};
 use raylab::scene::load::SceneKind;
 
@@ -73,40 +73,17 @@ fn run(cli: Cli) -> anyhow::Result<()> {
 
 /// No subcommand: the viewer where there is a display, else a render of the box.
 fn run_default() -> anyhow::Result<()> {
-    let scene = SceneArgs {
-        scene: "cornell".into(),
-        width: None,
-        height: None,
-        integrator: None,
-        camera: None,
-        default_light: raylab::scene::load::DefaultLight::Auto,
-        tonemap: None,
-        max_depth: None,
-        sampler: raylab::integrators::path::SamplerKind::DEFAULT,
-        material: Vec::new(),
-        exposure: 0.0,
-        camera_pos: None,
-        yaw: 0.0,
-        pitch: 0.0,
-        light_pos: None,
-        light_power: None,
-        add: Vec::new(),
-        transform: Vec::new(),
-        ambient: None,
+    // The defaults of `raylab render`, exactly as clap gives them.
+    let Ok(Cli {
+        command: Some(Command::Render(args)),
+    }) = Cli::try_parse_from(["raylab", "render"])
+    else {
+        anyhow::bail!("internal error: the default render arguments do not parse");
     };
     if let Ok(event_loop) = viewer::open_display() {
-        let session = load(&scene, false)?;
-        return viewer::run_on(event_loop, session, &scene);
+        let session = load(&args.scene, false)?;
+        return viewer::run_on(event_loop, session, &args.scene);
     }
-    let args = RenderArgs {
-        scene,
-        output: None,
-        spp: None,
-        time: None,
-        seed: 0,
-        threads: None,
-        quiet: false,
-    };
     render_cmd::run(&args)?;
     eprintln!(
         "no display found, so raylab rendered an image instead of opening the viewer; \
@@ -181,6 +158,14 @@ fn load(args: &SceneArgs, quiet: bool) -> anyhow::Result<Session> {
             plural(s.emitters, "emitting triangle"),
             mib(s.geometry_bytes),
             s.time.as_secs_f64() * 1e3,
+        );
+    }
+    if !quiet && let Some([w, h]) = loaded.summary.environment_size {
+        let s = &loaded.summary;
+        eprintln!(
+            "environment {w}×{h}: {:.1} MiB with its sampling tables, {:.0} ms",
+            s.environment_bytes as f64 / (1024.0 * 1024.0),
+            s.environment_time.as_secs_f64() * 1e3
         );
     }
     let size = args

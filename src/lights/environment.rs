@@ -1,0 +1,490 @@
+//! The environment: radiance arriving from infinitely far away in every
+//! direction, either constant or an equirectangular (latitude–longitude) map.
+//! Rays that leave the scene see it; the path tracer samples it as a light.
+//!
+//! The mapping is `scene-conventions.md`'s: direction `d` (unit, away from the
+//! scene, +y up) maps to `u = 0.5 + atan2(d.x, −d.z)/(2π)`, `v = acos(d.y)/π`,
+//! with `(0, 0)` the image's top-left corner, so the centre column is seen
+//! looking along −z and `u = 0.75` is +x. Lookups are bilinear between texel
+//! centres, wrapping in `u` and clamping in `v`.
+//!
+//! Maps are importance sampled: a piecewise-constant distribution over the
+//! texels ([`Distribution2D`]) in proportion to the luminance of each texel's
+//! mean (bilinear) radiance times `sin θ`, the area its texel covers on the
+//! sphere. A direction's density per solid angle is then
+//! `p(u, v) / (2π² sin θ)`. Using each texel's *mean* bilinear radiance (not
+//! its own value) keeps the density positive wherever the looked-up radiance
+//! is, and makes the power estimate exact.
+
+use std::f32::consts::PI;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use glam::{Vec2, Vec3A};
+use rayon::prelude::*;
+use thiserror::Error;
+
+use super::rgbe::{self, RgbImage};
+use crate::sampling::distribution::Distribution2D;
+
+/// The widest or tallest environment map read.
+pub const MAX_SIDE: usize = 32768;
+/// The most texels an environment map may have (2^27: 1.5 GiB as RGB floats).
+pub const MAX_TEXELS: usize = 1 << 27;
+
+/// Why an environment map could not be read.
+#[derive(Debug, Error)]
+pub enum EnvError {
+    /// The file could not be read.
+    #[error("{}: {cause}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// What the system said.
+        cause: std::io::Error,
+    },
+    /// The file is not a readable image or breaks a limit.
+    #[error("{}: {message}", path.display())]
+    Format {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        message: String,
+    },
+    /// The extension is neither `.hdr` nor `.exr`.
+    #[error("{}: environment maps are Radiance .hdr or OpenEXR .exr files", path.display())]
+    UnknownFormat {
+        /// The file.
+        path: PathBuf,
+    },
+}
+
+/// How the path tracer picks directions of the environment for next-event
+/// estimation.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum EnvSampling {
+    /// In proportion to the map's radiance (constant environments: uniform).
+    #[default]
+    Importance,
+    /// Uniformly over the sphere (for comparisons).
+    Uniform,
+}
+
+/// An equirectangular radiance map with its sampling distribution.
+#[derive(Clone, Debug)]
+pub struct EnvMap {
+    width: usize,
+    height: usize,
+    texels: Vec<[f32; 3]>,
+    distribution: Distribution2D,
+    /// `∫ L dω` over the sphere, per channel (the mean-radiance integral).
+    radiance_integral: Vec3A,
+}
+
+/// Rec. 709 luminance.
+#[inline]
+fn luminance(c: Vec3A) -> f32 {
+    0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
+}
+
+impl EnvMap {
+    /// A map from an RGB image (row 0 at the top, `+y`). Non-finite or negative
+    /// values become zero. Builds the sampling tables, rows in parallel.
+    pub fn from_image(image: RgbImage) -> Self {
+        let RgbImage {
+            width,
+            height,
+            mut pixels,
+        } = image;
+        pixels.par_iter_mut().for_each(|p| {
+            *p = p.map(|x| if x.is_finite() && x > 0.0 { x } else { 0.0 });
+        });
+        let mut map = Self {
+            width,
+            height,
+            texels: pixels,
+            distribution: Distribution2D::default(),
+            radiance_integral: Vec3A::ZERO,
+        };
+        if width == 0 || height == 0 {
+            return map;
+        }
+        // Each texel's mean radiance under bilinear filtering: itself 9/16, its
+        // four edge neighbours 3/32 each, its corners 1/64 each (u wraps, v clamps).
+        let mean = |i: usize, j: usize| -> Vec3A {
+            let (w, h) = (width, height);
+            let at = |di: isize, dj: isize| {
+                let x = (i as isize + di).rem_euclid(w as isize) as usize;
+                let y = (j as isize + dj).clamp(0, h as isize - 1) as usize;
+                Vec3A::from(map.texels[y * w + x])
+            };
+            at(0, 0) * (9.0 / 16.0)
+                + (at(-1, 0) + at(1, 0) + at(0, -1) + at(0, 1)) * (3.0 / 32.0)
+                + (at(-1, -1) + at(1, -1) + at(-1, 1) + at(1, 1)) * (1.0 / 64.0)
+        };
+        let sin_theta = |j: usize| (PI * (j as f32 + 0.5) / height as f32).sin();
+        map.distribution =
+            Distribution2D::new(width, height, |i, j| luminance(mean(i, j)) * sin_theta(j));
+        // ∫ L dω: each texel covers (2π/W)·(π/H)·sin θ.
+        let texel_solid_angle = 2.0 * std::f64::consts::PI.powi(2) / (width * height) as f64;
+        let integral = (0..height)
+            .into_par_iter()
+            .map(|j| {
+                let row = (0..width).fold(glam::DVec3::ZERO, |acc, i| acc + mean(i, j).as_dvec3());
+                row * sin_theta(j) as f64 * texel_solid_angle
+            })
+            .sum::<glam::DVec3>();
+        map.radiance_integral = integral.as_vec3().into();
+        map
+    }
+
+    /// Reads a Radiance `.hdr` or OpenEXR `.exr` file (by extension).
+    pub fn load(path: &Path) -> Result<Self, EnvError> {
+        Ok(Self::from_image(read_image(path)?))
+    }
+
+    /// Width in texels.
+    pub fn width(&self) -> usize {
+        self.width
+    }
+
+    /// Height in texels.
+    pub fn height(&self) -> usize {
+        self.height
+    }
+
+    /// Texel `(i, j)` (column, row from the top).
+    pub fn texel(&self, i: usize, j: usize) -> Vec3A {
+        Vec3A::from(self.texels[j * self.width + i])
+    }
+
+    /// Bytes held by the texels and the sampling tables.
+    pub fn memory_bytes(&self) -> usize {
+        std::mem::size_of_val(self.texels.as_slice()) + self.distribution.memory_bytes()
+    }
+
+    /// Bilinear lookup at `(u, v)` (texel centres at `(i + 0.5)/W`), wrapping
+    /// in `u`, clamping in `v`.
+    #[inline]
+    pub fn lookup(&self, uv: Vec2) -> Vec3A {
+        let (w, h) = (self.width, self.height);
+        if w == 0 || h == 0 {
+            return Vec3A::ZERO;
+        }
+        let x = uv.x * w as f32 - 0.5;
+        let y = uv.y * h as f32 - 0.5;
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = (x - x0, y - y0);
+        let col = |k: f32| (k as i64).rem_euclid(w as i64) as usize;
+        let row = |k: f32| (k.max(0.0) as usize).min(h - 1);
+        let (i0, i1) = (col(x0), col(x0 + 1.0));
+        let (j0, j1) = (row(y0), row(y0 + 1.0));
+        let t = |i: usize, j: usize| Vec3A::from(self.texels[j * w + i]);
+        let top = t(i0, j0) * (1.0 - fx) + t(i1, j0) * fx;
+        let bottom = t(i0, j1) * (1.0 - fx) + t(i1, j1) * fx;
+        top * (1.0 - fy) + bottom * fy
+    }
+}
+
+/// Reads an environment image, checking its size before allocating.
+fn read_image(path: &Path) -> Result<RgbImage, EnvError> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    let format = |message: String| EnvError::Format {
+        path: path.to_owned(),
+        message,
+    };
+    match ext.as_deref() {
+        Some("hdr") => {
+            let bytes = std::fs::read(path).map_err(|cause| EnvError::Io {
+                path: path.to_owned(),
+                cause,
+            })?;
+            rgbe::decode(&bytes, MAX_SIDE, MAX_TEXELS).map_err(format)
+        }
+        Some("exr") => read_exr(path).map_err(format),
+        _ => Err(EnvError::UnknownFormat {
+            path: path.to_owned(),
+        }),
+    }
+}
+
+/// Reads the first RGB(A) layer of an OpenEXR file (alpha ignored; a file
+/// with only luminance `Y` is not read).
+fn read_exr(path: &Path) -> Result<RgbImage, String> {
+    use exr::prelude::*;
+    let meta = exr::meta::MetaData::read_from_file(path, false).map_err(|e| e.to_string())?;
+    let header = meta.headers.first().ok_or("the file has no layer")?;
+    let size = header.layer_size;
+    if size.width() > MAX_SIDE
+        || size.height() > MAX_SIDE
+        || size.width().saturating_mul(size.height()) > MAX_TEXELS
+    {
+        return Err(format!(
+            "the image is {}×{}; at most {MAX_SIDE} a side and {MAX_TEXELS} pixels are read",
+            size.width(),
+            size.height()
+        ));
+    }
+    let image = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .rgba_channels(
+            |res, _| RgbImage {
+                width: res.width(),
+                height: res.height(),
+                pixels: vec![[0.0; 3]; res.width() * res.height()],
+            },
+            |img: &mut RgbImage, pos, (r, g, b, _a): (f32, f32, f32, f32)| {
+                let w = img.width;
+                img.pixels[pos.y() * w + pos.x()] = [r, g, b];
+            },
+        )
+        .first_valid_layer()
+        .all_attributes()
+        .from_file(path)
+        .map_err(|e| match e {
+            exr::error::Error::NotSupported(what) if what.contains("channel") => {
+                format!("no R, G, B channels ({what})")
+            }
+            e => e.to_string(),
+        })?;
+    Ok(image.layer_data.channel_data.pixels)
+}
+
+/// The map's `(u, v)` of a direction (unit, +y up, in the map's own frame).
+#[inline]
+pub fn direction_to_uv(d: Vec3A) -> Vec2 {
+    let u = 0.5 + d.x.atan2(-d.z) * (0.5 / PI);
+    let v = d.y.clamp(-1.0, 1.0).acos() * (1.0 / PI);
+    Vec2::new(u - u.floor(), v)
+}
+
+/// The direction of a point `(u, v)` of the map, and `sin θ`.
+#[inline]
+pub fn uv_to_direction(uv: Vec2) -> (Vec3A, f32) {
+    let phi = 2.0 * PI * (uv.x - 0.5);
+    let theta = PI * uv.y;
+    let (sin_t, cos_t) = theta.sin_cos();
+    let (sin_p, cos_p) = phi.sin_cos();
+    (
+        Vec3A::new(sin_t * sin_p, cos_t, -sin_t * cos_p),
+        sin_t.max(0.0),
+    )
+}
+
+/// What surrounds the scene.
+#[derive(Clone, Debug, Default)]
+enum Source {
+    /// Nothing (black).
+    #[default]
+    None,
+    /// The same radiance from every direction.
+    Constant(Vec3A),
+    /// An equirectangular map (shared: scenes and their copies keep one).
+    Map(Arc<EnvMap>),
+}
+
+/// The environment: a source (none, constant, map), a strength that scales
+/// it, a rotation about +y, and how it is sampled.
+#[derive(Clone, Debug, Default)]
+pub struct Environment {
+    source: Source,
+    /// Multiplies the source's radiance.
+    strength: f32,
+    /// `(sin, cos)` of the rotation about +y (counter-clockwise seen from above).
+    rotation: (f32, f32),
+    /// Rotation in degrees, as given.
+    rotation_degrees: f32,
+    sampling: EnvSampling,
+}
+
+impl Environment {
+    /// No environment: escaping rays see black.
+    pub fn none() -> Self {
+        Self::from_source(Source::None)
+    }
+
+    /// The same radiance `radiance` from every direction (non-finite or
+    /// negative channels become zero).
+    pub fn constant(radiance: Vec3A) -> Self {
+        let clean = Vec3A::from(
+            radiance
+                .to_array()
+                .map(|x| if x.is_finite() && x > 0.0 { x } else { 0.0 }),
+        );
+        if clean == Vec3A::ZERO {
+            return Self::none();
+        }
+        Self::from_source(Source::Constant(clean))
+    }
+
+    /// An environment map.
+    pub fn map(map: EnvMap) -> Self {
+        Self::from_source(Source::Map(Arc::new(map)))
+    }
+
+    /// Reads a map from a Radiance `.hdr` or OpenEXR `.exr` file.
+    pub fn load(path: &Path) -> Result<Self, EnvError> {
+        Ok(Self::map(EnvMap::load(path)?))
+    }
+
+    fn from_source(source: Source) -> Self {
+        Self {
+            source,
+            strength: 1.0,
+            rotation: (0.0, 1.0),
+            rotation_degrees: 0.0,
+            sampling: EnvSampling::Importance,
+        }
+    }
+
+    /// The same environment scaled by `strength` (finite, ≥ 0; else 0).
+    pub fn with_strength(mut self, strength: f32) -> Self {
+        self.strength = if strength.is_finite() && strength > 0.0 {
+            strength
+        } else {
+            0.0
+        };
+        self
+    }
+
+    /// The same environment turned by `degrees` about +y (positive:
+    /// counter-clockwise seen from above, so what was seen towards +x is then
+    /// seen towards −z).
+    pub fn with_rotation(mut self, degrees: f32) -> Self {
+        let d = if degrees.is_finite() { degrees } else { 0.0 };
+        let r = (d as f64).to_radians();
+        self.rotation = (r.sin() as f32, r.cos() as f32);
+        self.rotation_degrees = d;
+        self
+    }
+
+    /// The same environment, sampled as `sampling` says.
+    pub fn with_sampling(mut self, sampling: EnvSampling) -> Self {
+        self.sampling = sampling;
+        self
+    }
+
+    /// The strength.
+    pub fn strength(&self) -> f32 {
+        self.strength
+    }
+
+    /// The rotation about +y in degrees.
+    pub fn rotation_degrees(&self) -> f32 {
+        self.rotation_degrees
+    }
+
+    /// The map, if the environment is one.
+    pub fn env_map(&self) -> Option<&EnvMap> {
+        match &self.source {
+            Source::Map(m) => Some(m),
+            _ => None,
+        }
+    }
+
+    /// Whether escaping rays see black (nothing to look up or sample).
+    #[inline]
+    pub fn is_black(&self) -> bool {
+        self.strength == 0.0 || matches!(self.source, Source::None)
+    }
+
+    /// A world direction in the map's frame (undoing the rotation).
+    #[inline]
+    fn to_map(&self, d: Vec3A) -> Vec3A {
+        let (s, c) = self.rotation;
+        Vec3A::new(c * d.x - s * d.z, d.y, s * d.x + c * d.z)
+    }
+
+    /// A map direction in the world (applying the rotation).
+    #[inline]
+    fn to_world(&self, d: Vec3A) -> Vec3A {
+        let (s, c) = self.rotation;
+        Vec3A::new(c * d.x + s * d.z, d.y, -s * d.x + c * d.z)
+    }
+
+    /// Radiance arriving from direction `dir` (unit, world space, pointing
+    /// away from the scene).
+    #[inline]
+    pub fn radiance(&self, dir: Vec3A) -> Vec3A {
+        match &self.source {
+            Source::None => Vec3A::ZERO,
+            Source::Constant(c) => *c * self.strength,
+            Source::Map(m) => m.lookup(direction_to_uv(self.to_map(dir))) * self.strength,
+        }
+    }
+
+    /// A direction chosen from `u` in `[0, 1)²`, with the radiance from it and
+    /// its density per solid angle; `None` for a black environment or a
+    /// direction of zero density.
+    #[inline]
+    pub fn sample(&self, u: Vec2) -> Option<(Vec3A, Vec3A, f32)> {
+        if self.is_black() {
+            return None;
+        }
+        let map = match (&self.source, self.sampling) {
+            (Source::Map(m), EnvSampling::Importance) => m,
+            _ => {
+                let dir = uniform_sphere(u);
+                return Some((dir, self.radiance(dir), 1.0 / (4.0 * PI)));
+            }
+        };
+        let (uv, pdf_uv) = map.distribution.sample(u)?;
+        let (d, sin_theta) = uv_to_direction(uv);
+        if sin_theta <= 0.0 || pdf_uv <= 0.0 {
+            return None;
+        }
+        let pdf = pdf_uv / (2.0 * PI * PI * sin_theta);
+        let radiance = map.lookup(uv) * self.strength;
+        Some((self.to_world(d), radiance, pdf))
+    }
+
+    /// The density per solid angle with which [`Environment::sample`] picks
+    /// direction `dir` (world space).
+    #[inline]
+    pub fn pdf(&self, dir: Vec3A) -> f32 {
+        if self.is_black() {
+            return 0.0;
+        }
+        match (&self.source, self.sampling) {
+            (Source::Map(m), EnvSampling::Importance) => {
+                let d = self.to_map(dir);
+                let sin_theta = (1.0 - d.y * d.y).max(0.0).sqrt();
+                if sin_theta <= 0.0 {
+                    return 0.0;
+                }
+                m.distribution.pdf(direction_to_uv(d)) / (2.0 * PI * PI * sin_theta)
+            }
+            _ => 1.0 / (4.0 * PI),
+        }
+    }
+
+    /// `∫ L dω` over the sphere, averaged over the colour channels. The power
+    /// the environment sends into a sphere of radius `r` is `π r²` times this
+    /// (the scene's light choice weighs it so).
+    pub fn radiance_integral(&self) -> f32 {
+        let per_channel = match &self.source {
+            Source::None => Vec3A::ZERO,
+            Source::Constant(c) => *c * (4.0 * PI),
+            Source::Map(m) => m.radiance_integral,
+        };
+        let mean = per_channel.element_sum() / 3.0 * self.strength;
+        if mean.is_finite() && mean > 0.0 {
+            mean
+        } else {
+            0.0
+        }
+    }
+}
+
+/// A direction uniformly on the unit sphere from `u` in `[0, 1)²`.
+#[inline]
+pub fn uniform_sphere(u: Vec2) -> Vec3A {
+    let z = 1.0 - 2.0 * u.x;
+    let s = (1.0 - z * z).max(0.0).sqrt();
+    let (sin, cos) = (2.0 * PI * u.y).sin_cos();
+    Vec3A::new(s * cos, s * sin, z)
+}
