@@ -5,15 +5,9 @@ use std::path::Path;
 use std::process::{Command, Output, Stdio};
 use std::time::Duration;
 
-fn raylab(args: &[&str], dir: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_raylab"))
-        .args(args)
-        .current_dir(dir)
-        .env_remove("DISPLAY")
-        .stdin(Stdio::null())
-        .output()
-        .expect("run raylab")
-}
+mod common;
+
+use common::raylab;
 
 fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()

@@ -294,3 +294,23 @@ pub fn texture_refs(m: &SurfaceMaterial) -> impl Iterator<Item = &TextureRef> {
     });
     textures.chain([&m.emission_texture]).flatten()
 }
+
+/// Every texture a material refers to, for changing them (say, when the
+/// material's images move to another store).
+pub fn texture_refs_mut(m: &mut SurfaceMaterial) -> impl Iterator<Item = &mut TextureRef> {
+    let gltf = match &mut m.kind {
+        MaterialKind::Gltf(g) => Some(g.as_mut()),
+        MaterialKind::Fixed(_) => None,
+    };
+    let textures = gltf.into_iter().flat_map(|g| {
+        [
+            &mut g.base_color_texture,
+            &mut g.metallic_roughness_texture,
+            &mut g.normal_texture,
+            &mut g.specular_texture,
+            &mut g.specular_color_texture,
+            &mut g.transmission_texture,
+        ]
+    });
+    textures.chain([&mut m.emission_texture]).flatten()
+}

@@ -5,7 +5,8 @@ use glam::Vec3A;
 
 use crate::geometry::triangle::Triangle;
 use crate::materials::Material;
-use crate::scene::{PointLight, Scene};
+use crate::materials::surface::SurfaceMaterial;
+use crate::scene::{PointLight, Scene, SceneParts};
 
 /// Side of the box in the lab's model units before normalisation.
 const L: f32 = 555.0;
@@ -264,6 +265,32 @@ pub fn area_scene() -> Scene {
     .expect("the built-in box is valid");
     light_area_patch(&mut scene);
     scene
+}
+
+/// The parts of `cornell` (or of `cornell-area` when `area`) in the lab's own
+/// frame (y down), for composing with other models: the box, its point light
+/// (the key light; off for `cornell-area`), its ambient term, and for
+/// `cornell-area` the emitting ceiling patch.
+pub fn parts(area: bool) -> SceneParts {
+    let (mut tris, mut rho) = triangles();
+    if area {
+        push_area_light(&mut tris, &mut rho);
+    }
+    let light = PointLight {
+        position: LIGHT_POSITION,
+        power: Vec3A::splat(if area { 0.0 } else { LIGHT_POWER }),
+    };
+    let ambient = Vec3A::splat(if area { 0.0 } else { AMBIENT });
+    let mut parts = SceneParts::lab(tris, rho, light, ambient).expect("the built-in box is valid");
+    if area {
+        let mut patch = SurfaceMaterial::diffuse(Vec3A::ZERO);
+        patch.emission = AREA_LIGHT_RADIANCE;
+        parts.materials.push(patch);
+        for prim in parts::AREA_LIGHT {
+            parts.material_of[prim] = parts.materials.len() as u32 - 1;
+        }
+    }
+    parts
 }
 
 /// Appends the ceiling patch's two triangles (black) to a box's triangles.

@@ -13,9 +13,10 @@ use super::cornell::{self, MaterialChoice};
 use super::framing;
 use super::gltf::{GltfError, load_gltf};
 use super::obj::{ObjError, load_obj};
+use super::shot::{ShotCamera, ShotError, ShotSettings, load_shot};
 use super::transform::Transform;
 use super::{PointLight, Scene, SceneError};
-use crate::camera::{Lens, Y_UP_TOWARDS_MINUS_Z};
+use crate::camera::{Lens, SceneCamera, Y_UP_TOWARDS_MINUS_Z};
 use crate::geometry::triangle::Triangle;
 use crate::lights::environment::{EnvError, Environment};
 
@@ -29,6 +30,17 @@ pub enum SceneKind {
     Mesh,
     /// A glTF 2.0 file.
     Gltf,
+    /// A scene file (`.toml`) composing models, lights and a camera.
+    Shot,
+}
+
+impl SceneKind {
+    /// Whether the scene is in physical units with real-world defaults (glTF
+    /// and scene files: `path`, tone mapping, 600-pixel-high images), rather
+    /// than one of the lab's scenes.
+    pub fn is_physical(self) -> bool {
+        matches!(self, SceneKind::Gltf | SceneKind::Shot)
+    }
 }
 
 /// Options of [`load`].
@@ -195,6 +207,9 @@ pub struct Loaded {
     /// Whether raylab added its default lighting (a key point light and a grey
     /// sky; see [`DefaultLight`]).
     pub default_light: bool,
+    /// A scene file's render settings (empty for other scenes): what the
+    /// command line leaves out is taken from here.
+    pub settings: ShotSettings,
 }
 
 /// Why a scene cannot be loaded; the message names the file.
@@ -207,12 +222,12 @@ pub enum LoadError {
     #[error(transparent)]
     Gltf(#[from] GltfError),
     /// The scene's content is invalid.
-    #[error("{name}: {source}")]
+    #[error("{name}: {cause}")]
     Scene {
         /// The scene.
         name: String,
         /// What is wrong.
-        source: SceneError,
+        cause: SceneError,
     },
     /// The name is neither a built-in scene nor a known file type.
     #[error(
@@ -225,6 +240,9 @@ pub enum LoadError {
     /// An environment map is unreadable or malformed.
     #[error(transparent)]
     Env(#[from] EnvError),
+    /// A scene file is unreadable, malformed or inconsistent.
+    #[error(transparent)]
+    Shot(#[from] ShotError),
 }
 
 /// Ambient term of mesh and glTF scenes unless the user gives one.
@@ -253,6 +271,7 @@ fn file_kind(name: &str) -> Option<SceneKind> {
     match ext.as_str() {
         "obj" => Some(SceneKind::Mesh),
         "gltf" | "glb" => Some(SceneKind::Gltf),
+        "toml" => Some(SceneKind::Shot),
         _ => None,
     }
 }
@@ -260,9 +279,9 @@ fn file_kind(name: &str) -> Option<SceneKind> {
 /// Loads `name`: `cornell`, `cornell-area`, a `.obj`, `.gltf` or `.glb` file.
 pub fn load(name: &str, options: &LoadOptions) -> Result<Loaded, LoadError> {
     let start = Instant::now();
-    let scene_err = |source| LoadError::Scene {
+    let scene_err = |cause| LoadError::Scene {
         name: name.to_string(),
-        source,
+        cause,
     };
     let kind = match name {
         "cornell" | "cornell-area" => SceneKind::Lab,
@@ -280,13 +299,14 @@ pub fn load(name: &str, options: &LoadOptions) -> Result<Loaded, LoadError> {
     }
     let mut warnings = Vec::new();
     let mut default_light = false;
+    let mut settings = ShotSettings::default();
     // The environment first: a scene lit by one gets no default lighting.
     let env_start = Instant::now();
     let environment = match &options.environment.source {
         Some(_) => Some(options.environment.apply(&Environment::none())?),
         None => None,
     };
-    let environment_time = env_start.elapsed();
+    let mut environment_time = env_start.elapsed();
     let (mut scene, view) = match kind {
         SceneKind::Lab => {
             let area = name == "cornell-area";
@@ -368,49 +388,62 @@ pub fn load(name: &str, options: &LoadOptions) -> Result<Loaded, LoadError> {
                         if cameras == 1 { "" } else { "s" }
                     )));
                 }
-                _ => match scene.cameras.get(options.camera.unwrap_or(0)) {
-                    Some(c) => InitialView {
-                        position: c.position,
-                        rotation: c.rotation,
-                        lens: c.lens,
-                        aspect_ratio: c.aspect_ratio,
-                        step: framing.step,
+                _ => view_through(scene.cameras.get(options.camera.unwrap_or(0)), &framing),
+            };
+            default_light = add_default_light(
+                &mut scene,
+                &view,
+                options.default_light,
+                loaded.has_punctual_lights || environment.is_some(),
+            );
+            if let Some(p) = options.light_power {
+                scene.light.power = Vec3A::splat(p);
+            }
+            (scene, view)
+        }
+        SceneKind::Shot => {
+            let shot = load_shot(Path::new(name))?;
+            warnings.extend(shot.warnings);
+            settings = shot.settings;
+            let mut parts = shot.parts;
+            parts.ambient = Vec3A::splat(options.ambient.unwrap_or(MESH_AMBIENT));
+            let cameras = parts.cameras.len();
+            let mut scene = Scene::from_parts(parts).map_err(scene_err)?;
+            if environment.is_none()
+                && let Some(e) = shot.environment
+            {
+                let from_file = EnvironmentOptions {
+                    source: match (e.file, e.color) {
+                        (Some(f), _) => Some(EnvSource::File(f)),
+                        (None, Some(c)) => Some(EnvSource::Color(Vec3A::from(c))),
+                        (None, None) => None,
                     },
-                    None => InitialView {
-                        position: framing.camera_pos,
-                        rotation: Y_UP_TOWARDS_MINUS_Z,
-                        lens: Lens::LAB,
-                        aspect_ratio: None,
-                        step: framing.step,
-                    },
+                    strength: e.strength,
+                    rotation: e.rotate,
+                };
+                let env_start = Instant::now();
+                let env = from_file.apply(&Environment::none())?;
+                environment_time = env_start.elapsed();
+                scene.set_environment(env);
+            }
+            let (lo, hi) = scene.bounds();
+            let framing = framing::frame(lo, hi);
+            let camera = match options.camera {
+                Some(i) if i >= cameras => {
+                    return Err(LoadError::Usage(format!(
+                        "--camera {i}: {name}'s models have {cameras} camera{}",
+                        if cameras == 1 { "" } else { "s" }
+                    )));
+                }
+                Some(i) => Some(scene.cameras[i].clone()),
+                None => match shot.camera {
+                    ShotCamera::Placed(c) => Some(c),
+                    ShotCamera::Default => scene.cameras.first().cloned().or(shot.box_camera),
                 },
             };
-            let r = scene.radius().max(1e-6);
-            let emitter_irradiance = scene.emitted_power() / (4.0 * std::f32::consts::PI * r * r);
-            let weak_emitters =
-                emitter_irradiance < DEFAULT_LIGHT_EMITTER_RATIO * DEFAULT_LIGHT_IRRADIANCE;
-            let add = match options.default_light {
-                DefaultLight::On => true,
-                DefaultLight::Off => false,
-                DefaultLight::Auto => {
-                    !loaded.has_punctual_lights && weak_emitters && environment.is_none()
-                }
-            };
-            if add {
-                // A key light above and to the right of the starting camera,
-                // giving DEFAULT_LIGHT_IRRADIANCE at the scene's centre.
-                let centre = (lo + hi) * 0.5;
-                let radius = scene.radius().max(1e-3);
-                let offset = view.rotation * Vec3A::new(0.5, -0.7, 0.0) * radius;
-                let position = view.position + offset;
-                let r2 = (position - centre).length_squared().max(1e-6);
-                scene.light = PointLight {
-                    position,
-                    power: Vec3A::splat(DEFAULT_LIGHT_IRRADIANCE * 4.0 * std::f32::consts::PI * r2),
-                };
-                scene.set_environment(Environment::constant(Vec3A::splat(DEFAULT_SKY_RADIANCE)));
-                default_light = true;
-            }
+            let view = view_through(camera.as_ref(), &framing);
+            let lit = shot.has_lights || !scene.environment().is_black() || environment.is_some();
+            default_light = add_default_light(&mut scene, &view, options.default_light, lit);
             if let Some(p) = options.light_power {
                 scene.light.power = Vec3A::splat(p);
             }
@@ -454,5 +487,59 @@ pub fn load(name: &str, options: &LoadOptions) -> Result<Loaded, LoadError> {
         summary,
         warnings,
         default_light,
+        settings,
     })
+}
+
+/// The starting view through `camera`, or framing the scene from +z (y up)
+/// without one.
+fn view_through(camera: Option<&SceneCamera>, framing: &framing::Framing) -> InitialView {
+    match camera {
+        Some(c) => InitialView {
+            position: c.position,
+            rotation: c.rotation,
+            lens: c.lens,
+            aspect_ratio: c.aspect_ratio,
+            step: framing.step,
+        },
+        None => InitialView {
+            position: framing.camera_pos,
+            rotation: Y_UP_TOWARDS_MINUS_Z,
+            lens: Lens::LAB,
+            aspect_ratio: None,
+            step: framing.step,
+        },
+    }
+}
+
+/// Adds raylab's default lighting (a key light above and to the right of the
+/// starting camera giving [`DEFAULT_LIGHT_IRRADIANCE`] at the scene's centre,
+/// and a grey sky) when `when` says so: `auto` adds it to a scene that is not
+/// `lit` (no punctual lights, no environment) and whose emitters are too weak
+/// to light it. Returns whether it was added.
+fn add_default_light(scene: &mut Scene, view: &InitialView, when: DefaultLight, lit: bool) -> bool {
+    let r = scene.radius().max(1e-6);
+    let emitter_irradiance = scene.emitted_power() / (4.0 * std::f32::consts::PI * r * r);
+    let weak_emitters = emitter_irradiance < DEFAULT_LIGHT_EMITTER_RATIO * DEFAULT_LIGHT_IRRADIANCE;
+    let add = match when {
+        DefaultLight::On => true,
+        DefaultLight::Off => false,
+        DefaultLight::Auto => !lit && weak_emitters,
+    };
+    if add {
+        // A key light above and to the right of the starting camera,
+        // giving DEFAULT_LIGHT_IRRADIANCE at the scene's centre.
+        let (lo, hi) = scene.bounds();
+        let centre = (lo + hi) * 0.5;
+        let radius = scene.radius().max(1e-3);
+        let offset = view.rotation * Vec3A::new(0.5, -0.7, 0.0) * radius;
+        let position = view.position + offset;
+        let r2 = (position - centre).length_squared().max(1e-6);
+        scene.light = PointLight {
+            position,
+            power: Vec3A::splat(DEFAULT_LIGHT_IRRADIANCE * 4.0 * std::f32::consts::PI * r2),
+        };
+        scene.set_environment(Environment::constant(Vec3A::splat(DEFAULT_SKY_RADIANCE)));
+    }
+    add
 }

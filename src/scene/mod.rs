@@ -7,12 +7,14 @@
 //! ([`Scene::intersect`], [`Scene::occluded`]), which also makes alpha-masked
 //! surfaces holes.
 
+pub mod compose;
 pub mod cornell;
 pub mod framing;
 pub mod gltf;
 pub mod load;
 pub mod mesh;
 pub mod obj;
+pub mod shot;
 pub mod transform;
 
 use std::collections::HashMap;
@@ -120,6 +122,55 @@ pub struct SceneParts {
     pub cameras: Vec<SceneCamera>,
 }
 
+impl SceneParts {
+    /// The parts of a scene of bare triangles with diffuse reflectances in the
+    /// lab's form (one-sided, lab normals `cross(v2 − v0, v1 − v0)`, one
+    /// material per distinct colour); see [`Scene::new`].
+    pub fn lab(
+        triangles: Vec<Triangle>,
+        reflectance: Vec<Vec3A>,
+        light: PointLight,
+        ambient: Vec3A,
+    ) -> Result<Self, SceneError> {
+        if triangles.len() != reflectance.len() {
+            return Err(SceneError::LengthMismatch {
+                triangles: triangles.len(),
+                reflectances: reflectance.len(),
+            });
+        }
+        let valid = |r: &Vec3A| r.is_finite() && r.min_element() >= 0.0 && r.max_element() <= 1.0;
+        if let Some(index) = reflectance.iter().position(|r| !valid(r)) {
+            return Err(SceneError::BadReflectance {
+                index,
+                value: reflectance[index].into(),
+            });
+        }
+        // One material per distinct colour.
+        let mut ids: HashMap<[u32; 3], u32> = HashMap::new();
+        let mut materials = Vec::new();
+        let material_of = reflectance
+            .iter()
+            .map(|r| {
+                *ids.entry(r.to_array().map(f32::to_bits))
+                    .or_insert_with(|| {
+                        materials.push(SurfaceMaterial::diffuse(*r));
+                        materials.len() as u32 - 1
+                    })
+            })
+            .collect();
+        let normals = triangles.iter().map(Triangle::lab_normal).collect();
+        Ok(SceneParts {
+            triangles,
+            normals,
+            material_of,
+            materials,
+            light,
+            ambient,
+            ..SceneParts::default()
+        })
+    }
+}
+
 /// Marks a bare triangle in [`SceneParts::instance_of`].
 pub const NO_INSTANCE: u32 = u32::MAX;
 
@@ -187,42 +238,7 @@ impl Scene {
         light: PointLight,
         ambient: Vec3A,
     ) -> Result<Self, SceneError> {
-        if triangles.len() != reflectance.len() {
-            return Err(SceneError::LengthMismatch {
-                triangles: triangles.len(),
-                reflectances: reflectance.len(),
-            });
-        }
-        let valid = |r: &Vec3A| r.is_finite() && r.min_element() >= 0.0 && r.max_element() <= 1.0;
-        if let Some(index) = reflectance.iter().position(|r| !valid(r)) {
-            return Err(SceneError::BadReflectance {
-                index,
-                value: reflectance[index].into(),
-            });
-        }
-        // One material per distinct colour.
-        let mut ids: HashMap<[u32; 3], u32> = HashMap::new();
-        let mut materials = Vec::new();
-        let material_of = reflectance
-            .iter()
-            .map(|r| {
-                *ids.entry(r.to_array().map(f32::to_bits))
-                    .or_insert_with(|| {
-                        materials.push(SurfaceMaterial::diffuse(*r));
-                        materials.len() as u32 - 1
-                    })
-            })
-            .collect();
-        let normals = triangles.iter().map(Triangle::lab_normal).collect();
-        Self::from_parts(SceneParts {
-            triangles,
-            normals,
-            material_of,
-            materials,
-            light,
-            ambient,
-            ..SceneParts::default()
-        })
+        Self::from_parts(SceneParts::lab(triangles, reflectance, light, ambient)?)
     }
 
     /// Checks the parts (finite vertices, references in range) and builds the

@@ -187,6 +187,14 @@ impl TextureStore {
         id
     }
 
+    /// Moves every image of `other` to the end of this store, returning the id
+    /// `other`'s image 0 now has (add it to `other`'s texture references).
+    pub fn append(&mut self, other: TextureStore) -> u32 {
+        let offset = u32::try_from(self.images.len()).expect("too many images");
+        self.images.extend(other.images);
+        offset
+    }
+
     /// The image of id `id`.
     ///
     /// # Panics

@@ -99,3 +99,14 @@ pub fn path_film(scene: &raylab::Scene, camera: &raylab::Camera, spp: u32, seed:
     };
     raylab::render::render(scene, camera, &settings, &|_| {}).film
 }
+
+/// Runs the `raylab` binary in `dir` without a display or input.
+pub fn raylab(args: &[&str], dir: &Path) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_raylab"))
+        .args(args)
+        .current_dir(dir)
+        .env_remove("DISPLAY")
+        .stdin(std::process::Stdio::null())
+        .output()
+        .expect("run raylab")
+}

@@ -113,8 +113,8 @@ pub struct SceneArgs {
     pub material: Vec<(String, MaterialChoice)>,
     /// PNG exposure in stops: PNG values are multiplied by 2^E (and by π for
     /// `path`, see README) before the sRGB encoding; EXR is never scaled.
-    #[arg(long, default_value_t = 0.0, value_name = "E", allow_hyphen_values = true, value_parser = parse_exposure)]
-    pub exposure: f32,
+    #[arg(long, value_name = "E", allow_hyphen_values = true, value_parser = parse_exposure)]
+    pub exposure: Option<f32>,
     /// Camera position [default: 0,0,-3 in the box; framing the mesh otherwise].
     #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true, value_parser = parse_vec3)]
     pub camera_pos: Option<Vec3A>,
@@ -160,7 +160,7 @@ pub struct SceneArgs {
     pub ambient: Option<f32>,
 }
 
-#[derive(Debug, Args)]
+#[derive(Debug, Clone, Args)]
 pub struct RenderArgs {
     #[command(flatten)]
     pub scene: SceneArgs,
@@ -176,13 +176,8 @@ pub struct RenderArgs {
     pub time: Option<f64>,
     /// Seed of the sample positions; the same seed gives the same image on any
     /// number of threads.
-    #[arg(
-        long,
-        default_value_t = 0,
-        value_name = "S",
-        allow_hyphen_values = true
-    )]
-    pub seed: u64,
+    #[arg(long, value_name = "S", allow_hyphen_values = true)]
+    pub seed: Option<u64>,
     /// Worker threads [default: one per core].
     #[arg(long, value_name = "N", allow_hyphen_values = true, value_parser = parse_threads)]
     pub threads: Option<usize>,
@@ -211,7 +206,7 @@ impl SceneArgs {
     /// `--integrator`, `path` for glTF scenes and `direct` for the others.
     pub fn integrator(&self, kind: SceneKind) -> Integrator {
         let default = match kind {
-            SceneKind::Gltf => Integrator::path(),
+            SceneKind::Gltf | SceneKind::Shot => Integrator::path(),
             SceneKind::Lab | SceneKind::Mesh => Integrator::Direct,
         };
         match self.integrator.unwrap_or(default) {
@@ -260,7 +255,7 @@ impl SceneArgs {
     /// the aspect ratio.
     pub fn size(&self, kind: SceneKind, aspect_ratio: Option<f32>) -> Result<(u32, u32), String> {
         let (default, aspect) = match kind {
-            SceneKind::Gltf => match aspect_ratio {
+            SceneKind::Gltf | SceneKind::Shot => match aspect_ratio {
                 Some(a) => (
                     ((600.0 * a).round().clamp(1.0, MAX_SIDE as f32) as u32, 600),
                     a,
@@ -317,12 +312,58 @@ impl SceneArgs {
     }
 }
 
-/// Whether a scene name is a glTF file.
+/// Whether a scene name is a glTF file or a scene file (which have cameras).
 fn is_gltf(scene: &str) -> bool {
     std::path::Path::new(scene)
         .extension()
         .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("gltf") || e.eq_ignore_ascii_case("glb"))
+        .is_some_and(|e| {
+            ["gltf", "glb", "toml"]
+                .iter()
+                .any(|x| e.eq_ignore_ascii_case(x))
+        })
+}
+
+/// Whether a scene name is a scene file.
+pub fn is_scene_file(scene: &str) -> bool {
+    std::path::Path::new(scene)
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("toml"))
+}
+
+impl SceneArgs {
+    /// These arguments with what they leave out taken from a scene file's
+    /// `[render]` settings.
+    pub fn with_file_settings(&self, s: &raylab::scene::shot::ShotSettings) -> Self {
+        Self {
+            width: self.width.or(s.width),
+            height: self.height.or(s.height),
+            integrator: self.integrator.or(s.integrator),
+            max_depth: self.max_depth.or(s.max_depth),
+            tonemap: self.tonemap.or(s.tonemap),
+            exposure: self.exposure.or(s.exposure),
+            ..self.clone()
+        }
+    }
+}
+
+impl RenderArgs {
+    /// These arguments with what they leave out taken from the scene file's
+    /// `[render]` settings (when the scene is one).
+    pub fn with_scene_file(&self) -> anyhow::Result<Self> {
+        if !is_scene_file(&self.scene.scene) {
+            return Ok(self.clone());
+        }
+        let s = raylab::scene::shot::read_settings(std::path::Path::new(&self.scene.scene))?;
+        Ok(Self {
+            scene: self.scene.with_file_settings(&s),
+            spp: self.spp.or(s.spp),
+            time: self.time.or(s.time),
+            seed: self.seed.or(s.seed),
+            ..self.clone()
+        })
+    }
 }
 
 fn parse_camera(s: &str) -> Result<usize, String> {

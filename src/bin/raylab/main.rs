@@ -65,10 +65,20 @@ fn is_broken_pipe(e: &anyhow::Error) -> bool {
 fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Some(Command::Render(args)) => render_cmd::run(&args),
-        Some(Command::View(args)) => viewer::run(&args.scene),
+        Some(Command::View(args)) => view_command(&args.scene),
         Some(Command::Bench(args)) => bench::run(&args),
         None => run_default(),
     }
+}
+
+/// `raylab view`: the viewer, with a scene file's settings where the
+/// arguments leave them out.
+fn view_command(args: &SceneArgs) -> anyhow::Result<()> {
+    if args::is_scene_file(&args.scene) {
+        let settings = raylab::scene::shot::read_settings(std::path::Path::new(&args.scene))?;
+        return viewer::run(&args.with_file_settings(&settings));
+    }
+    viewer::run(args)
 }
 
 /// No subcommand: the viewer where there is a display, else a render of the box.
@@ -119,8 +129,8 @@ pub fn display(
     tonemap: ToneMap,
 ) -> Display {
     let factor = match (kind, integrator) {
-        (SceneKind::Gltf, raylab::Integrator::Direct) => 1.0 / std::f32::consts::PI,
-        (SceneKind::Gltf, _) => 1.0,
+        (k, raylab::Integrator::Direct) if k.is_physical() => 1.0 / std::f32::consts::PI,
+        (k, _) if k.is_physical() => 1.0,
         (_, i) if i.is_physical() => std::f32::consts::PI,
         _ => 1.0,
     };
@@ -183,7 +193,7 @@ fn load(args: &SceneArgs, quiet: bool) -> anyhow::Result<Session> {
         lens: v.lens,
     };
     let tonemap = args.tonemap.unwrap_or(match kind {
-        SceneKind::Gltf => ToneMap::KhronosPbrNeutral,
+        SceneKind::Gltf | SceneKind::Shot => ToneMap::KhronosPbrNeutral,
         _ => ToneMap::Clamp,
     });
     Ok(Session {

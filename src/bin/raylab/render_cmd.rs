@@ -16,6 +16,7 @@ use crate::args::{MAX_SPP, RenderArgs};
 const PROGRESS_DELAY: Duration = Duration::from_millis(300);
 
 pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
+    let args = &args.with_scene_file()?;
     let output = args.output.clone().unwrap_or_else(|| {
         // SCENE.png in the current folder, also for a mesh given by its path.
         let stem = std::path::Path::new(&args.scene.scene)
@@ -88,7 +89,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
                 scene,
                 &camera,
                 integrator,
-                args.seed,
+                args.seed.unwrap_or(0),
                 budget,
                 max_spp,
                 &time_spent,
@@ -100,7 +101,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             let settings = RenderSettings {
                 integrator,
                 spp,
-                seed: args.seed,
+                seed: args.seed.unwrap_or(0),
             };
             Progressive {
                 rendered: render(scene, &camera, &settings, &rows_done),
@@ -122,7 +123,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let display = crate::display(
         session.kind,
         integrator,
-        args.scene.exposure,
+        args.scene.exposure.unwrap_or(0.0),
         session.tonemap,
     );
     write_image_with(&done.rendered.film, &output, display)?;

@@ -57,7 +57,7 @@ pub fn run_on(event_loop: EventLoop<()>, session: Session, args: &SceneArgs) -> 
     let (w, h) = session.size;
     let mut app = Viewer {
         path: args.integrator_for_path(),
-        exposure: args.exposure,
+        exposure: args.exposure.unwrap_or(0.0),
         kind: session.kind,
         tonemap: session.tonemap,
         scene: session.scene,

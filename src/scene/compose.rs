@@ -1,0 +1,191 @@
+//! Putting scenes together: placing a loaded model's parts in the world and
+//! appending one model's parts to another's, as scene files do.
+
+use glam::{Affine3A, Mat3A, Vec3A};
+
+use super::{Instance, NO_INSTANCE, SceneParts};
+use crate::lights::Light;
+use crate::materials::surface::texture_refs_mut;
+
+impl SceneParts {
+    /// Moves everything by `to_world`: triangles, their front normals,
+    /// instances, lights and cameras. A mirroring transform keeps each front
+    /// normal on the side it was (as glTF's node transforms do).
+    pub fn transform(&mut self, to_world: Affine3A) {
+        let linear = to_world.matrix3;
+        let normal_matrix = linear.inverse().transpose();
+        for t in &mut self.triangles {
+            for v in &mut t.v {
+                *v = to_world.transform_point3a(*v);
+            }
+        }
+        for n in &mut self.normals {
+            *n = (normal_matrix * *n).normalize_or_zero();
+        }
+        for inst in &mut self.instances {
+            *inst = Instance::new(inst.mesh, inst.first_triangle, to_world * inst.to_world);
+        }
+        let direction = |d: Vec3A| (linear * d).normalize_or_zero();
+        for light in &mut self.lights {
+            match light {
+                Light::Point { position, .. } => *position = to_world.transform_point3a(*position),
+                Light::Spot {
+                    position,
+                    direction: axis,
+                    ..
+                } => {
+                    *position = to_world.transform_point3a(*position);
+                    *axis = direction(*axis);
+                }
+                Light::Directional {
+                    direction: travel, ..
+                } => *travel = direction(*travel),
+            }
+        }
+        self.light.position = to_world.transform_point3a(self.light.position);
+        for camera in &mut self.cameras {
+            camera.position = to_world.transform_point3a(camera.position);
+            // The rotation part only: a camera is not scaled.
+            let r = linear * camera.rotation;
+            let right = r.x_axis.normalize_or_zero();
+            let forward = r.z_axis.normalize_or_zero();
+            let down = forward.cross(right).normalize_or_zero();
+            if right != Vec3A::ZERO && forward != Vec3A::ZERO && down != Vec3A::ZERO {
+                camera.rotation = Mat3A::from_cols(right, down, forward);
+            }
+        }
+    }
+
+    /// Appends `other`'s triangles, meshes, instances, materials, images,
+    /// lights and cameras after this one's, renumbering `other`'s references.
+    /// The key light and the ambient term stay this one's; the result is
+    /// two-sided if either is.
+    pub fn append(&mut self, other: SceneParts) {
+        let triangle_offset = self.triangles.len() as u32;
+        let material_offset = self.materials.len() as u32;
+        let mesh_offset = self.meshes.len() as u32;
+        let instance_offset = self.instances.len() as u32;
+        let image_offset = self.textures.append(other.textures);
+        // An empty list means "all bare"; it must grow once either side has
+        // instances.
+        let had_instances = !self.instance_of.is_empty();
+        if !had_instances && !other.instance_of.is_empty() {
+            self.instance_of = vec![NO_INSTANCE; self.triangles.len()];
+        }
+        if had_instances || !other.instance_of.is_empty() {
+            if other.instance_of.is_empty() {
+                self.instance_of
+                    .extend(std::iter::repeat_n(NO_INSTANCE, other.triangles.len()));
+            } else {
+                self.instance_of.extend(other.instance_of.iter().map(|&i| {
+                    if i == NO_INSTANCE {
+                        NO_INSTANCE
+                    } else {
+                        i + instance_offset
+                    }
+                }));
+            }
+        }
+        self.triangles.extend(other.triangles);
+        self.normals.extend(other.normals);
+        self.material_of
+            .extend(other.material_of.iter().map(|&m| m + material_offset));
+        self.meshes.extend(other.meshes.into_iter().map(|mut mesh| {
+            mesh.material += material_offset;
+            mesh
+        }));
+        self.instances
+            .extend(other.instances.into_iter().map(|inst| Instance {
+                mesh: inst.mesh + mesh_offset,
+                first_triangle: inst.first_triangle + triangle_offset,
+                ..inst
+            }));
+        self.materials
+            .extend(other.materials.into_iter().map(|mut m| {
+                for t in texture_refs_mut(&mut m) {
+                    t.image += image_offset;
+                }
+                m
+            }));
+        self.lights.extend(other.lights);
+        self.cameras.extend(other.cameras);
+        self.two_sided |= other.two_sided;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::triangle::Triangle;
+    use crate::materials::surface::SurfaceMaterial;
+    use crate::scene::{MeshData, Scene};
+
+    fn quad(material: u32) -> SceneParts {
+        let (a, b, c, d) = (Vec3A::ZERO, Vec3A::X, Vec3A::new(1.0, 1.0, 0.0), Vec3A::Y);
+        SceneParts {
+            triangles: vec![Triangle::new(a, b, c), Triangle::new(a, c, d)],
+            normals: vec![Vec3A::Z; 2],
+            material_of: vec![material; 2],
+            materials: vec![SurfaceMaterial::diffuse(Vec3A::splat(0.5)); material as usize + 1],
+            ..SceneParts::default()
+        }
+    }
+
+    #[test]
+    fn appended_parts_keep_their_references() {
+        let mut meshed = quad(0);
+        meshed.meshes.push(MeshData {
+            positions: vec![
+                glam::Vec3::ZERO,
+                glam::Vec3::X,
+                glam::Vec3::ONE,
+                glam::Vec3::Y,
+            ],
+            indices: vec![[0, 1, 2], [0, 2, 3]],
+            ..MeshData::default()
+        });
+        meshed
+            .instances
+            .push(Instance::new(0, 0, Affine3A::IDENTITY));
+        meshed.instance_of = vec![0, 0];
+        meshed.lights.push(Light::Point {
+            position: Vec3A::ZERO,
+            intensity: Vec3A::ONE,
+        });
+        let mut empty = SceneParts::default();
+        empty.append(meshed.clone());
+        assert_eq!(empty.instance_of, [0, 0]);
+        let mut all = quad(1);
+        all.append(meshed.clone());
+        meshed.transform(Affine3A::from_translation(glam::Vec3::new(0.0, 0.0, 5.0)));
+        all.append(meshed);
+        assert_eq!(all.triangles.len(), 6);
+        assert_eq!(all.material_of, [1, 1, 2, 2, 3, 3]);
+        assert_eq!(all.instance_of, [NO_INSTANCE, NO_INSTANCE, 0, 0, 1, 1]);
+        assert_eq!(all.instances[1].first_triangle, 4);
+        assert_eq!(all.instances[1].mesh, 1);
+        assert_eq!(all.instances[1].to_world.translation.z, 5.0);
+        assert_eq!(all.triangles[5].v[1], Vec3A::new(1.0, 1.0, 5.0));
+        assert!(matches!(all.lights[1], Light::Point { position, .. } if position.z == 5.0));
+        // What from_parts checks holds.
+        Scene::from_parts(all).unwrap();
+    }
+
+    #[test]
+    fn transforms_move_normals_as_normals() {
+        let mut parts = quad(0);
+        // Stretch x by 4 and turn 90° about y: +z normals become +x.
+        let m = Affine3A::from_rotation_y(std::f32::consts::FRAC_PI_2)
+            * Affine3A::from_scale(glam::Vec3::new(4.0, 1.0, 1.0));
+        parts.transform(m);
+        for n in &parts.normals {
+            assert!((*n - Vec3A::X).length() < 1e-6, "{n}");
+        }
+        let t = &parts.triangles[0];
+        assert!(
+            (t.v[1] - Vec3A::new(0.0, 0.0, -4.0)).length() < 1e-5,
+            "{}",
+            t.v[1]
+        );
+    }
+}
