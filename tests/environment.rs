@@ -84,6 +84,33 @@ fn directions_find_their_texels_as_the_conventions_say() {
     }
 }
 
+/// The power estimate's integral `∫ L dω`: 4πL for a uniform map, 2πL for a
+/// sky that is bright above the horizon only (to the resolution of the map,
+/// whose bilinear filter spreads the horizon's edge over one texel).
+#[test]
+fn the_radiance_integral_is_exact_for_simple_maps() {
+    let uniform = Environment::map(map_of(64, 32, |_, _| [2.0, 2.0, 2.0]));
+    let want = 8.0 * PI;
+    assert!((uniform.radiance_integral() - want).abs() < 1e-3 * want);
+    let sky = Environment::map(map_of(
+        64,
+        32,
+        |_, j| if j < 16 { [1.0; 3] } else { [0.0; 3] },
+    ));
+    let want = 2.0 * PI;
+    assert!(
+        (sky.radiance_integral() - want).abs() < 1e-3 * want,
+        "{}",
+        sky.radiance_integral()
+    );
+    assert_eq!(
+        Environment::constant(Vec3A::ONE)
+            .with_strength(0.5)
+            .radiance_integral(),
+        2.0 * PI
+    );
+}
+
 #[test]
 fn importance_sampling_follows_its_density() {
     let (w, h) = (64, 32);

@@ -77,7 +77,7 @@ pub struct EnvMap {
     height: usize,
     texels: Vec<[f32; 3]>,
     distribution: Distribution2D,
-    /// `∫ L dω` over the sphere, per channel (the mean-radiance integral).
+    /// `∫ L dω` over the sphere of the channels' mean (in every lane).
     radiance_integral: Vec3A,
 }
 
@@ -109,32 +109,44 @@ impl EnvMap {
         if width == 0 || height == 0 {
             return map;
         }
-        // Each texel's mean radiance under bilinear filtering: itself 9/16, its
-        // four edge neighbours 3/32 each, its corners 1/64 each (u wraps, v clamps).
-        let mean = |i: usize, j: usize| -> Vec3A {
-            let (w, h) = (width, height);
-            let at = |di: isize, dj: isize| {
-                let x = (i as isize + di).rem_euclid(w as isize) as usize;
-                let y = (j as isize + dj).clamp(0, h as isize - 1) as usize;
-                Vec3A::from(map.texels[y * w + x])
-            };
-            at(0, 0) * (9.0 / 16.0)
-                + (at(-1, 0) + at(1, 0) + at(0, -1) + at(0, 1)) * (3.0 / 32.0)
-                + (at(-1, -1) + at(1, -1) + at(-1, 1) + at(1, 1)) * (1.0 / 64.0)
-        };
-        let sin_theta = |j: usize| (PI * (j as f32 + 0.5) / height as f32).sin();
-        map.distribution =
-            Distribution2D::new(width, height, |i, j| luminance(mean(i, j)) * sin_theta(j));
-        // ∫ L dω: each texel covers (2π/W)·(π/H)·sin θ.
-        let texel_solid_angle = 2.0 * std::f64::consts::PI.powi(2) / (width * height) as f64;
-        let integral = (0..height)
-            .into_par_iter()
-            .map(|j| {
-                let row = (0..width).fold(glam::DVec3::ZERO, |acc, i| acc + mean(i, j).as_dvec3());
-                row * sin_theta(j) as f64 * texel_solid_angle
+        // Each texel's mean radiance under bilinear filtering is a separable
+        // filter of the texels: itself 3/4, each neighbour 1/8, along u
+        // (wrapping) and then along v (clamping). Luminance is linear, so the
+        // luminance of the mean is the filtered luminance. Rows in parallel.
+        let mut luminance_rows = vec![0.0f32; width * height];
+        let row_sums: Vec<f64> = luminance_rows
+            .par_chunks_mut(width)
+            .zip(map.texels.par_chunks(width))
+            .map(|(out, row)| {
+                let lum = |i: usize| luminance(Vec3A::from(row[i]));
+                let mut sum = 0.0f64;
+                for i in 0..width {
+                    let (left, right) = ((i + width - 1) % width, (i + 1) % width);
+                    out[i] = 0.75 * lum(i) + 0.125 * (lum(left) + lum(right));
+                    sum += (row[i][0] + row[i][1] + row[i][2]) as f64 / 3.0;
+                }
+                sum
             })
-            .sum::<glam::DVec3>();
-        map.radiance_integral = integral.as_vec3().into();
+            .collect();
+        let sin_theta = |j: usize| (PI * (j as f32 + 0.5) / height as f32).sin();
+        let at = |i: usize, j: isize| {
+            luminance_rows[j.clamp(0, height as isize - 1) as usize * width + i]
+        };
+        map.distribution = Distribution2D::new(width, height, |i, j| {
+            let j = j as isize;
+            (0.75 * at(i, j) + 0.125 * (at(i, j - 1) + at(i, j + 1))) * sin_theta(j as usize)
+        });
+        // ∫ L dω (channel mean): each texel covers (2π/W)·(π/H)·sin θ, and the
+        // u filter keeps a row's sum, so only the v filter mixes rows' sums.
+        let texel_solid_angle = 2.0 * std::f64::consts::PI.powi(2) / (width * height) as f64;
+        let row_sum = |j: isize| row_sums[j.clamp(0, height as isize - 1) as usize];
+        let integral: f64 = (0..height as isize)
+            .map(|j| {
+                let filtered = 0.75 * row_sum(j) + 0.125 * (row_sum(j - 1) + row_sum(j + 1));
+                filtered * sin_theta(j as usize) as f64 * texel_solid_angle
+            })
+            .sum();
+        map.radiance_integral = Vec3A::splat(integral as f32);
         map
     }
 
