@@ -266,3 +266,23 @@ fn the_command_line_overrides_the_file() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("direct, 3 spp"), "{err}");
 }
+
+/// The README's full example is a valid scene file that composes (its paths
+/// are relative to `scenes/`).
+#[test]
+fn the_readme_example_composes() {
+    let readme = std::fs::read_to_string(project("README.md")).unwrap();
+    let section = &readme[readme
+        .find("## Scene files")
+        .expect("a Scene files section")..];
+    let start = section.find("```toml\n").expect("a toml block") + 8;
+    let text = &section[start..start + section[start..].find("```").unwrap()];
+    let path = project("scenes/readme-example.toml");
+    let file = raylab::scene::shot::parse(text, &path).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(file.models.len(), 3);
+    assert_eq!(file.lights.len(), 4);
+    let shot = raylab::scene::shot::compose(file, &path).unwrap_or_else(|e| panic!("{e}"));
+    // The box's point light and the file's first point light: the box's is the key.
+    assert!(shot.parts.light.power.max_element() > 0.0);
+    assert_eq!(shot.settings.max_depth, Some(16));
+}
