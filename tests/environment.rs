@@ -428,3 +428,102 @@ fn environment_renders_are_bit_identical_on_any_thread_count() {
     assert!(common::bit_identical(&one, &three));
     assert!(mean(&one).max_element() > 0.0);
 }
+
+#[test]
+fn command_line_environments() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |args: &[&str]| common::raylab(args, dir.path());
+    let err = |o: &std::process::Output| String::from_utf8_lossy(&o.stderr).into_owned();
+    // Far from the box, the corner pixels see the sky: exactly its radiance.
+    let out = run(&[
+        "render",
+        "--integrator",
+        "path",
+        "--env-color",
+        "0.25,0.5,0.75",
+        "--env-strength",
+        "2",
+        "--camera-pos",
+        "0,0,-30",
+        "--width",
+        "8",
+        "--height",
+        "8",
+        "-o",
+        "sky.exr",
+    ]);
+    assert!(out.status.success(), "{}", err(&out));
+    let film = raylab::film::read_exr(&dir.path().join("sky.exr")).unwrap();
+    assert_eq!(film.get(0, 0), Vec3A::new(0.5, 1.0, 1.5));
+    // A map given by file, turned: loads and says so.
+    let hdr = project_file("../shared/envmaps/venice_sunset_1k.hdr");
+    let out = run(&[
+        "render",
+        "--integrator",
+        "path",
+        "--env",
+        &hdr,
+        "--env-rotate",
+        "90",
+        "--width",
+        "8",
+        "--height",
+        "8",
+        "-o",
+        "map.png",
+    ]);
+    assert!(out.status.success(), "{}", err(&out));
+    // Mistakes: one line each, naming what is wrong.
+    for (args, code, want) in [
+        (
+            &["render", "--env-strength", "2", "-o", "x.png"][..],
+            1,
+            "--env-strength",
+        ),
+        (
+            &["render", "--env", "missing.hdr", "-o", "x.png"][..],
+            1,
+            "missing.hdr",
+        ),
+        (
+            &["render", "--env-color", "1,2", "-o", "x.png"][..],
+            2,
+            "--env-color",
+        ),
+        (
+            &["render", "--env-strength", "-1", "-o", "x.png"][..],
+            2,
+            "--env-strength",
+        ),
+        (
+            &[
+                "render",
+                "--env",
+                "a.hdr",
+                "--env-color",
+                "1,1,1",
+                "-o",
+                "x.png",
+            ][..],
+            2,
+            "--env",
+        ),
+    ] {
+        let out = run(args);
+        assert_eq!(out.status.code(), Some(code), "{args:?}: {}", err(&out));
+        assert_eq!(
+            err(&out).trim().lines().count(),
+            1,
+            "{args:?}: {}",
+            err(&out)
+        );
+        assert!(err(&out).contains(want), "{args:?}: {}", err(&out));
+    }
+}
+
+fn project_file(rel: &str) -> String {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join(rel)
+        .to_string_lossy()
+        .into_owned()
+}
