@@ -8,7 +8,6 @@ use std::f32::consts::PI;
 use std::time::Instant;
 
 use glam::{Vec2, Vec3A};
-use raylab::camera::{Lens, look_at};
 use raylab::film::{Film, rel_mse};
 use raylab::lights::environment::{EnvMap, EnvSampling, Environment, direction_to_uv};
 use raylab::lights::rgbe::{self, RgbImage};
@@ -277,17 +276,6 @@ fn hdr_and_exr_files_load_to_the_same_radiance() {
     );
 }
 
-fn camera(position: Vec3A, target: Vec3A, yfov_deg: f32, w: u32, h: u32) -> Camera {
-    let rotation = look_at(position, target, Vec3A::Y).unwrap();
-    Camera::with_lens(
-        position,
-        rotation,
-        Lens::from_yfov(yfov_deg.to_radians()),
-        w,
-        h,
-    )
-}
-
 fn mean(film: &Film) -> Vec3A {
     let sum: glam::DVec3 = film.pixels.iter().map(|p| p.as_dvec3()).sum();
     (sum / film.pixels.len() as f64).as_vec3a()
@@ -304,7 +292,7 @@ fn white_sphere_in_a_uniform_environment_is_the_environment() {
     let n = tris.len();
     let mut scene =
         common::two_sided_scene(tris, vec![0; n], vec![SurfaceMaterial::diffuse(Vec3A::ONE)]);
-    let cam = camera(Vec3A::new(0.0, 0.5, 3.0), Vec3A::ZERO, 45.0, 32, 32);
+    let cam = common::look_camera(Vec3A::new(0.0, 0.5, 3.0), Vec3A::ZERO, 45.0, 32, 32);
     for env in [
         Environment::constant(l),
         Environment::map(map_of(16, 8, |_, _| [1.6, 1.0, 0.5])).with_strength(0.5),
@@ -357,7 +345,7 @@ fn sun_patch_scene() -> (Scene, Camera) {
         }
     });
     scene.set_environment(Environment::map(map));
-    let cam = camera(
+    let cam = common::look_camera(
         Vec3A::new(0.0, 4.0, 7.0),
         Vec3A::new(0.0, 0.5, 0.0),
         40.0,

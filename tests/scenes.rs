@@ -39,7 +39,7 @@ fn every_example_scene_renders() {
         .filter(|p| p.extension().is_some_and(|e| e == "toml"))
         .collect();
     files.sort();
-    assert!(files.len() >= 2, "examples: {files:?}");
+    assert!(files.len() >= 3, "examples: {files:?}");
     for path in &files {
         let loaded = load_file(path);
         assert!(!loaded.default_light, "{}: lights itself", path.display());

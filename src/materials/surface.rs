@@ -77,6 +77,15 @@ pub struct GltfMaterial {
     /// Beer–Lambert attenuation coefficient per unit length inside the volume
     /// (`−ln(attenuationColor) / attenuationDistance`); zero for clear media.
     pub attenuation: Vec3A,
+    /// OBJ `map_Pr`: multiplies the roughness by its red (grey) channel.
+    pub roughness_texture: Option<TextureRef>,
+    /// OBJ `map_Pm`: multiplies the metallic factor by its red (grey) channel.
+    pub metallic_texture: Option<TextureRef>,
+    /// OBJ `map_d`: multiplies alpha by its alpha channel, or by its red
+    /// channel when `alpha_from_red` (images without alpha).
+    pub alpha_texture: Option<TextureRef>,
+    /// Whether `alpha_texture`'s red channel is the alpha.
+    pub alpha_from_red: bool,
 }
 
 impl Default for GltfMaterial {
@@ -99,6 +108,10 @@ impl Default for GltfMaterial {
             transmission_texture: None,
             thin_walled: true,
             attenuation: Vec3A::ZERO,
+            roughness_texture: None,
+            metallic_texture: None,
+            alpha_texture: None,
+            alpha_from_red: false,
         }
     }
 }
@@ -176,6 +189,10 @@ impl SurfaceMaterial {
                 if let Some(t) = &g.base_color_texture {
                     c *= lookup(t, attrs, textures, ColorSpace::Srgb);
                 }
+                if let Some(t) = &g.alpha_texture {
+                    let a = lookup(t, attrs, textures, ColorSpace::Linear);
+                    c.w *= if g.alpha_from_red { a.x } else { a.w };
+                }
                 c
             }
         }
@@ -203,6 +220,12 @@ impl SurfaceMaterial {
             let mr = lookup(t, attrs, textures, ColorSpace::Linear);
             roughness *= mr.y;
             metallic *= mr.z;
+        }
+        if let Some(t) = &g.roughness_texture {
+            roughness *= lookup(t, attrs, textures, ColorSpace::Linear).x;
+        }
+        if let Some(t) = &g.metallic_texture {
+            metallic *= lookup(t, attrs, textures, ColorSpace::Linear).x;
         }
         let mut specular = g.specular;
         if let Some(t) = &g.specular_texture {
@@ -290,6 +313,9 @@ pub fn texture_refs(m: &SurfaceMaterial) -> impl Iterator<Item = &TextureRef> {
             &g.specular_texture,
             &g.specular_color_texture,
             &g.transmission_texture,
+            &g.roughness_texture,
+            &g.metallic_texture,
+            &g.alpha_texture,
         ]
     });
     textures.chain([&m.emission_texture]).flatten()
@@ -310,6 +336,9 @@ pub fn texture_refs_mut(m: &mut SurfaceMaterial) -> impl Iterator<Item = &mut Te
             &mut g.specular_texture,
             &mut g.specular_color_texture,
             &mut g.transmission_texture,
+            &mut g.roughness_texture,
+            &mut g.metallic_texture,
+            &mut g.alpha_texture,
         ]
     });
     textures.chain([&mut m.emission_texture]).flatten()

@@ -12,7 +12,7 @@ use thiserror::Error;
 use super::cornell::{self, MaterialChoice};
 use super::framing;
 use super::gltf::{GltfError, load_gltf};
-use super::obj::{ObjError, load_obj};
+use super::obj::{ObjError, load_obj, load_obj_scene};
 use super::shot::{ShotCamera, ShotError, ShotSettings, load_shot};
 use super::transform::Transform;
 use super::{PointLight, Scene, SceneError};
@@ -356,10 +356,25 @@ pub fn load(name: &str, options: &LoadOptions) -> Result<Loaded, LoadError> {
             (scene, view)
         }
         SceneKind::Mesh => {
-            let mut mesh = load_obj(Path::new(name))?;
-            warnings.append(&mut mesh.warnings);
-            let ambient = options.ambient.unwrap_or(MESH_AMBIENT);
-            let (mut scene, framing) = framing::mesh_scene(mesh, ambient).map_err(scene_err)?;
+            let obj = load_obj_scene(Path::new(name))?;
+            warnings.extend(obj.warnings);
+            let mut parts = obj.parts;
+            parts.ambient = Vec3A::splat(options.ambient.unwrap_or(MESH_AMBIENT));
+            let (lo, hi) = crate::workload::bounds(&parts.triangles);
+            let framing = framing::frame(lo, hi);
+            parts.light = framing.light;
+            let mut scene = Scene::from_parts(parts).map_err(scene_err)?;
+            // The framing light lights a bare mesh; an OBJ whose emitters
+            // light it (a room with a ceiling lamp) keeps only those, unless
+            // asked (`--default-light on`).
+            let keep_light = match options.default_light {
+                DefaultLight::On => true,
+                DefaultLight::Off => false,
+                DefaultLight::Auto => !emitters_light(&scene) && environment.is_none(),
+            };
+            if !keep_light {
+                scene.light.power = Vec3A::ZERO;
+            }
             if let Some(p) = options.light_power {
                 scene.light.power = Vec3A::splat(p);
             }
@@ -512,19 +527,25 @@ fn view_through(camera: Option<&SceneCamera>, framing: &framing::Framing) -> Ini
     }
 }
 
+/// Whether a scene's emitters are strong enough to light it: their power
+/// spread over the bounding sphere, `P / (4πr²)`, is at least
+/// [`DEFAULT_LIGHT_EMITTER_RATIO`] of [`DEFAULT_LIGHT_IRRADIANCE`].
+fn emitters_light(scene: &Scene) -> bool {
+    let r = scene.radius().max(1e-6);
+    let emitter_irradiance = scene.emitted_power() / (4.0 * std::f32::consts::PI * r * r);
+    emitter_irradiance >= DEFAULT_LIGHT_EMITTER_RATIO * DEFAULT_LIGHT_IRRADIANCE
+}
+
 /// Adds raylab's default lighting (a key light above and to the right of the
 /// starting camera giving [`DEFAULT_LIGHT_IRRADIANCE`] at the scene's centre,
 /// and a grey sky) when `when` says so: `auto` adds it to a scene that is not
 /// `lit` (no punctual lights, no environment) and whose emitters are too weak
 /// to light it. Returns whether it was added.
 fn add_default_light(scene: &mut Scene, view: &InitialView, when: DefaultLight, lit: bool) -> bool {
-    let r = scene.radius().max(1e-6);
-    let emitter_irradiance = scene.emitted_power() / (4.0 * std::f32::consts::PI * r * r);
-    let weak_emitters = emitter_irradiance < DEFAULT_LIGHT_EMITTER_RATIO * DEFAULT_LIGHT_IRRADIANCE;
     let add = match when {
         DefaultLight::On => true,
         DefaultLight::Off => false,
-        DefaultLight::Auto => !lit && weak_emitters,
+        DefaultLight::Auto => !lit && !emitters_light(scene),
     };
     if add {
         // A key light above and to the right of the starting camera,

@@ -13,6 +13,7 @@ pub mod framing;
 pub mod gltf;
 pub mod load;
 pub mod mesh;
+pub mod mtl;
 pub mod obj;
 pub mod shot;
 pub mod transform;

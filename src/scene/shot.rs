@@ -8,6 +8,7 @@
 //! line and column (the parser's spans). Paths are relative to the file.
 
 use std::collections::BTreeMap;
+use std::ops::Range;
 use std::path::{Path, PathBuf};
 
 use glam::{Affine3A, EulerRot, Quat, Vec3, Vec3A};
@@ -502,7 +503,7 @@ fn override_material(
 /// A model's parts with named triangle ranges (the built-in box's parts).
 struct ModelParts {
     parts: SceneParts,
-    named_ranges: Vec<(String, std::ops::Range<usize>)>,
+    named_ranges: Vec<(String, Range<usize>)>,
     lab_camera: Option<SceneCamera>,
     warnings: Vec<String>,
 }
@@ -590,28 +591,12 @@ fn load_model(
                     })
                 }
                 Some("obj") => {
-                    let mesh = super::obj::load_obj(&file)?;
-                    // OBJ is counter-clockwise from the front; the lab's normal
-                    // takes the other order.
-                    let mut parts = SceneParts::lab(
-                        mesh.triangles
-                            .iter()
-                            .map(|t| crate::Triangle::new(t.v[0], t.v[2], t.v[1]))
-                            .collect(),
-                        mesh.reflectance,
-                        PointLight::default(),
-                        Vec3A::ZERO,
-                    )
-                    .map_err(|cause| super::LoadError::Scene {
-                        name: file.display().to_string(),
-                        cause,
-                    })?;
-                    parts.two_sided = true;
+                    let obj = super::obj::load_obj_scene(&file)?;
                     Ok(ModelParts {
-                        parts,
-                        named_ranges: Vec::new(),
+                        parts: obj.parts,
+                        named_ranges: obj.named_parts,
                         lab_camera: None,
-                        warnings: mesh.warnings,
+                        warnings: obj.warnings,
                     })
                 }
                 _ => Err(invalid(
@@ -736,12 +721,33 @@ pub fn compose(file: ShotFile, path: &Path) -> Result<Shot, super::LoadError> {
                 }
                 continue;
             }
-            if let Some((_, range)) = model.named_ranges.iter().find(|(n, _)| n == target) {
-                for prim in range.clone() {
-                    let old = &model.parts.materials[model.parts.material_of[prim] as usize];
-                    let new = override_material(path, spec, &defined, old)?;
-                    model.parts.materials.push(new);
-                    model.parts.material_of[prim] = model.parts.materials.len() as u32 - 1;
+            let ranges: Vec<Range<usize>> = model
+                .named_ranges
+                .iter()
+                .filter(|(n, _)| n == target)
+                .map(|(_, r)| r.clone())
+                .collect();
+            if !ranges.is_empty() {
+                // One new material per original one in the part.
+                let mut replaced: BTreeMap<u32, u32> = BTreeMap::new();
+                for prim in ranges.into_iter().flatten() {
+                    let old = model.parts.material_of[prim];
+                    let new = match replaced.get(&old) {
+                        Some(&m) => m,
+                        None => {
+                            let m = override_material(
+                                path,
+                                spec,
+                                &defined,
+                                &model.parts.materials[old as usize],
+                            )?;
+                            model.parts.materials.push(m);
+                            let id = model.parts.materials.len() as u32 - 1;
+                            replaced.insert(old, id);
+                            id
+                        }
+                    };
+                    model.parts.material_of[prim] = new;
                 }
                 continue;
             }

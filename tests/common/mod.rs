@@ -110,3 +110,17 @@ pub fn raylab(args: &[&str], dir: &Path) -> std::process::Output {
         .output()
         .expect("run raylab")
 }
+
+/// A perspective camera at `position` looking at `target` (+y up) with a
+/// vertical field of view of `fov_deg`.
+pub fn look_camera(
+    position: glam::Vec3A,
+    target: glam::Vec3A,
+    fov_deg: f32,
+    w: u32,
+    h: u32,
+) -> raylab::Camera {
+    let rotation = raylab::camera::look_at(position, target, glam::Vec3A::Y).unwrap();
+    let lens = raylab::camera::Lens::from_yfov(fov_deg.to_radians());
+    raylab::Camera::with_lens(position, rotation, lens, w, h)
+}

@@ -9,7 +9,7 @@
 //! unchecked number.
 
 pub mod accessor;
-mod tangents;
+pub(crate) mod tangents;
 
 use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};
