@@ -4,8 +4,7 @@
 use glam::{Mat3A, Vec3A};
 
 use crate::camera::Y_UP_TOWARDS_MINUS_Z;
-use crate::scene::obj::Mesh;
-use crate::scene::{PointLight, Scene, SceneError};
+use crate::scene::PointLight;
 
 /// Where the camera and light go for a mesh, and how far a key press moves them.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -50,20 +49,6 @@ pub fn frame(lo: Vec3A, hi: Vec3A) -> Framing {
         },
         step: 0.05 * 2.0 * radius,
     }
-}
-
-/// A scene of a mesh with its framing; `ambient` is the lab's constant term.
-pub fn mesh_scene(mesh: Mesh, ambient: f32) -> Result<(Scene, Framing), SceneError> {
-    let (lo, hi) = crate::workload::bounds(&mesh.triangles);
-    let framing = frame(lo, hi);
-    let mut scene = Scene::new(
-        mesh.triangles,
-        mesh.reflectance,
-        framing.light,
-        Vec3A::splat(ambient),
-    )?;
-    scene.two_sided = true;
-    Ok((scene, framing))
 }
 
 #[cfg(test)]
