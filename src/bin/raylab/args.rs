@@ -153,6 +153,11 @@ pub struct RenderArgs {
     /// Output file; `.png` (8-bit sRGB) or `.exr` (linear float32) [default: SCENE.png].
     #[arg(short, long, value_name = "FILE")]
     pub output: Option<PathBuf>,
+    /// Also write first-hit AOVs as extra EXR channels, averaged over each
+    /// pixel's samples: any of albedo, normal, depth, position, e.g.
+    /// `albedo,normal` (needs an .exr output; SCENE.exr without -o).
+    #[arg(long, value_name = "AOV,...", value_parser = parse_aovs)]
+    pub aov: Option<raylab::aov::AovSet>,
     /// Samples per pixel: sample 0 goes through the pixel centre, others are
     /// jittered (`path` jitters all). With --time: at most this many [default: no limit].
     #[arg(long, value_name = "N", allow_hyphen_values = true, value_parser = parse_spp)]
@@ -181,6 +186,21 @@ pub struct RenderArgs {
 pub struct ViewArgs {
     #[command(flatten)]
     pub scene: SceneArgs,
+}
+
+impl RenderArgs {
+    /// Checks what clap cannot: AOVs need an EXR output.
+    pub fn validate(&self) -> Result<(), String> {
+        if let (Some(aovs), Some(output)) = (&self.aov, &self.output)
+            && raylab::film::Format::from_path(output).ok() != Some(raylab::film::Format::Exr)
+        {
+            return Err(format!(
+                "error: --aov {aovs} writes extra EXR channels: the output must be .exr, not {}",
+                output.display()
+            ));
+        }
+        Ok(())
+    }
 }
 
 impl SceneArgs {
@@ -300,6 +320,10 @@ fn is_gltf(scene: &str) -> bool {
         .extension()
         .and_then(|e| e.to_str())
         .is_some_and(|e| e.eq_ignore_ascii_case("gltf") || e.eq_ignore_ascii_case("glb"))
+}
+
+fn parse_aovs(s: &str) -> Result<raylab::aov::AovSet, String> {
+    s.parse()
 }
 
 fn parse_camera(s: &str) -> Result<usize, String> {
