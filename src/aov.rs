@@ -369,18 +369,25 @@ impl AovSums {
                 let at = next;
                 next += k;
                 let mut values = vec![0.0f32; self.sums.len() / stride * k];
+                // A row at a time on rayon (a pixel at a time would be mostly
+                // scheduling).
+                let row = self.width.max(1) as usize;
                 values
-                    .par_chunks_mut(k)
-                    .zip(self.sums.par_chunks(stride))
-                    .for_each(|(pixel, record)| {
-                        let hits = f64::from(record[stride - 1]);
-                        let count = if aov.over_hits() { hits } else { n };
-                        for (v, &sum) in pixel.iter_mut().zip(&record[at..at + k]) {
-                            *v = if count > 0.0 {
-                                (f64::from(sum) / count) as f32
-                            } else {
-                                f32::INFINITY
-                            };
+                    .par_chunks_mut(k * row)
+                    .zip(self.sums.par_chunks(stride * row))
+                    .for_each(|(pixels, records)| {
+                        for (pixel, record) in
+                            pixels.chunks_exact_mut(k).zip(records.chunks_exact(stride))
+                        {
+                            let hits = f64::from(record[stride - 1]);
+                            let count = if aov.over_hits() { hits } else { n };
+                            for (v, &sum) in pixel.iter_mut().zip(&record[at..at + k]) {
+                                *v = if count > 0.0 {
+                                    (f64::from(sum) / count) as f32
+                                } else {
+                                    f32::INFINITY
+                                };
+                            }
                         }
                     });
                 AovLayer { aov, values }

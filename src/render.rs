@@ -396,12 +396,14 @@ impl Tile<'_> {
                         return;
                     }
                 };
-                let mut shaded = None;
-                let ray = start.ray;
+                // The path only copies what it shaded the hit with; the AOVs
+                // are made of it afterwards, outside the path tracer's loop.
+                let mut seen = None;
                 let v = start.trace(scene, hit, &options, rays, &mut |s, b| {
-                    shaded = Some(layout.first_hit(&ray, s, || *b));
+                    seen = Some((*s, *b))
                 });
-                gather(i, &ray, hit, shaded.as_ref());
+                let shaded = seen.map(|(s, b)| layout.first_hit(&start.ray, &s, || b));
+                gather(i, &start.ray, hit, shaded.as_ref());
                 add(i, v);
             };
             for s in samples.clone() {
