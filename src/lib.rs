@@ -20,12 +20,15 @@
 //! * [`sampling`]: PCG32 streams keyed by (seed, pixel, sample), and
 //!   Owen-scrambled Sobol' points;
 //! * [`render`]: tiles on rayon, deterministic per-pixel sampling;
+//! * [`aov`]: first-hit albedo, normal, depth and position per pixel (a
+//!   denoiser's guides), gathered by the render;
 //! * [`film`]: the image buffer, tone mapping and atomic PNG/EXR output;
 //! * [`controls`]: the viewer's camera/light state and how input changes it;
 //! * [`workload`]: the ray-casting workloads of `raylab bench`.
 
 #![warn(missing_docs)]
 
+pub mod aov;
 pub mod camera;
 pub mod controls;
 pub mod film;

@@ -7,13 +7,15 @@ use std::time::{Duration, Instant};
 use glam::{DVec3, Vec3A};
 use rayon::prelude::*;
 
+use crate::aov::{AovImage, AovSet, AovSums, FirstHit, Layout};
 use crate::camera::Camera;
 use crate::film::Film;
 use crate::geometry::ray::{Hit, Ray};
 use crate::integrators::Integrator;
 use crate::integrators::path::{self, PathOptions, PathSampler, SamplerKind};
+use crate::materials::Material;
 use crate::sampling::sampler::Rng;
-use crate::scene::Scene;
+use crate::scene::{Scene, SurfaceHit};
 
 /// Rows per tile: small enough to balance two cores on small images, large enough
 /// that scheduling costs nothing; even, so that tiles hold whole pixel quads.
@@ -49,6 +51,9 @@ pub struct Rendered {
     pub rays: u64,
     /// Samples that came out NaN or infinite and were dropped (counted as black).
     pub dropped: u64,
+    /// The AOVs asked for ([`render_with_aovs`]), averaged over the same samples;
+    /// `None` when none were.
+    pub aovs: Option<AovImage>,
 }
 
 /// What a call of [`accumulate`] cost and found.
@@ -85,14 +90,30 @@ pub fn render(
     settings: &RenderSettings,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Rendered {
+    render_with_aovs(scene, camera, settings, AovSet::NONE, progress)
+}
+
+/// [`render`] that also gathers `aovs` from the camera rays' first hits (see
+/// [`crate::aov`]); the image is the same as without them, bit for bit.
+pub fn render_with_aovs(
+    scene: &Scene,
+    camera: &Camera,
+    settings: &RenderSettings,
+    aovs: AovSet,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Rendered {
     let mut film = Film::new(camera.width, camera.height);
-    let tally = accumulate(
+    let mut aov_sums = (!aovs.is_empty()).then(|| AovSums::new(aovs, camera.width, camera.height));
+    let tally = accumulate_into(
         scene,
         camera,
         settings.integrator,
         settings.seed,
         0..settings.spp.max(1),
-        &mut film,
+        Target {
+            film: &mut film,
+            aovs: aov_sums.as_mut(),
+        },
         progress,
     );
     film.average(settings.spp);
@@ -100,6 +121,7 @@ pub fn render(
         film,
         rays: tally.rays,
         dropped: tally.dropped,
+        aovs: aov_sums.map(|a| a.average(settings.spp)),
     }
 }
 
@@ -130,11 +152,30 @@ pub fn render_for(
     max_spp: u32,
     progress: &(dyn Fn(Duration) + Sync),
 ) -> Progressive {
+    let settings = RenderSettings {
+        integrator,
+        spp: max_spp,
+        seed,
+    };
+    render_for_with_aovs(scene, camera, &settings, AovSet::NONE, budget, progress)
+}
+
+/// [`render_for`] that also gathers `aovs` (see [`crate::aov`]) over the
+/// samples taken; `settings.spp` is the most samples per pixel to take.
+pub fn render_for_with_aovs(
+    scene: &Scene,
+    camera: &Camera,
+    settings: &RenderSettings,
+    aovs: AovSet,
+    budget: Duration,
+    progress: &(dyn Fn(Duration) + Sync),
+) -> Progressive {
     let start = Instant::now();
     let mut film = Film::new(camera.width, camera.height);
+    let mut aov_sums = (!aovs.is_empty()).then(|| AovSums::new(aovs, camera.width, camera.height));
     let mut tally = Tally::default();
     let mut spp = 0u32;
-    let max_spp = max_spp.max(1);
+    let max_spp = settings.spp.max(1);
     while spp < max_spp {
         let elapsed = start.elapsed();
         let remaining = budget.saturating_sub(elapsed);
@@ -152,13 +193,16 @@ pub fn render_for(
             (fit.round() as u32).clamp(1, max_spp - spp)
         };
         tally = tally
-            + accumulate(
+            + accumulate_into(
                 scene,
                 camera,
-                integrator,
-                seed,
+                settings.integrator,
+                settings.seed,
                 spp..spp + n,
-                &mut film,
+                Target {
+                    film: &mut film,
+                    aovs: aov_sums.as_mut(),
+                },
                 &|_| progress(start.elapsed()),
             );
         spp += n;
@@ -169,6 +213,7 @@ pub fn render_for(
             film,
             rays: tally.rays,
             dropped: tally.dropped,
+            aovs: aov_sums.map(|a| a.average(spp)),
         },
         spp,
     }
@@ -191,15 +236,60 @@ pub fn accumulate(
     sums: &mut Film,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Tally {
+    let target = Target {
+        film: sums,
+        aovs: None,
+    };
+    accumulate_into(scene, camera, integrator, seed, samples, target, progress)
+}
+
+/// Where [`accumulate_into`] adds its samples: the image's sums and, if asked
+/// for, the AOVs'.
+struct Target<'a> {
+    film: &'a mut Film,
+    aovs: Option<&'a mut AovSums>,
+}
+
+/// [`accumulate`] into `target`, gathering the AOVs (if any) from the same
+/// camera rays and their closest hits, which the render finds anyway: the
+/// image does not change, and no ray is added.
+fn accumulate_into(
+    scene: &Scene,
+    camera: &Camera,
+    integrator: Integrator,
+    seed: u64,
+    samples: Range<u32>,
+    target: Target<'_>,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Tally {
     let width = camera.width as usize;
+    let sums = target.film;
     assert_eq!((sums.width, sums.height), (camera.width, camera.height));
+    let tile_pixels = width * TILE_ROWS;
+    let tiles = sums.pixels.len().div_ceil(tile_pixels);
+    // Each tile's slice of the AOV sums (empty ones without AOVs, so that the
+    // tiles still zip with them).
+    let (layout, aov_tiles): (_, Vec<&mut [f32]>) = match target.aovs {
+        Some(a) => {
+            assert_eq!((a.width, a.height), (camera.width, camera.height));
+            let layout = a.layout();
+            (
+                Some(layout),
+                a.sums.chunks_mut(tile_pixels * layout.stride).collect(),
+            )
+        }
+        None => (None, (0..tiles).map(|_| &mut [][..]).collect()),
+    };
     sums.pixels
-        .par_chunks_mut(width * TILE_ROWS)
+        .par_chunks_mut(tile_pixels)
+        .zip(aov_tiles)
         .enumerate()
-        .map(|(tile, rows)| {
+        // Each worker reuses one buffer for the tiles' AOV sums: a fresh one per
+        // tile would be fresh pages from the system, and faulting those in cost
+        // more than gathering the AOVs.
+        .map_init(Vec::new, |aov_wide, (tile, (rows, aov_rows))| {
             let y0 = tile * TILE_ROWS;
             let n_rows = rows.len() / width;
-            let mut rays = 0u64;
             let mut dropped = 0u64;
             // Many samples are summed in f64 (one buffer per tile), so that even
             // 2^20 of them lose nothing to f32 rounding; one sample goes straight
@@ -219,78 +309,187 @@ pub fn accumulate(
                     None => rows[i] += v,
                 }
             };
-            if let Integrator::Path(options) = integrator {
-                for s in samples.clone() {
-                    // Camera rays of 2×2 pixel quads traced together, then each
-                    // path on its own; a last odd row or column alone.
-                    for qy in (0..n_rows).step_by(2) {
-                        for qx in (0..width).step_by(2) {
-                            let pixel = |x: usize, y: usize| ((y0 + y) * width + x) as u64;
-                            if qy + 1 < n_rows && qx + 1 < width {
-                                let quad = [(qx, qy), (qx + 1, qy), (qx, qy + 1), (qx + 1, qy + 1)];
-                                let mut starts = quad.map(|(x, y)| {
-                                    PathStart::new(camera, &options, seed, pixel(x, y), s)
-                                });
-                                let primary = starts.each_ref().map(|p| p.ray);
-                                rays += 4;
-                                let hits = scene.intersect4(&primary, f32::INFINITY);
-                                for (((x, y), start), hit) in
-                                    quad.into_iter().zip(&mut starts).zip(hits)
-                                {
-                                    let v = start.trace(scene, hit, &options, &mut rays);
-                                    add(y * width + x, v);
-                                }
-                            } else {
-                                for y in qy..(qy + 2).min(n_rows) {
-                                    for x in qx..(qx + 2).min(width) {
-                                        let mut start =
-                                            PathStart::new(camera, &options, seed, pixel(x, y), s);
-                                        rays += 1;
-                                        let hit = scene.intersect(&start.ray, f32::INFINITY);
-                                        let v = start.trace(scene, hit, &options, &mut rays);
-                                        add(y * width + x, v);
-                                    }
-                                }
-                            }
-                        }
-                    }
+            // The AOVs are summed in f64 too, for any number of samples (one
+            // sample's f64 sum rounds back to the same f32).
+            aov_wide.clear();
+            aov_wide.resize(aov_rows.len(), 0.0);
+            let mut gather = |i: usize, ray: &Ray, hit: Option<Hit>, shaded: Option<&FirstHit>| {
+                if let Some(layout) = &layout {
+                    let record = &mut aov_wide[i * layout.stride..(i + 1) * layout.stride];
+                    layout.gather(scene, camera, ray, hit, shaded, record);
                 }
-            }
-            let lab_samples = if integrator.is_physical() {
-                0..0
-            } else {
-                samples.clone()
             };
-            for s in lab_samples {
-                // 2×2 pixel quads traced together; a last odd row or column alone.
-                for qy in (0..n_rows).step_by(2) {
-                    for qx in (0..width).step_by(2) {
-                        if qy + 1 < n_rows && qx + 1 < width {
-                            let quad = [(qx, qy), (qx + 1, qy), (qx, qy + 1), (qx + 1, qy + 1)];
-                            let primary =
-                                quad.map(|(x, y)| pixel_ray(camera, seed, s, x, y0 + y, width));
-                            let values = integrator.radiance4(scene, &primary, &mut rays);
-                            for ((x, y), v) in quad.into_iter().zip(values) {
-                                add(y * width + x, v);
-                            }
-                        } else {
-                            for y in qy..(qy + 2).min(n_rows) {
-                                for x in qx..(qx + 2).min(width) {
-                                    let ray = pixel_ray(camera, seed, s, x, y0 + y, width);
-                                    add(y * width + x, integrator.radiance(scene, &ray, &mut rays));
-                                }
-                            }
-                        }
-                    }
-                }
-            }
+            let tile = Tile {
+                scene,
+                camera,
+                integrator,
+                seed,
+                samples: samples.clone(),
+                width,
+                y0,
+                n_rows,
+            };
+            let rays = match &layout {
+                Some(layout) => tile.trace::<true>(Some(layout), &mut add, &mut gather),
+                None => tile.trace::<false>(None, &mut add, &mut gather),
+            };
             for (sum, w) in rows.iter_mut().zip(&wide) {
                 *sum += w.as_vec3a();
+            }
+            for (sum, w) in aov_rows.iter_mut().zip(aov_wide.iter()) {
+                *sum += *w as f32;
             }
             progress(n_rows as u64);
             Tally { rays, dropped }
         })
         .sum()
+}
+
+/// One tile's share of a call of [`accumulate_into`]: its rows and the samples.
+struct Tile<'a> {
+    scene: &'a Scene,
+    camera: &'a Camera,
+    integrator: Integrator,
+    seed: u64,
+    samples: Range<u32>,
+    /// Image width in pixels.
+    width: usize,
+    /// First row.
+    y0: usize,
+    /// Rows.
+    n_rows: usize,
+}
+
+impl Tile<'_> {
+    /// Traces the tile's samples in sample order, handing each value to `add`
+    /// (with the pixel's index in the tile) and, when `aovs` is given, each
+    /// camera ray with its hit to `gather` (with the hit's shading where `path`
+    /// found it); returns the rays cast. `AOVS` says whether `aovs` is given:
+    /// the loop without AOVs is then compiled free of their code, which even
+    /// as an untaken branch slowed the lab's cheap integrators by 5 %.
+    fn trace<const AOVS: bool>(
+        &self,
+        aovs: Option<&Layout>,
+        add: &mut impl FnMut(usize, Vec3A),
+        gather: &mut impl FnMut(usize, &Ray, Option<Hit>, Option<&FirstHit>),
+    ) -> u64 {
+        let &Tile {
+            scene,
+            camera,
+            integrator,
+            seed,
+            ref samples,
+            width,
+            y0,
+            n_rows,
+        } = self;
+        let mut rays = 0u64;
+        if let Integrator::Path(options) = integrator {
+            // One path from its camera ray's hit into pixel `i`, its AOVs
+            // gathered from the first hit as the path shades it.
+            let mut path_sample = |i: usize, start: &mut PathStart, hit, rays: &mut u64| {
+                let layout = match aovs {
+                    Some(layout) if AOVS => layout,
+                    // Without AOVs the path alone, observed by nothing.
+                    _ => {
+                        add(i, start.trace(scene, hit, &options, rays, &mut |_, _| {}));
+                        return;
+                    }
+                };
+                // The path only copies what it shaded the hit with; the AOVs
+                // are made of it afterwards, outside the path tracer's loop.
+                let mut seen = None;
+                let v = start.trace(scene, hit, &options, rays, &mut |s, b| {
+                    seen = Some((*s, *b))
+                });
+                let shaded = seen.map(|(s, b)| layout.first_hit(&start.ray, &s, || b));
+                gather(i, &start.ray, hit, shaded.as_ref());
+                add(i, v);
+            };
+            for s in samples.clone() {
+                // Camera rays of 2×2 pixel quads traced together, then each
+                // path on its own; a last odd row or column alone.
+                for qy in (0..n_rows).step_by(2) {
+                    for qx in (0..width).step_by(2) {
+                        let pixel = |x: usize, y: usize| ((y0 + y) * width + x) as u64;
+                        if qy + 1 < n_rows && qx + 1 < width {
+                            let quad = [(qx, qy), (qx + 1, qy), (qx, qy + 1), (qx + 1, qy + 1)];
+                            let mut starts = quad.map(|(x, y)| {
+                                PathStart::new(camera, &options, seed, pixel(x, y), s)
+                            });
+                            let primary = starts.each_ref().map(|p| p.ray);
+                            rays += 4;
+                            let hits = scene.intersect4(&primary, f32::INFINITY);
+                            for (((x, y), start), hit) in
+                                quad.into_iter().zip(&mut starts).zip(hits)
+                            {
+                                path_sample(y * width + x, start, hit, &mut rays);
+                            }
+                        } else {
+                            for y in qy..(qy + 2).min(n_rows) {
+                                for x in qx..(qx + 2).min(width) {
+                                    let mut start =
+                                        PathStart::new(camera, &options, seed, pixel(x, y), s);
+                                    rays += 1;
+                                    let hit = scene.intersect(&start.ray, f32::INFINITY);
+                                    path_sample(y * width + x, &mut start, hit, &mut rays);
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        let lab_samples = if integrator.is_physical() {
+            0..0
+        } else {
+            samples.clone()
+        };
+        for s in lab_samples {
+            // 2×2 pixel quads traced together; a last odd row or column alone.
+            for qy in (0..n_rows).step_by(2) {
+                for qx in (0..width).step_by(2) {
+                    if qy + 1 < n_rows && qx + 1 < width {
+                        let quad = [(qx, qy), (qx + 1, qy), (qx, qy + 1), (qx + 1, qy + 1)];
+                        // Four plain calls, not `quad.map`: the compiler did not
+                        // always inline the closure through it (3 % of `flat`).
+                        let ray =
+                            |(x, y): (usize, usize)| pixel_ray(camera, seed, s, x, y0 + y, width);
+                        let primary = [ray(quad[0]), ray(quad[1]), ray(quad[2]), ray(quad[3])];
+                        let values = if !AOVS {
+                            integrator.radiance4(scene, &primary, &mut rays)
+                        } else {
+                            rays += 4;
+                            let hits = scene.intersect4(&primary, f32::INFINITY);
+                            for (((x, y), ray), hit) in quad.into_iter().zip(&primary).zip(hits) {
+                                gather(y * width + x, ray, hit, None);
+                            }
+                            integrator.radiance4_from(scene, &primary, hits, &mut rays)
+                        };
+                        for ((x, y), v) in quad.into_iter().zip(values) {
+                            add(y * width + x, v);
+                        }
+                    } else {
+                        for y in qy..(qy + 2).min(n_rows) {
+                            for x in qx..(qx + 2).min(width) {
+                                let ray = pixel_ray(camera, seed, s, x, y0 + y, width);
+                                let v = if !AOVS {
+                                    integrator.radiance(scene, &ray, &mut rays)
+                                } else {
+                                    rays += 1;
+                                    let hit = scene.intersect(&ray, f32::INFINITY);
+                                    gather(y * width + x, &ray, hit, None);
+                                    integrator.radiance_from(scene, &ray, hit, &mut rays)
+                                };
+                                add(y * width + x, v);
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        rays
+    }
 }
 
 /// The sampler of one `path` sample.
@@ -325,7 +524,8 @@ impl PathStart {
         Self { sampler, ray }
     }
 
-    /// The path's radiance given the camera ray's closest hit.
+    /// The path's radiance given the camera ray's closest hit; `observe` sees
+    /// the first hit's shading (see [`path::radiance_observed`]).
     #[inline]
     fn trace(
         &mut self,
@@ -333,13 +533,15 @@ impl PathStart {
         hit: Option<Hit>,
         options: &PathOptions,
         rays: &mut u64,
+        observe: &mut impl FnMut(&SurfaceHit, &Material),
     ) -> Vec3A {
+        let ray = &self.ray;
         match &mut self.sampler {
             AnySampler::Sobol(smp) => {
-                path::radiance_from(scene, &self.ray, hit, options, smp, rays)
+                path::radiance_observed(scene, ray, hit, options, smp, rays, observe)
             }
             AnySampler::Independent(rng) => {
-                path::radiance_from(scene, &self.ray, hit, options, rng, rays)
+                path::radiance_observed(scene, ray, hit, options, rng, rays, observe)
             }
         }
     }

@@ -805,3 +805,84 @@ fn bad_gltf_files_and_cameras_exit_with_one_line() {
     assert_eq!(o.status.code(), Some(1));
     assert!(stderr(&o).contains("has 1 camera"), "{}", stderr(&o));
 }
+
+#[test]
+fn render_writes_aovs_as_named_exr_channels_beside_rgb() {
+    let dir = tempfile::tempdir().unwrap();
+    let size = [
+        "--width", "30", "--height", "20", "--spp", "2", "--seed", "5",
+    ];
+    let mut args = vec!["render", "--aov", "albedo,depth", "-o", "x.exr", "--quiet"];
+    args.extend(size);
+    let out = raylab(&args, dir.path());
+    assert!(out.status.success(), "{}", stderr(&out));
+    let file = dir.path().join("x.exr");
+    let channels = raylab::film::read_exr_channels(&file).unwrap();
+    assert_eq!((channels.width, channels.height), (30, 20));
+    assert_eq!(
+        channels.names(),
+        ["B", "G", "R", "albedo.B", "albedo.G", "albedo.R", "depth.Z"]
+    );
+    // The same image and AOVs as the library's, and the image still reads as
+    // the plain RGB picture.
+    let settings = raylab::render::RenderSettings {
+        integrator: raylab::Integrator::Direct,
+        spp: 2,
+        seed: 5,
+    };
+    let set = "albedo,depth".parse().unwrap();
+    let scene = raylab::scene::cornell::scene();
+    let cam = raylab::Camera::lab(raylab::scene::cornell::CAMERA_POSITION, 0.0, 0.0, 30, 20);
+    let want = raylab::render::render_with_aovs(&scene, &cam, &settings, set, &|_| {});
+    assert_eq!(raylab::film::read_exr(&file).unwrap(), want.film);
+    for channel in want.aovs.unwrap().into_channels() {
+        assert_eq!(
+            channels.get(&channel.name),
+            Some(&channel.values[..]),
+            "{}",
+            channel.name
+        );
+    }
+    // Inside the back wall, above the blocks: albedo 0.75, depth 4.
+    let at = 6 * 30 + 15;
+    assert_eq!(channels.get("albedo.G").unwrap()[at], 0.75);
+    assert!((channels.get("depth.Z").unwrap()[at] - 4.0).abs() < 1e-5);
+
+    // Without -o: SCENE.exr, since only EXR holds AOVs.
+    let mut args = vec!["render", "--aov", "normal", "--quiet"];
+    args.extend(size);
+    let out = raylab(&args, dir.path());
+    assert!(out.status.success(), "{}", stderr(&out));
+    let names = raylab::film::read_exr_channels(&dir.path().join("cornell.exr")).unwrap();
+    assert!(names.get("normal.X").is_some(), "{:?}", names.names());
+}
+
+#[test]
+fn aov_errors_are_one_line_usage_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    for (args, needle) in [
+        (
+            vec!["render", "--aov", "albedo", "-o", "x.png"],
+            "the output must be .exr",
+        ),
+        (
+            vec!["render", "--aov", "albedo,colour", "-o", "x.exr"],
+            "unknown AOV 'colour' (expected albedo, normal, depth, position)",
+        ),
+        (
+            vec!["render", "--aov", "depth,depth", "-o", "x.exr"],
+            "given twice",
+        ),
+    ] {
+        let out = raylab(&args, dir.path());
+        let err = stderr(&out);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
+        assert!(err.contains(needle), "{args:?}: {err}");
+    }
+    assert_eq!(
+        std::fs::read_dir(dir.path()).unwrap().count(),
+        0,
+        "nothing written"
+    );
+}

@@ -192,6 +192,12 @@ pub enum OutputError {
         /// The underlying error.
         source: std::io::Error,
     },
+    /// Extra channels (AOVs) were asked for in a format that has none.
+    #[error("{path}: AOVs need an .exr output (a PNG holds only the image)")]
+    ChannelsNeedExr {
+        /// The requested path.
+        path: PathBuf,
+    },
     /// The encoder failed.
     #[error("cannot encode {path}: {message}")]
     Encode {
@@ -238,8 +244,53 @@ pub fn write_image(film: &Film, path: &Path) -> Result<(), OutputError> {
 /// [`write_image`] with PNG values passed through `display` (exposure and tone
 /// mapping); EXR always holds the values unchanged.
 pub fn write_image_with(film: &Film, path: &Path, display: Display) -> Result<(), OutputError> {
+    write_image_layers(film, Vec::new(), path, display)
+}
+
+/// One named channel of an EXR image: `width * height` values, row-major from
+/// the top-left like a [`Film`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct Channel {
+    /// Its name, `layer.channel` for a layer's (e.g. `albedo.R`).
+    pub name: String,
+    /// Its values.
+    pub values: Vec<f32>,
+}
+
+/// [`write_image_with`] with `extra` channels (AOVs) beside the image's: one
+/// single-part EXR whose `R`, `G`, `B` are the image (what [`read_exr`] and
+/// every EXR reader take as the picture) and whose other channels are named
+/// `layer.channel`, the layer convention that Nuke, Blender and OpenImageIO
+/// read from single-part files (the EXR format stores channels sorted by
+/// name). `extra` must be empty for PNG ([`OutputError::ChannelsNeedExr`]);
+/// it is taken, not borrowed, since the EXR encoder needs its planes owned (a
+/// copy of a large image's AOVs would double their memory).
+pub fn write_image_layers(
+    film: &Film,
+    extra: Vec<Channel>,
+    path: &Path,
+    display: Display,
+) -> Result<(), OutputError> {
     let format = Format::from_path(path)?;
-    write_atomic(path, |tmp| write_format(film, format, path, tmp, display))
+    if !extra.is_empty() && format != Format::Exr {
+        return Err(OutputError::ChannelsNeedExr {
+            path: path.to_owned(),
+        });
+    }
+    if let Some(c) = extra.iter().find(|c| c.values.len() != film.pixels.len()) {
+        return Err(OutputError::Encode {
+            path: path.to_owned(),
+            message: format!(
+                "channel {} has {} values for {} pixels",
+                c.name,
+                c.values.len(),
+                film.pixels.len()
+            ),
+        });
+    }
+    write_atomic(path, |tmp| {
+        write_format(film, extra, format, path, tmp, display)
+    })
 }
 
 /// Writes `bytes` to `path` atomically (as [`write_image`] does).
@@ -284,6 +335,7 @@ fn write_atomic(
 
 fn write_format(
     film: &Film,
+    extra: Vec<Channel>,
     format: Format,
     path: &Path,
     tmp: &Path,
@@ -314,15 +366,22 @@ fn write_format(
             out.flush().map_err(io_err)
         }
         Format::Exr => {
-            let w = film.width as usize;
             use exr::prelude::*;
-            let pixels = SpecificChannels::rgb(|pos: Vec2<usize>| {
-                let p = film.pixels[pos.y() * w + pos.x()];
-                (p.x, p.y, p.z)
-            });
+            let size = (film.width as usize, film.height as usize);
+            let plane = |c: usize| film.pixels.iter().map(|p| p[c]).collect::<Vec<f32>>();
+            let channels = ["R", "G", "B"]
+                .into_iter()
+                .enumerate()
+                .map(|(c, name)| AnyChannel::new(name, FlatSamples::F32(plane(c))))
+                .chain(
+                    extra
+                        .into_iter()
+                        .map(|c| AnyChannel::new(c.name.as_str(), FlatSamples::F32(c.values))),
+                )
+                .collect();
             // Blocks written in order, not by a thread pool: the same image gives
             // the same bytes (pixels were identical before, the files not).
-            Image::from_channels((w, film.height as usize), pixels)
+            Image::from_channels(size, AnyChannels::sort(channels))
                 .write()
                 .non_parallel()
                 .to_file(tmp)
@@ -358,6 +417,65 @@ pub fn read_exr(path: &Path) -> Result<Film, OutputError> {
         message: e.to_string(),
     })?;
     Ok(image.layer_data.channel_data.pixels)
+}
+
+/// Every channel of an EXR file's first part, by name.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ExrChannels {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// The channels, in the file's (name) order, as `f32`.
+    pub channels: Vec<Channel>,
+}
+
+impl ExrChannels {
+    /// The values of the channel called `name` (e.g. `albedo.R`), if present.
+    pub fn get(&self, name: &str) -> Option<&[f32]> {
+        self.channels
+            .iter()
+            .find(|c| c.name == name)
+            .map(|c| c.values.as_slice())
+    }
+
+    /// The names of the channels.
+    pub fn names(&self) -> Vec<&str> {
+        self.channels.iter().map(|c| c.name.as_str()).collect()
+    }
+}
+
+/// Reads every channel of an OpenEXR file's first part (the image and the AOVs
+/// that [`write_image_layers`] writes, or any other file's), converted to `f32`.
+pub fn read_exr_channels(path: &Path) -> Result<ExrChannels, OutputError> {
+    use exr::prelude::*;
+    let image = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .first_valid_layer()
+        .all_attributes()
+        .from_file(path)
+        .map_err(|e| OutputError::Encode {
+            path: path.to_owned(),
+            message: e.to_string(),
+        })?;
+    let size = image.layer_data.size;
+    let channels = image
+        .layer_data
+        .channel_data
+        .list
+        .into_iter()
+        .map(|c| Channel {
+            name: c.name.to_string(),
+            values: c.sample_data.values_as_f32().collect(),
+        })
+        .collect();
+    Ok(ExrChannels {
+        width: size.width() as u32,
+        height: size.height() as u32,
+        channels,
+    })
 }
 
 #[cfg(test)]
@@ -410,6 +528,45 @@ mod tests {
         assert_eq!(img.get_pixel(2, 1).0, [255, 188, 0]);
         // Nothing but the two outputs is left behind.
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2);
+    }
+
+    #[test]
+    fn extra_channels_round_trip_beside_the_image_and_need_exr() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut film = Film::new(2, 2);
+        film.pixels[1] = Vec3A::new(0.5, 1.5, 2.5);
+        let extra = vec![
+            Channel {
+                name: "depth.Z".into(),
+                values: vec![4.0, f32::INFINITY, 1.0, 2.0],
+            },
+            Channel {
+                name: "albedo.R".into(),
+                values: vec![0.75, 0.0, 0.5, 1.0],
+            },
+        ];
+        let exr = dir.path().join("a.exr");
+        write_image_layers(&film, extra.clone(), &exr, Display::clamped(1.0)).unwrap();
+        // The image reads as before; every channel by name, sorted as EXR stores them.
+        assert_eq!(read_exr(&exr).unwrap(), film);
+        let all = read_exr_channels(&exr).unwrap();
+        assert_eq!((all.width, all.height), (2, 2));
+        assert_eq!(all.names(), ["B", "G", "R", "albedo.R", "depth.Z"]);
+        assert_eq!(all.get("depth.Z"), Some(&extra[0].values[..]));
+        assert_eq!(all.get("albedo.R"), Some(&extra[1].values[..]));
+        assert_eq!(all.get("G").unwrap()[1], 1.5);
+        assert_eq!(all.get("normal.X"), None);
+        // PNG has no room for them; a channel of the wrong size is refused.
+        let png = dir.path().join("a.png");
+        let err = write_image_layers(&film, extra, &png, Display::clamped(1.0)).unwrap_err();
+        assert!(matches!(err, OutputError::ChannelsNeedExr { .. }), "{err}");
+        let short = vec![Channel {
+            name: "x".into(),
+            values: vec![1.0],
+        }];
+        assert!(write_image_layers(&film, short, &exr, Display::clamped(1.0)).is_err());
+        assert_eq!(read_exr_channels(&exr).unwrap(), all, "the old file stays");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
     }
 
     #[test]

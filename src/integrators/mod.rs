@@ -67,7 +67,24 @@ impl Integrator {
             return path::radiance(scene, ray, &options, &mut Rng::new(0, 0), rays);
         }
         *rays += 1;
-        let Some(hit) = scene.intersect(ray, f32::INFINITY) else {
+        let hit = scene.intersect(ray, f32::INFINITY);
+        self.radiance_from(scene, ray, hit, rays)
+    }
+
+    /// [`Integrator::radiance`] for a ray whose closest hit `hit` is already
+    /// known (the render gathers AOVs from it); does not count that ray.
+    #[inline]
+    pub fn radiance_from(
+        self,
+        scene: &Scene,
+        ray: &Ray,
+        hit: Option<Hit>,
+        rays: &mut u64,
+    ) -> Vec3A {
+        if let Integrator::Path(options) = self {
+            return path_from(scene, ray, hit, &options, rays);
+        }
+        let Some(hit) = hit else {
             return Vec3A::ZERO;
         };
         let rho = scene.base_color(&hit);
@@ -86,6 +103,23 @@ impl Integrator {
         }
         *count += 4;
         let hits = scene.intersect4(rays, f32::INFINITY);
+        self.radiance4_from(scene, rays, hits, count)
+    }
+
+    /// [`Integrator::radiance4`] for rays whose closest hits `hits` are already
+    /// known; does not count them. Always inlined, as [`Integrator::radiance4`]
+    /// was before it was split in two: the lab's loop depends on it.
+    #[inline(always)]
+    pub fn radiance4_from(
+        self,
+        scene: &Scene,
+        rays: &[Ray; 4],
+        hits: [Option<Hit>; 4],
+        count: &mut u64,
+    ) -> [Vec3A; 4] {
+        if let Integrator::Path(options) = self {
+            return std::array::from_fn(|i| path_from(scene, &rays[i], hits[i], &options, count));
+        }
         let rho = hits.map(|h| h.map_or(Vec3A::ZERO, |h| scene.base_color(&h)));
         if self == Integrator::Flat {
             return rho;
@@ -124,6 +158,20 @@ impl Integrator {
             rho[lane] * (d + scene.ambient)
         })
     }
+}
+
+/// `path`'s radiance with the fixed stream of [`Integrator::radiance`]. Out of
+/// line: inlined, the path tracer would make the lab integrators' functions too
+/// large for the render loop to inline them.
+#[inline(never)]
+fn path_from(
+    scene: &Scene,
+    ray: &Ray,
+    hit: Option<Hit>,
+    options: &PathOptions,
+    rays: &mut u64,
+) -> Vec3A {
+    path::radiance_from(scene, ray, hit, options, &mut Rng::new(0, 0), rays)
 }
 
 /// The lab's `D`: irradiance from the point light at a hit, zero when the light is

@@ -17,7 +17,7 @@ use glam::{Vec2, Vec3A};
 use crate::geometry::ray::{Hit, Ray};
 use crate::materials::{Frame, Material};
 use crate::sampling::sampler::Rng;
-use crate::scene::{LightSample, Scene};
+use crate::scene::{LightSample, Scene, SurfaceHit};
 
 /// Bounces after which Russian roulette may end a path.
 pub const RR_DEPTH: u32 = 3;
@@ -176,6 +176,22 @@ pub fn radiance_from(
     sampler: &mut impl PathSampler,
     rays: &mut u64,
 ) -> Vec3A {
+    radiance_observed(scene, ray, first, options, sampler, rays, &mut |_, _| {})
+}
+
+/// [`radiance_from`] that shows `observe` the first hit's surface and BSDF as
+/// the path shades them, so that the render's AOVs need not look the hit's
+/// textures up again. Not called when the path ends before it shades that hit
+/// (a miss, or `max_depth` 1).
+pub fn radiance_observed(
+    scene: &Scene,
+    ray: &Ray,
+    first: Option<Hit>,
+    options: &PathOptions,
+    sampler: &mut impl PathSampler,
+    rays: &mut u64,
+    observe: &mut impl FnMut(&SurfaceHit, &Material),
+) -> Vec3A {
     let mut next_hit = first;
     let mut l = Vec3A::ZERO;
     let mut beta = Vec3A::ONE;
@@ -228,6 +244,9 @@ pub fn radiance_from(
         }
 
         let bsdf = material.bsdf(&surface.attrs, textures);
+        if depth == 0 {
+            observe(&surface, &bsdf);
+        }
         let wo_world = -ray.dir;
         // The shading frame's normal. Two-sided BSDFs (glass, glTF) take the
         // front normal and tell the sides apart themselves; one-sided ones face

@@ -374,6 +374,25 @@ impl Material {
         }
     }
 
+    /// A cheap estimate of the directional albedo seen from a direction at
+    /// cosine `cos_o` to the shading normal (either side), in `[0, 1]` per
+    /// channel: the albedo a denoiser takes as its guide (see
+    /// [`crate::aov`]). Diffuse: the reflectance. Mirror: its reflectance (the
+    /// specular tint). Glass: 1 (clear, `R + T = 1`). Conductors, rough or
+    /// smooth: the Fresnel reflectance at `cos_o` (their tint; the energy that
+    /// single-scattering GGX loses at high roughness is not subtracted). The
+    /// glTF BSDF: [`PbrBsdf::albedo`].
+    pub fn albedo(&self, cos_o: f32) -> Vec3A {
+        let cos = cos_o.abs().min(1.0);
+        let a = match *self {
+            Material::Diffuse { reflectance } | Material::Mirror { reflectance } => reflectance,
+            Material::Dielectric { .. } => Vec3A::ONE,
+            Material::RoughConductor { eta, k, .. } => fresnel_conductor(cos, eta, k),
+            Material::Pbr(ref p) => p.albedo(cos),
+        };
+        finite_or_zero(a).clamp(Vec3A::ZERO, Vec3A::ONE)
+    }
+
     /// NaN counts as smooth too: never a NaN in the microfacet code.
     #[inline]
     fn is_smooth(alpha: f32) -> bool {
@@ -565,6 +584,48 @@ mod tests {
 
     /// All χ² tests of this module, for the Šidák correction.
     const CHI2_TESTS: u32 = 3 + 3 * 4;
+
+    // --------------------------------------------------------------- Albedo
+
+    #[test]
+    fn albedo_is_the_reflectance_tint_or_white_and_stays_in_range() {
+        let rho = Vec3A::new(0.75, 0.15, 0.5);
+        for cos in [1.0, 0.5, -0.3, 0.0] {
+            assert_eq!(Material::Diffuse { reflectance: rho }.albedo(cos), rho);
+            assert_eq!(Material::Mirror { reflectance: rho }.albedo(cos), rho);
+            assert_eq!(Material::Dielectric { ior: 1.5 }.albedo(cos), Vec3A::ONE);
+            assert_eq!(Material::perfect_conductor(0.3).albedo(cos), Vec3A::ONE);
+        }
+        let Material::RoughConductor { eta, k, .. } = Material::gold(0.2) else {
+            unreachable!()
+        };
+        let gold = Material::gold(0.2).albedo(1.0);
+        assert_eq!(gold, fresnel_conductor(1.0, eta, k));
+        assert!(gold.x > gold.z && gold.max_element() <= 1.0, "{gold}");
+        // glTF: head-on, Schlick's terms are F0: a metal gives its base colour,
+        // a dielectric F0 + (1 − F0)·c; smooth clear glass is white at any angle.
+        let c = Vec3A::new(0.8, 0.4, 0.2);
+        let metal = PbrBsdf::new(c, 1.0, 0.5);
+        assert!((Material::Pbr(metal).albedo(1.0) - c).abs().max_element() < 1e-6);
+        let plastic = PbrBsdf::new(c, 0.0, 0.5);
+        let want = 0.04 + 0.96 * c;
+        assert!((plastic.albedo(-1.0) - want).abs().max_element() < 1e-6);
+        // Towards grazing the Fresnel terms grow: brighter, never above 1.
+        assert!(plastic.albedo(0.1).cmpgt(want).all());
+        let glass = PbrBsdf {
+            transmission: 1.0,
+            thin_walled: false,
+            ..PbrBsdf::new(Vec3A::ONE, 0.0, 0.0)
+        };
+        for cos in [1.0, 0.7, 0.2, 0.01] {
+            assert!((glass.albedo(cos) - Vec3A::ONE).abs().max_element() < 1e-6);
+        }
+        // Out-of-range and NaN inputs still give an albedo in [0, 1].
+        let hot = PbrBsdf::new(Vec3A::splat(3.0), 0.5, 0.5).albedo(0.5);
+        assert!(hot.cmple(Vec3A::ONE).all() && hot.cmpge(Vec3A::ZERO).all());
+        let nan = PbrBsdf::new(Vec3A::splat(f32::NAN), 0.0, 0.5);
+        assert_eq!(Material::Pbr(nan).albedo(1.0), Vec3A::ZERO);
+    }
 
     // ---------------------------------------------------------------- Frame
 

@@ -247,6 +247,27 @@ impl PbrBsdf {
         Material::is_smooth(self.alpha) && !self.has_diffuse()
     }
 
+    /// A cheap estimate of the directional albedo seen at cosine `cos_o` to the
+    /// normal, per channel and clamped to `[0, 1]`, from the same Fresnel terms
+    /// at `cos θo` that choose the lobes in [`PbrBsdf::sample`], but in colour:
+    /// `m F(c) + (1 − m) (s F_d + (1 − s max(F_d)) c)`, the metal's tint plus the
+    /// dielectric's white specular and its diffuse and transmitted parts (both
+    /// tinted by `c`). Roughness is ignored (no masking loss), and so is the
+    /// interface seen from inside a volume. A smooth metal gives its specular
+    /// tint, clear smooth glass about 1.
+    pub fn albedo(&self, cos_o: f32) -> Vec3A {
+        let cos = cos_o.abs().min(1.0);
+        let (m, s, c) = (self.metallic, self.specular, self.base_color);
+        let fd = schlick(self.f0(), cos);
+        let dielectric = s * fd + (1.0 - s * fd.max_element()) * c;
+        let a = m * schlick(c, cos) + (1.0 - m) * dielectric;
+        if a.is_finite() {
+            a.clamp(Vec3A::ZERO, Vec3A::ONE)
+        } else {
+            Vec3A::ZERO
+        }
+    }
+
     /// Whether the diffuse part can be non-zero anywhere: `(1 − m)(1 − tr)` and the
     /// base colour positive and `s max(F0) < 1` (`1 − s max(F)` is largest at
     /// normal incidence on the microfacet, where `F = F0`).

@@ -167,6 +167,11 @@ pub struct RenderArgs {
     /// Output file; `.png` (8-bit sRGB) or `.exr` (linear float32) [default: SCENE.png].
     #[arg(short, long, value_name = "FILE")]
     pub output: Option<PathBuf>,
+    /// Also write first-hit AOVs as extra EXR channels, averaged over each
+    /// pixel's samples: any of albedo, normal, depth, position, e.g.
+    /// `albedo,normal` (needs an .exr output; SCENE.exr without -o).
+    #[arg(long, value_name = "AOV,...", value_parser = parse_aovs)]
+    pub aov: Option<raylab::aov::AovSet>,
     /// Samples per pixel: sample 0 goes through the pixel centre, others are
     /// jittered (`path` jitters all). With --time: at most this many [default: no limit].
     #[arg(long, value_name = "N", allow_hyphen_values = true, value_parser = parse_spp)]
@@ -190,6 +195,21 @@ pub struct RenderArgs {
 pub struct ViewArgs {
     #[command(flatten)]
     pub scene: SceneArgs,
+}
+
+impl RenderArgs {
+    /// Checks what clap cannot: AOVs need an EXR output.
+    pub fn validate(&self) -> Result<(), String> {
+        if let (Some(aovs), Some(output)) = (&self.aov, &self.output)
+            && raylab::film::Format::from_path(output).ok() != Some(raylab::film::Format::Exr)
+        {
+            return Err(format!(
+                "error: --aov {aovs} writes extra EXR channels: the output must be .exr, not {}",
+                output.display()
+            ));
+        }
+        Ok(())
+    }
 }
 
 impl SceneArgs {
@@ -364,6 +384,10 @@ impl RenderArgs {
             ..self.clone()
         })
     }
+}
+
+fn parse_aovs(s: &str) -> Result<raylab::aov::AovSet, String> {
+    s.parse()
 }
 
 fn parse_camera(s: &str) -> Result<usize, String> {

@@ -45,6 +45,12 @@ fn main() -> ExitCode {
         eprintln!("{message}");
         return ExitCode::from(2);
     }
+    if let Some(Command::Render(a)) = &cli.command
+        && let Err(message) = a.validate()
+    {
+        eprintln!("{message}");
+        return ExitCode::from(2);
+    }
     match run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         // A reader that stopped early (`raylab bench ... | head -1`) is not a failure.

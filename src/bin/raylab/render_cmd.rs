@@ -7,8 +7,8 @@ use std::time::{Duration, Instant};
 
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use raylab::film::{Format, write_image_with};
-use raylab::render::{Progressive, RenderSettings, render, render_for};
+use raylab::film::{Format, write_image_layers};
+use raylab::render::{Progressive, RenderSettings, render_for_with_aovs, render_with_aovs};
 
 use crate::args::{MAX_SPP, RenderArgs};
 
@@ -18,12 +18,15 @@ const PROGRESS_DELAY: Duration = Duration::from_millis(300);
 pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let args = &args.with_scene_file()?;
     let output = args.output.clone().unwrap_or_else(|| {
-        // SCENE.png in the current folder, also for a mesh given by its path.
+        // SCENE.png in the current folder, also for a mesh given by its path;
+        // SCENE.exr with AOVs, which only EXR holds.
         let stem = std::path::Path::new(&args.scene.scene)
             .file_stem()
             .map_or_else(|| "image".into(), |s| s.to_string_lossy().into_owned());
-        PathBuf::from(format!("{stem}.png"))
+        let ext = if args.aov.is_some() { "exr" } else { "png" };
+        PathBuf::from(format!("{stem}.{ext}"))
     });
+    let aovs = args.aov.unwrap_or_default();
     // Refuse an unsupported format or a missing folder before spending time on
     // the render.
     Format::from_path(&output)?;
@@ -84,16 +87,12 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         Some(seconds) => {
             let budget = Duration::from_secs_f64(seconds);
             bar.set_length(budget.as_millis() as u64);
-            let max_spp = args.spp.unwrap_or(MAX_SPP);
-            render_for(
-                scene,
-                &camera,
+            let settings = RenderSettings {
                 integrator,
-                args.seed.unwrap_or(0),
-                budget,
-                max_spp,
-                &time_spent,
-            )
+                spp: args.spp.unwrap_or(MAX_SPP),
+                seed: args.seed.unwrap_or(0),
+            };
+            render_for_with_aovs(scene, &camera, &settings, aovs, budget, &time_spent)
         }
         None => {
             let spp = args.spp.unwrap_or(1);
@@ -104,12 +103,12 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
                 seed: args.seed.unwrap_or(0),
             };
             Progressive {
-                rendered: render(scene, &camera, &settings, &rows_done),
+                rendered: render_with_aovs(scene, &camera, &settings, aovs, &rows_done),
                 spp,
             }
         }
     };
-    let done = match args.threads {
+    let mut done = match args.threads {
         Some(n) => rayon::ThreadPoolBuilder::new()
             .num_threads(n)
             .build()
@@ -126,7 +125,14 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         args.scene.exposure.unwrap_or(0.0),
         session.tonemap,
     );
-    write_image_with(&done.rendered.film, &output, display)?;
+    // The AOVs as EXR planes; they and the image are written, then freed.
+    let channels = done
+        .rendered
+        .aovs
+        .take()
+        .map(|a| a.into_channels())
+        .unwrap_or_default();
+    write_image_layers(&done.rendered.film, channels, &output, display)?;
     if !args.quiet {
         let secs = elapsed.as_secs_f64();
         let rays = done.rendered.rays;
@@ -135,8 +141,13 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         } else {
             String::new()
         };
+        let with_aovs = if aovs.is_empty() {
+            String::new()
+        } else {
+            format!(" (with AOVs {aovs})")
+        };
         eprintln!(
-            "wrote {}: {}x{}, {}, {} spp, {:.1} ms, {} rays, {:.1} Mrays/s{dropped}",
+            "wrote {}{with_aovs}: {}x{}, {}, {} spp, {:.1} ms, {} rays, {:.1} Mrays/s{dropped}",
             output.display(),
             camera.width,
             camera.height,

@@ -1,0 +1,500 @@
+//! Arbitrary output variables (AOVs): per-pixel data about the first surface
+//! each camera ray hits, written next to the image as extra EXR channels. They
+//! are what a denoiser (e.g. Open Image Denoise) takes as its guides, and what
+//! compositors use for relighting, depth effects and masks.
+//!
+//! Every AOV is gathered from the camera rays of the beauty pass itself (the
+//! same sample positions, hence the same antialiased edges), from the hit the
+//! render already found: no extra rays are cast. `path` also hands over the
+//! hit's shading (surface and BSDF), so its textures are not looked up twice;
+//! for `flat` and `direct` the AOVs shade the hit themselves. Per pixel sample:
+//!
+//! * `albedo`: the directional albedo of the first hit's BSDF as seen from the
+//!   camera, [`Material::albedo`](crate::materials::Material::albedo) (diffuse:
+//!   the reflectance; glTF: an estimate from the lobe weights; mirrors and
+//!   conductors: their specular tint; glass: 1), in `[0, 1]`; zero on a miss
+//!   (the environment is not an albedo). It does not depend on the integrator:
+//!   `flat` and `direct` get the albedo of the BSDF that `path` would use.
+//! * `normal`: the world-space shading normal (interpolated, normal-mapped),
+//!   turned to the side of the surface the camera sees; zero on a miss.
+//! * `depth`: camera-space depth, the distance of the hit point from the
+//!   camera along its viewing axis (not along the ray), for perspective and
+//!   orthographic cameras alike.
+//! * `position`: the world-space hit point.
+//!
+//! A pixel's value is the mean over its samples, so that noise-free geometry
+//! gives noise-free AOVs and edges are antialiased as in the image: `albedo`
+//! and `normal` over all samples (a miss counts as zero, so an edge pixel
+//! blends towards zero and its normal is shorter than 1, as OIDN expects);
+//! `depth` and `position` over the samples that hit (a mean with a miss's
+//! infinity would be infinite, one with zero meaningless), and `+∞` (every
+//! component) where no sample hits. Sums are kept per pixel in sample order, so
+//! AOVs are bit-identical for any number of threads, like the image.
+
+use std::fmt;
+use std::str::FromStr;
+
+use glam::Vec3A;
+use rayon::prelude::*;
+
+use crate::camera::Camera;
+use crate::film::Channel;
+use crate::geometry::ray::{Hit, Ray};
+use crate::materials::Material;
+use crate::scene::{Scene, SurfaceHit};
+
+/// One output variable.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Aov {
+    /// First-hit BSDF albedo, linear RGB in `[0, 1]`.
+    Albedo,
+    /// World-space shading normal facing the camera.
+    Normal,
+    /// Camera-space depth (along the viewing axis).
+    Depth,
+    /// World-space hit position.
+    Position,
+}
+
+impl Aov {
+    /// Every AOV, in the order the README lists them.
+    pub const ALL: [Aov; 4] = [Aov::Albedo, Aov::Normal, Aov::Depth, Aov::Position];
+
+    /// The name on the command line and of the EXR layer.
+    pub fn name(self) -> &'static str {
+        match self {
+            Aov::Albedo => "albedo",
+            Aov::Normal => "normal",
+            Aov::Depth => "depth",
+            Aov::Position => "position",
+        }
+    }
+
+    /// The channels' suffixes, as compositors read them: colours `R, G, B`,
+    /// vectors `X, Y, Z`, depth `Z` (Nuke's `depth.Z`).
+    pub fn channels(self) -> &'static [&'static str] {
+        match self {
+            Aov::Albedo => &["R", "G", "B"],
+            Aov::Normal | Aov::Position => &["X", "Y", "Z"],
+            Aov::Depth => &["Z"],
+        }
+    }
+
+    /// The full EXR channel names, `layer.channel` (e.g. `albedo.R`).
+    pub fn channel_names(self) -> impl Iterator<Item = String> {
+        self.channels()
+            .iter()
+            .map(move |c| format!("{}.{c}", self.name()))
+    }
+
+    /// Whether pixels average this AOV over the samples that hit (and are `+∞`
+    /// where none did) rather than over all samples.
+    fn over_hits(self) -> bool {
+        matches!(self, Aov::Depth | Aov::Position)
+    }
+
+    /// The valid names, for error messages.
+    fn expected() -> String {
+        let names: Vec<&str> = Aov::ALL.iter().map(|a| a.name()).collect();
+        names.join(", ")
+    }
+}
+
+impl fmt::Display for Aov {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for Aov {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        Aov::ALL
+            .into_iter()
+            .find(|a| a.name() == s)
+            .ok_or_else(|| format!("unknown AOV '{s}' (expected {})", Aov::expected()))
+    }
+}
+
+/// A set of AOVs in the order given, each at most once (possibly empty).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct AovSet {
+    list: [Aov; 4],
+    len: u8,
+}
+
+impl Default for AovSet {
+    fn default() -> Self {
+        Self::NONE
+    }
+}
+
+impl AovSet {
+    /// No AOVs: the render gathers nothing.
+    pub const NONE: AovSet = AovSet {
+        list: Aov::ALL,
+        len: 0,
+    };
+
+    /// The set of `aovs` in their order; an error if one is given twice.
+    pub fn new(aovs: &[Aov]) -> Result<Self, String> {
+        let mut set = Self::NONE;
+        for &a in aovs {
+            if set.contains(a) {
+                return Err(format!("AOV '{a}' given twice"));
+            }
+            set.list[set.len as usize] = a;
+            set.len += 1;
+        }
+        Ok(set)
+    }
+
+    /// The AOVs in order.
+    pub fn iter(&self) -> impl Iterator<Item = Aov> + '_ {
+        self.list[..self.len as usize].iter().copied()
+    }
+
+    /// Whether the set holds `aov`.
+    pub fn contains(&self, aov: Aov) -> bool {
+        self.iter().any(|a| a == aov)
+    }
+
+    /// Whether the set is empty.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// Number of AOVs.
+    pub fn len(&self) -> usize {
+        self.len as usize
+    }
+}
+
+impl FromStr for AovSet {
+    type Err = String;
+    /// A comma-separated list such as `albedo,normal`.
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        let aovs: Vec<Aov> = s
+            .split(',')
+            .map(|name| match name.trim() {
+                "" => Err(format!(
+                    "expected a comma-separated list of AOVs ({}), got '{s}'",
+                    Aov::expected()
+                )),
+                name => name.parse(),
+            })
+            .collect::<Result<_, _>>()?;
+        AovSet::new(&aovs)
+    }
+}
+
+impl fmt::Display for AovSet {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let names: Vec<&str> = self.iter().map(Aov::name).collect();
+        f.write_str(&names.join(","))
+    }
+}
+
+/// Where each AOV's sums lie in a pixel's record of [`AovSums`]: the AOVs'
+/// channels in the set's order, then the number of samples that hit.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct Layout {
+    /// Offset of each AOV (indexed as [`Aov::ALL`]) if gathered.
+    offset: [Option<usize>; 4],
+    /// Values per pixel.
+    pub(crate) stride: usize,
+}
+
+impl Layout {
+    fn new(set: AovSet) -> Self {
+        let mut offset = [None; 4];
+        let mut next = 0;
+        for a in set.iter() {
+            offset[a as usize] = Some(next);
+            next += a.channels().len();
+        }
+        Layout {
+            offset,
+            stride: next + 1,
+        }
+    }
+
+    /// What the AOVs need of a camera ray's hit, from its shading: the surface
+    /// `s` and (if the albedo is wanted) its BSDF, which `bsdf` gives. `path`
+    /// passes the ones it shades the hit with, so that the textures are not
+    /// looked up twice.
+    #[inline]
+    pub(crate) fn first_hit(
+        &self,
+        ray: &Ray,
+        s: &SurfaceHit,
+        bsdf: impl FnOnce() -> Material,
+    ) -> FirstHit {
+        // The side the camera sees, decided by the geometric normal (a shading
+        // normal may tilt past the view direction).
+        let normal = if s.ng.dot(ray.dir) > 0.0 { -s.ns } else { s.ns };
+        let albedo = if self.offset[Aov::Albedo as usize].is_some() {
+            bsdf().albedo(normal.dot(ray.dir))
+        } else {
+            Vec3A::ZERO
+        };
+        FirstHit {
+            point: s.point.p,
+            normal,
+            albedo,
+        }
+    }
+
+    /// Adds the AOVs of one camera ray `ray` with closest hit `hit` to a pixel's
+    /// record `out` (a miss adds nothing: its albedo and normal are zero, and
+    /// depth and position only count hits). `shaded` is what
+    /// [`Layout::first_hit`] made of the hit if the integrator shaded it;
+    /// otherwise the hit is shaded here, as far as the AOVs need. Out of line:
+    /// a call per sample costs nothing measurable, while inlined it changed
+    /// what the compiler inlined in the render loop (renders without AOVs
+    /// included, 1 % of `flat`).
+    #[inline(never)]
+    pub(crate) fn gather(
+        &self,
+        scene: &Scene,
+        camera: &Camera,
+        ray: &Ray,
+        hit: Option<Hit>,
+        shaded: Option<&FirstHit>,
+        out: &mut [f64],
+    ) {
+        let Some(hit) = hit else { return };
+        let [albedo, normal, depth, position] = self.offset;
+        let first = match shaded {
+            Some(&f) => f,
+            // Depth and position need just the point.
+            None if albedo.is_none() && normal.is_none() => FirstHit {
+                point: scene.surface_point(&hit, ray.dir).p,
+                normal: Vec3A::ZERO,
+                albedo: Vec3A::ZERO,
+            },
+            None => {
+                let s = scene.surface(&hit);
+                self.first_hit(ray, &s, || {
+                    let material = &scene.materials()[s.material as usize];
+                    material.bsdf(&s.attrs, scene.textures())
+                })
+            }
+        };
+        let p = first.point;
+        if !(p.is_finite() && first.normal.is_finite() && first.albedo.is_finite()) {
+            return;
+        }
+        let mut add = |at: Option<usize>, v: Vec3A, n: usize| {
+            if let Some(at) = at {
+                for (o, c) in out[at..at + n].iter_mut().zip(v.to_array()) {
+                    *o += f64::from(c);
+                }
+            }
+        };
+        add(albedo, first.albedo, 3);
+        add(normal, first.normal, 3);
+        // Along the viewing axis: (p − eye)·forward, the same for an orthographic
+        // camera, whose rays start on the plane through the eye.
+        let d = (p - camera.position).dot(camera.forward());
+        add(depth, Vec3A::splat(d), 1);
+        add(position, p, 3);
+        out[self.stride - 1] += 1.0;
+    }
+}
+
+/// A camera ray's hit as the AOVs see it (see [`Layout::first_hit`]).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct FirstHit {
+    point: Vec3A,
+    normal: Vec3A,
+    albedo: Vec3A,
+}
+
+/// Per-pixel sums of AOVs over the samples taken so far (a record of
+/// `f32`s per pixel; see [`AovSums::average`] for the means).
+#[derive(Clone, Debug, PartialEq)]
+pub struct AovSums {
+    set: AovSet,
+    layout: Layout,
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+    /// `width * height` records, row-major.
+    pub(crate) sums: Vec<f32>,
+}
+
+impl AovSums {
+    /// Zero sums of `set` for a `width × height` image.
+    pub fn new(set: AovSet, width: u32, height: u32) -> Self {
+        let layout = Layout::new(set);
+        let len = width as usize * height as usize * layout.stride;
+        // Zeros written, not `vec![0.0; len]`'s lazily zeroed pages: those are
+        // read before they are written, and each then faults twice (the second
+        // time with a TLB shootdown), which cost more than the AOVs themselves.
+        let mut sums = Vec::with_capacity(len);
+        sums.resize(len, 0.0);
+        Self {
+            set,
+            layout,
+            width,
+            height,
+            sums,
+        }
+    }
+
+    /// The AOVs gathered.
+    pub fn set(&self) -> AovSet {
+        self.set
+    }
+
+    pub(crate) fn layout(&self) -> Layout {
+        self.layout
+    }
+
+    /// The means over `samples` samples per pixel (see the module
+    /// documentation for what each AOV averages over).
+    pub fn average(&self, samples: u32) -> AovImage {
+        let layout = self.layout;
+        let stride = layout.stride;
+        let n = f64::from(samples.max(1));
+        // The records hold the AOVs' channels in the set's order.
+        let mut next = 0;
+        let layers = self
+            .set
+            .iter()
+            .map(|aov| {
+                let k = aov.channels().len();
+                let at = next;
+                next += k;
+                let mut values = vec![0.0f32; self.sums.len() / stride * k];
+                // A row at a time on rayon (a pixel at a time would be mostly
+                // scheduling).
+                let row = self.width.max(1) as usize;
+                values
+                    .par_chunks_mut(k * row)
+                    .zip(self.sums.par_chunks(stride * row))
+                    .for_each(|(pixels, records)| {
+                        for (pixel, record) in
+                            pixels.chunks_exact_mut(k).zip(records.chunks_exact(stride))
+                        {
+                            let hits = f64::from(record[stride - 1]);
+                            let count = if aov.over_hits() { hits } else { n };
+                            for (v, &sum) in pixel.iter_mut().zip(&record[at..at + k]) {
+                                *v = if count > 0.0 {
+                                    (f64::from(sum) / count) as f32
+                                } else {
+                                    f32::INFINITY
+                                };
+                            }
+                        }
+                    });
+                AovLayer { aov, values }
+            })
+            .collect();
+        AovImage {
+            width: self.width,
+            height: self.height,
+            layers,
+        }
+    }
+}
+
+/// One AOV of a whole image.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AovLayer {
+    /// Which AOV.
+    pub aov: Aov,
+    /// Its values, row-major from the top-left, the channels of a pixel together
+    /// (`aov.channels().len()` per pixel, as OIDN takes them).
+    pub values: Vec<f32>,
+}
+
+/// The averaged AOVs of a render, in the order they were asked for.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AovImage {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// One layer per AOV.
+    pub layers: Vec<AovLayer>,
+}
+
+impl AovImage {
+    /// The layer of `aov`, if it was gathered.
+    pub fn layer(&self, aov: Aov) -> Option<&AovLayer> {
+        self.layers.iter().find(|l| l.aov == aov)
+    }
+
+    /// The channels of `aov` at pixel `(x, y)`, if it was gathered.
+    pub fn get(&self, aov: Aov, x: u32, y: u32) -> Option<&[f32]> {
+        let k = aov.channels().len();
+        let i = (y as usize * self.width as usize + x as usize) * k;
+        self.layer(aov)?.values.get(i..i + k)
+    }
+
+    /// Every channel as an EXR channel named `layer.channel` (one plane each),
+    /// each layer freed as soon as its planes are made (a large image's AOVs
+    /// need not be held twice).
+    pub fn into_channels(self) -> Vec<Channel> {
+        let mut channels = Vec::new();
+        for layer in self.layers {
+            let k = layer.aov.channels().len();
+            for (c, name) in layer.aov.channel_names().enumerate() {
+                let values = layer.values.iter().skip(c).step_by(k).copied().collect();
+                channels.push(Channel { name, values });
+            }
+        }
+        channels
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sets_parse_in_order_and_reject_unknown_names_and_repeats() {
+        let set: AovSet = "depth, albedo".parse().unwrap();
+        assert_eq!(set.iter().collect::<Vec<_>>(), [Aov::Depth, Aov::Albedo]);
+        assert_eq!(set.to_string(), "depth,albedo");
+        let all: AovSet = "albedo,normal,depth,position".parse().unwrap();
+        assert_eq!(all.len(), 4);
+        let err = "albedo,colour".parse::<AovSet>().unwrap_err();
+        assert_eq!(
+            err,
+            "unknown AOV 'colour' (expected albedo, normal, depth, position)"
+        );
+        assert!(
+            "normal,normal"
+                .parse::<AovSet>()
+                .unwrap_err()
+                .contains("twice")
+        );
+        for bad in ["", "albedo,", ","] {
+            assert!(bad.parse::<AovSet>().is_err(), "{bad:?}");
+        }
+        assert!(AovSet::NONE.is_empty());
+    }
+
+    #[test]
+    fn means_count_misses_as_zero_or_leave_them_out() {
+        // Two pixels, four samples each: the first hit twice, the second never.
+        let set: AovSet = "normal,depth".parse().unwrap();
+        let mut sums = AovSums::new(set, 2, 1);
+        assert_eq!(sums.layout.stride, 3 + 1 + 1);
+        sums.sums[..5].copy_from_slice(&[0.0, 2.0, 0.0, 7.0, 2.0]);
+        let image = sums.average(4);
+        assert_eq!(image.get(Aov::Normal, 0, 0), Some(&[0.0, 0.5, 0.0][..]));
+        assert_eq!(image.get(Aov::Depth, 0, 0), Some(&[3.5][..]));
+        assert_eq!(image.get(Aov::Normal, 1, 0), Some(&[0.0; 3][..]));
+        assert_eq!(image.get(Aov::Depth, 1, 0), Some(&[f32::INFINITY][..]));
+        assert_eq!(image.get(Aov::Albedo, 0, 0), None);
+        let channels = image.into_channels();
+        let names: Vec<&str> = channels.iter().map(|c| c.name.as_str()).collect();
+        assert_eq!(names, ["normal.X", "normal.Y", "normal.Z", "depth.Z"]);
+        assert_eq!(channels[1].values, [0.5, 0.0]);
+    }
+}
