@@ -64,6 +64,60 @@ pub fn incoherent(lo: Vec3A, hi: Vec3A, n: usize) -> Vec<Ray> {
         .collect()
 }
 
+/// Far end of the surface shadow rays, whose directions reach the light at 1.
+pub const SURFACE_SHADOW_TFAR: f32 = 1.0 - 1e-4;
+
+/// Rays that start on the mesh, as a path tracer's secondary rays do.
+pub struct SurfaceRays {
+    /// Closest-hit rays in cosine-distributed directions about the normal.
+    pub bounce: Vec<Ray>,
+    /// Any-hit rays to a point light, direction `light − origin` (not unit), to
+    /// be traced over `(0, SURFACE_SHADOW_TFAR]`.
+    pub shadow: Vec<Ray>,
+}
+
+/// The surface workloads (`tools/gen_surface_rays.py` defines the same for the
+/// shared data): from the hit point of every incoherent ray that hits, pushed
+/// off the surface by 1e-4 × the largest extent along the geometric normal on
+/// the side the ray came from, a diffuse bounce and a shadow ray to the point
+/// light at `c + (0.3, 1.0, 0.6) · ext`.
+pub fn surface(
+    bvh: &Bvh,
+    triangles: &[Triangle],
+    incoherent: &[Ray],
+    lo: Vec3A,
+    hi: Vec3A,
+) -> SurfaceRays {
+    let (lo64, hi64) = (lo.as_dvec3(), hi.as_dvec3());
+    let c = (lo64 + hi64) / 2.0;
+    let ext = (hi64 - lo64).max_element();
+    let light = c + DVec3::new(0.3, 1.0, 0.6) * ext;
+    let mut rng = Rng::new(4321, 0);
+    let (mut bounce, mut shadow) = (Vec::new(), Vec::new());
+    for ray in incoherent {
+        let Some(hit) = bvh.intersect(ray, f32::INFINITY) else {
+            continue;
+        };
+        let [a, b, c] = triangles[hit.prim as usize].v.map(|v| v.as_dvec3());
+        let d = ray.dir.as_dvec3();
+        let mut n = (b - a).cross(c - a).normalize();
+        if n.dot(d) > 0.0 {
+            n = -n;
+        }
+        let origin = ray.origin.as_dvec3() + d * hit.t as f64 + n * (1e-4 * ext);
+        // Cosine-distributed about n (Malley: a uniform disc lifted to the hemisphere).
+        let (u1, u2) = (rng.next_f32() as f64, rng.next_f32() as f64);
+        let (r, phi) = (u1.sqrt(), std::f64::consts::TAU * u2);
+        let t1 = if n.x.abs() > 0.9 { DVec3::Y } else { DVec3::X };
+        let t1 = t1.cross(n).normalize();
+        let t2 = n.cross(t1);
+        let dir = t1 * (r * phi.cos()) + t2 * (r * phi.sin()) + n * (1.0 - u1).max(0.0).sqrt();
+        bounce.push(Ray::new(origin.as_vec3a(), dir.normalize().as_vec3a()));
+        shadow.push(Ray::new(origin.as_vec3a(), (light - origin).as_vec3a()));
+    }
+    SurfaceRays { bounce, shadow }
+}
+
 /// Reads a ray file: little-endian f32, six per ray (`ox oy oz dx dy dz`).
 pub fn read_rays(path: &Path) -> Result<Vec<Ray>, String> {
     let bytes = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
@@ -111,6 +165,21 @@ pub fn cast_closest4(bvh: &Bvh, rays: &[Ray], t_max: f32, out: &mut [Option<Hit>
                 *o = bvh.intersect(r, t_max);
             }
         });
+}
+
+/// Closest hits as [`cast_closest`] through the stream API
+/// ([`Bvh::intersect_stream`]: several rays in flight per thread).
+pub fn cast_closest_stream(bvh: &Bvh, rays: &[Ray], t_max: f32, out: &mut [Option<Hit>]) {
+    out.par_chunks_mut(CHUNK)
+        .zip(rays.par_chunks(CHUNK))
+        .for_each(|(out, rays)| bvh.intersect_stream(rays, &[t_max], out));
+}
+
+/// Any hits as [`cast_occluded`] through the stream API ([`Bvh::occluded_stream`]).
+pub fn cast_occluded_stream(bvh: &Bvh, rays: &[Ray], t_max: f32, out: &mut [bool]) {
+    out.par_chunks_mut(CHUNK)
+        .zip(rays.par_chunks(CHUNK))
+        .for_each(|(out, rays)| bvh.occluded_stream(rays, &[t_max], out));
 }
 
 /// Whether each ray is blocked within `(0, t_max]`, one ray at a time.

@@ -59,9 +59,25 @@ pub struct BenchArgs {
     /// Thread counts to run, e.g. `1,2` [default: all cores].
     #[arg(long, value_name = "N[,N...]", value_delimiter = ',', allow_hyphen_values = true, value_parser = parse_threads)]
     pub threads: Vec<usize>,
+    /// Which query API to time: `single` (one ray at a time), `stream` (batches
+    /// with several rays in flight) or `all` (both, and four-ray packets on the
+    /// built-in primary workload) [default: all without --rays, else single].
+    #[arg(long, value_enum, value_name = "API")]
+    pub api: Option<BenchApi>,
     /// Timed runs per workload after one warm-up; the median is reported.
     #[arg(long, default_value_t = 5, value_name = "K", allow_hyphen_values = true, value_parser = parse_repeat)]
     pub repeat: usize,
+}
+
+/// The query APIs `raylab bench` can time.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum BenchApi {
+    /// One ray at a time (`Bvh::intersect`, `Bvh::occluded`).
+    Single,
+    /// Batches (`Bvh::intersect_stream`, `Bvh::occluded_stream`).
+    Stream,
+    /// Every API.
+    All,
 }
 
 /// Scene, image size, camera and light: shared by `render` and `view`.

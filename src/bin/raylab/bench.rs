@@ -7,9 +7,12 @@ use anyhow::{Context, anyhow};
 use raylab::film::write_bytes;
 use raylab::geometry::bvh::Bvh;
 use raylab::geometry::ray::{Hit, Ray};
-use raylab::workload::{self, cast_closest, cast_closest4, cast_occluded, encode_hits};
+use raylab::workload::{
+    self, cast_closest, cast_closest_stream, cast_closest4, cast_occluded, cast_occluded_stream,
+    encode_hits,
+};
 
-use crate::args::BenchArgs;
+use crate::args::{BenchApi, BenchArgs};
 
 /// Rays of the generated incoherent and shadow workloads.
 const INCOHERENT_RAYS: usize = 1 << 20;
@@ -26,7 +29,9 @@ struct Workload {
 enum Query {
     Closest,
     Closest4,
+    ClosestStream,
     Any,
+    AnyStream,
 }
 
 impl Query {
@@ -34,6 +39,23 @@ impl Query {
         match self {
             Query::Closest | Query::Any => "single",
             Query::Closest4 => "packet4",
+            Query::ClosestStream | Query::AnyStream => "stream",
+        }
+    }
+
+    /// The queries of `api` for closest hits (`any` false) or any hits.
+    fn of(api: BenchApi, any: bool, packets: bool) -> Vec<Query> {
+        let single = if any { Query::Any } else { Query::Closest };
+        let stream = if any {
+            Query::AnyStream
+        } else {
+            Query::ClosestStream
+        };
+        match api {
+            BenchApi::Single => vec![single],
+            BenchApi::Stream => vec![stream],
+            BenchApi::All if packets && !any => vec![single, Query::Closest4, stream],
+            BenchApi::All => vec![single, stream],
         }
     }
 }
@@ -73,50 +95,54 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         Some(path) => {
             let rays = workload::read_rays(path).map_err(|e| anyhow!(e))?;
             let t_max = args.tfar.unwrap_or(f32::INFINITY);
-            let (name, query) = if args.shadow {
-                ("shadow", Query::Any)
-            } else {
-                ("rays", Query::Closest)
-            };
-            vec![Workload {
-                name,
-                rays,
-                t_max,
-                query,
-            }]
+            let name = if args.shadow { "shadow" } else { "rays" };
+            Query::of(args.api.unwrap_or(BenchApi::Single), args.shadow, false)
+                .into_iter()
+                .map(|query| Workload {
+                    name,
+                    rays: rays.clone(),
+                    t_max,
+                    query,
+                })
+                .collect()
         }
         None => {
             let (lo, hi) = workload::bounds(tris);
             let diag = (hi - lo).length();
             let incoherent = workload::incoherent(lo, hi, INCOHERENT_RAYS);
             let primary = workload::primary(lo, hi);
+            let surface = workload::surface(&bvh, tris, &incoherent, lo, hi);
+            let api = args.api.unwrap_or(BenchApi::All);
+            let mut all = Vec::new();
+            let mut add = |name, rays: &Vec<Ray>, t_max: f32, any: bool, packets: bool| {
+                for query in Query::of(api, any, packets) {
+                    all.push(Workload {
+                        name,
+                        rays: rays.clone(),
+                        t_max,
+                        query,
+                    });
+                }
+            };
             let t_max = args.tfar.unwrap_or(f32::INFINITY);
-            vec![
-                Workload {
-                    name: "primary",
-                    rays: primary.clone(),
-                    t_max,
-                    query: Query::Closest,
-                },
-                Workload {
-                    name: "primary",
-                    rays: primary,
-                    t_max,
-                    query: Query::Closest4,
-                },
-                Workload {
-                    name: "incoherent",
-                    rays: incoherent.clone(),
-                    t_max,
-                    query: Query::Closest,
-                },
-                Workload {
-                    name: "shadow",
-                    rays: incoherent,
-                    t_max: args.tfar.unwrap_or(diag),
-                    query: Query::Any,
-                },
-            ]
+            add("primary", &primary, t_max, false, true);
+            add("incoherent", &incoherent, t_max, false, false);
+            add(
+                "shadow",
+                &incoherent,
+                args.tfar.unwrap_or(diag),
+                true,
+                false,
+            );
+            add("bounce", &surface.bounce, t_max, false, false);
+            add(
+                "surface_shadow",
+                &surface.shadow,
+                workload::SURFACE_SHADOW_TFAR,
+                true,
+                false,
+            );
+            all
         }
     };
 
@@ -142,7 +168,13 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
                     match w.query {
                         Query::Closest => cast_closest(&bvh, &w.rays, w.t_max, &mut hits),
                         Query::Closest4 => cast_closest4(&bvh, &w.rays, w.t_max, &mut hits),
+                        Query::ClosestStream => {
+                            cast_closest_stream(&bvh, &w.rays, w.t_max, &mut hits)
+                        }
                         Query::Any => cast_occluded(&bvh, &w.rays, w.t_max, &mut blocked),
+                        Query::AnyStream => {
+                            cast_occluded_stream(&bvh, &w.rays, w.t_max, &mut blocked)
+                        }
                     }
                     if run > 0 {
                         times.push(start.elapsed().as_secs_f64());
@@ -164,7 +196,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     }
     if let (Some(path), Some(w)) = (&args.hits, workloads.first()) {
         let bytes = match w.query {
-            Query::Any => blocked.iter().map(|&b| b as u8).collect(),
+            Query::Any | Query::AnyStream => blocked.iter().map(|&b| b as u8).collect(),
             _ => encode_hits(&hits),
         };
         write_bytes(&bytes, path)?;

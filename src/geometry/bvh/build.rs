@@ -12,7 +12,7 @@ use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 
 use rayon::prelude::*;
 
-use super::node::{ChildRef, EMPTY, Isa, LEAF, Node, WIDTH, leaf_parts, leaf_ref};
+use super::node::{ChildRef, EMPTY, Isa, LEAF, Node, NodeBoxes, WIDTH, leaf_parts, leaf_ref};
 use super::packet::Packet;
 use super::sah::{Aabb, BuildPrim, Cluster};
 use crate::geometry::triangle::Triangle;
@@ -22,7 +22,8 @@ const PARALLEL_MIN: usize = 4096;
 
 /// The built tree: nodes, leaf packets and the root.
 pub(super) struct Built {
-    pub(super) nodes: Vec<Node>,
+    pub(super) nodes: Vec<NodeBoxes>,
+    pub(super) children: Vec<[ChildRef; WIDTH]>,
     pub(super) packets: Vec<Packet>,
     pub(super) root: ChildRef,
     pub(super) triangles: usize,
@@ -72,10 +73,11 @@ pub(super) fn build(triangles: &[Triangle], isa: Isa) -> Option<Built> {
     } else {
         root
     };
-    let nodes = top.flatten(&fix_leaf);
+    let (nodes, children) = top.flatten(&fix_leaf);
     let packets = gather_packets(triangles, &prims, &chunks);
     Some(Built {
         nodes,
+        children,
         packets,
         root,
         triangles: prims.len(),
@@ -239,38 +241,56 @@ impl Piece {
 
     /// All the nodes in one array, pieces in depth-first order, references made
     /// global; `fix_leaf` turns a provisional leaf reference into its packets'.
-    fn flatten(&self, fix_leaf: &(impl Fn(ChildRef) -> ChildRef + Sync)) -> Vec<Node> {
+    fn flatten(
+        &self,
+        fix_leaf: &(impl Fn(ChildRef) -> ChildRef + Sync),
+    ) -> (Vec<NodeBoxes>, Vec<[ChildRef; WIDTH]>) {
         let mut placed = Vec::new();
         let total = self.place(0, &mut placed) as usize;
-        let mut nodes = Vec::with_capacity(total);
-        // Carve the destination into each piece's run, in offset order.
-        let mut rest = &mut nodes.spare_capacity_mut()[..total];
+        let mut boxes = Vec::with_capacity(total);
+        let mut children = Vec::with_capacity(total);
+        // Carve the destinations into each piece's run, in offset order.
+        let mut rest_boxes = &mut boxes.spare_capacity_mut()[..total];
+        let mut rest_children = &mut children.spare_capacity_mut()[..total];
         let mut jobs = Vec::with_capacity(placed.len());
         for placed in placed {
-            let (mine, others) = std::mem::take(&mut rest).split_at_mut(placed.piece.nodes.len());
-            jobs.push((placed, mine));
-            rest = others;
+            let len = placed.piece.nodes.len();
+            let (my_boxes, others) = std::mem::take(&mut rest_boxes).split_at_mut(len);
+            rest_boxes = others;
+            let (my_children, others) = std::mem::take(&mut rest_children).split_at_mut(len);
+            rest_children = others;
+            jobs.push((placed, my_boxes, my_children));
         }
-        jobs.into_par_iter().for_each(|(placed, out)| {
-            let mut links = placed.links.iter().peekable();
-            for (slot, (dst, src)) in out.iter_mut().zip(&placed.piece.nodes).enumerate() {
-                let mut node = *src;
-                for r in &mut node.children {
-                    *r = match *r {
-                        EMPTY => EMPTY,
-                        r if r & LEAF != 0 => fix_leaf(r),
-                        r => r + placed.offset,
-                    };
+        jobs.into_par_iter()
+            .for_each(|(placed, out_boxes, out_children)| {
+                let mut links = placed.links.iter().peekable();
+                for (slot, ((dst_box, dst_kids), src)) in out_boxes
+                    .iter_mut()
+                    .zip(out_children.iter_mut())
+                    .zip(&placed.piece.nodes)
+                    .enumerate()
+                {
+                    let mut kids = src.children;
+                    for r in &mut kids {
+                        *r = match *r {
+                            EMPTY => EMPTY,
+                            r if r & LEAF != 0 => fix_leaf(r),
+                            r => r + placed.offset,
+                        };
+                    }
+                    while let Some(&(_, lane, target)) = links.next_if(|l| l.0 == slot as u32) {
+                        kids[lane] = target;
+                    }
+                    dst_box.write(NodeBoxes { bounds: src.bounds });
+                    dst_kids.write(kids);
                 }
-                while let Some(&(_, lane, target)) = links.next_if(|l| l.0 == slot as u32) {
-                    node.children[lane] = target;
-                }
-                dst.write(node);
-            }
-        });
+            });
         // SAFETY: the runs cover `0..total` and each was written in full above.
-        unsafe { nodes.set_len(total) };
-        nodes
+        unsafe {
+            boxes.set_len(total);
+            children.set_len(total);
+        }
+        (boxes, children)
     }
 
     /// Appends this piece and those below it (depth first) to `placed`, starting

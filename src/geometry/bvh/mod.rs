@@ -12,13 +12,15 @@ mod node;
 mod packet;
 mod ray4;
 mod sah;
+mod stream;
 
 use std::mem::MaybeUninit;
 
 use crate::geometry::ray::{Hit, Ray};
 use crate::geometry::triangle::Triangle;
-use node::{BoxQuery, ChildRef, Isa, LEAF, Node, WIDTH, leaf_parts};
+use node::{BoxQuery, ChildRef, Isa, LEAF, NodeBoxes, WIDTH, leaf_parts};
 use packet::{Packet, PacketRay};
+pub use stream::IN_FLIGHT;
 
 /// Traversal stack size: at most `WIDTH - 1` entries per level of the tree, whose
 /// depth is at most that of the binary splits it is made of: [`sah::MAX_SAH_DEPTH`]
@@ -29,7 +31,8 @@ const STACK_SIZE: usize = (WIDTH - 1) * (sah::MAX_SAH_DEPTH + 32);
 /// The hierarchy, owning a copy of the triangles in leaf order.
 #[derive(Clone, Debug)]
 pub struct Bvh {
-    nodes: Vec<Node>,
+    nodes: Vec<NodeBoxes>,
+    children: Vec<[ChildRef; WIDTH]>,
     packets: Vec<Packet>,
     root: Option<ChildRef>,
     triangles: usize,
@@ -44,6 +47,7 @@ impl Bvh {
         match build::build(triangles, isa) {
             Some(built) => Bvh {
                 nodes: built.nodes,
+                children: built.children,
                 packets: built.packets,
                 root: Some(built.root),
                 triangles: built.triangles,
@@ -51,6 +55,7 @@ impl Bvh {
             },
             None => Bvh {
                 nodes: Vec::new(),
+                children: Vec::new(),
                 packets: Vec::new(),
                 root: None,
                 triangles: 0,
@@ -123,12 +128,13 @@ impl Bvh {
                 }
             } else {
                 let node = &self.nodes[cur as usize];
+                let kids = &self.children[cur as usize];
                 let mut mask = boxes.hit(isa, node, t_max, &mut t_near);
                 if mask != 0 {
                     let first = mask.trailing_zeros() as usize;
                     mask &= mask - 1;
                     if mask == 0 {
-                        cur = node.children[first];
+                        cur = kids[first];
                         continue;
                     }
                     let second = mask.trailing_zeros() as usize;
@@ -140,20 +146,24 @@ impl Bvh {
                         } else {
                             (first, second)
                         };
-                        stack.push((node.children[far], t_near[far]));
-                        cur = node.children[near];
+                        self.prefetch_child(kids[far]);
+                        stack.push((kids[far], t_near[far]));
+                        cur = kids[near];
                         continue;
                     }
                     // Several boxes hit: push them all, order them far to near and
                     // continue with the nearest (the pops skip any that start
                     // beyond the closest hit by then).
                     let base = stack.len;
-                    stack.push((node.children[first], t_near[first]));
-                    stack.push((node.children[second], t_near[second]));
+                    stack.push((kids[first], t_near[first]));
+                    stack.push((kids[second], t_near[second]));
+                    self.prefetch_child(kids[first]);
+                    self.prefetch_child(kids[second]);
                     while mask != 0 {
                         let lane = mask.trailing_zeros() as usize;
                         mask &= mask - 1;
-                        stack.push((node.children[lane], t_near[lane]));
+                        self.prefetch_child(kids[lane]);
+                        stack.push((kids[lane], t_near[lane]));
                     }
                     stack.sort_far_to_near(base);
                     cur = stack.pop().expect("three or more were just pushed").0;
@@ -199,17 +209,37 @@ impl Bvh {
                 }
             } else {
                 let node = &self.nodes[cur as usize];
+                let kids = &self.children[cur as usize];
                 let mut mask = boxes.hit(isa, node, t_max, &mut t_near);
                 while mask != 0 {
                     let lane = mask.trailing_zeros() as usize;
                     mask &= mask - 1;
-                    stack.push(node.children[lane]);
+                    stack.push(kids[lane]);
                 }
             }
             match stack.pop() {
                 Some(next) => cur = next,
                 None => return false,
             }
+        }
+    }
+
+    /// Asks for the memory of a child that will be visited later, so that its
+    /// cache misses overlap with the work on its siblings: a node's three lines of
+    /// boxes and its children, or a leaf's first packet and a half.
+    #[inline(always)]
+    fn prefetch_child(&self, r: ChildRef) {
+        if r & LEAF != 0 {
+            let p: *const u8 = self.packets.as_ptr().wrapping_add(leaf_parts(r).0).cast();
+            for line in 0..3 {
+                prefetch(p.wrapping_add(64 * line));
+            }
+        } else {
+            let p: *const u8 = self.nodes.as_ptr().wrapping_add(r as usize).cast();
+            for line in 0..3 {
+                prefetch(p.wrapping_add(64 * line));
+            }
+            prefetch(self.children.as_ptr().wrapping_add(r as usize));
         }
     }
 
@@ -231,7 +261,8 @@ impl Bvh {
 
     /// Bytes used by nodes and triangle packets.
     pub fn memory_bytes(&self) -> usize {
-        self.nodes.len() * std::mem::size_of::<Node>()
+        self.nodes.len()
+            * (std::mem::size_of::<NodeBoxes>() + std::mem::size_of::<[ChildRef; WIDTH]>())
             + self.packets.len() * std::mem::size_of::<Packet>()
     }
 }
@@ -366,6 +397,68 @@ mod tests {
         }
     }
 
+    /// The stream API gives exactly the single-ray answers (the same traversal,
+    /// interleaved), with one `t_max` for all and one per ray, on both
+    /// instruction sets, including rays that start inside the soup, non-finite
+    /// rays and batches smaller than the rays in flight.
+    #[test]
+    fn stream_answers_equal_single_ray_answers() {
+        let mut rng = Rng::new(9, 4);
+        let tris = random_triangles(&mut rng, 5000);
+        let mut bvh = Bvh::build(&tris);
+        let mut rays: Vec<Ray> = (0..3001)
+            .map(|_| {
+                let o = Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 3.0 - 1.5;
+                let d = Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) - 0.5;
+                Ray::new(o, d)
+            })
+            .collect();
+        rays[17] = Ray::new(Vec3A::splat(f32::NAN), Vec3A::Z);
+        rays[18] = Ray::new(Vec3A::ZERO, Vec3A::new(0.0, f32::INFINITY, 1.0));
+        let t_max: Vec<f32> = (0..rays.len())
+            .map(|i| 0.2 + (i % 7) as f32 * 0.3)
+            .collect();
+        let isas = if Isa::detect() == Isa::Portable {
+            vec![Isa::Portable]
+        } else {
+            vec![Isa::detect(), Isa::Portable]
+        };
+        for isa in isas {
+            bvh.isa = isa;
+            for n in [0, 1, 3, 5, rays.len()] {
+                let rays = &rays[..n];
+                let mut hits = vec![None; n];
+                let mut blocked = vec![false; n];
+                bvh.intersect_stream(rays, &t_max[..n], &mut hits);
+                bvh.occluded_stream(rays, &t_max[..n], &mut blocked);
+                for (i, r) in rays.iter().enumerate() {
+                    assert_eq!(hits[i], bvh.intersect(r, t_max[i]), "ray {i}");
+                    assert_eq!(blocked[i], bvh.occluded(r, t_max[i]), "ray {i}");
+                }
+                bvh.intersect_stream(rays, &[f32::INFINITY], &mut hits);
+                let found = hits.iter().filter(|h| h.is_some()).count();
+                for (i, r) in rays.iter().enumerate() {
+                    assert_eq!(hits[i], bvh.intersect(r, f32::INFINITY), "ray {i}");
+                }
+                if n > 1000 {
+                    assert!(found > n / 4, "{found} of {n} hit");
+                }
+            }
+        }
+        let empty = Bvh::build(&[]);
+        let mut hits = vec![
+            Some(Hit {
+                t: 1.0,
+                prim: 0,
+                b1: 0.0,
+                b2: 0.0
+            });
+            2
+        ];
+        empty.intersect_stream(&rays[..2], &[1.0], &mut hits);
+        assert_eq!(hits, vec![None, None]);
+    }
+
     #[test]
     fn agrees_with_brute_force_on_random_soup() {
         let mut rng = Rng::new(3, 1);
@@ -393,12 +486,12 @@ mod tests {
         use std::hash::{Hash, Hasher};
         let mut h = std::collections::hash_map::DefaultHasher::new();
         built.root.hash(&mut h);
-        for node in &built.nodes {
+        for (node, kids) in built.nodes.iter().zip(&built.children) {
             node.bounds
                 .iter()
                 .flatten()
                 .for_each(|x| x.to_bits().hash(&mut h));
-            node.children.hash(&mut h);
+            kids.hash(&mut h);
         }
         for p in &built.packets {
             for lane in 0..4 {

@@ -42,6 +42,16 @@ pub(super) struct Node {
     pub(super) children: [ChildRef; WIDTH],
 }
 
+/// A node's eight boxes as traversal reads them: [`Node::bounds`] alone, 192
+/// bytes (three cache lines), with the children in an array of their own. Kept
+/// apart, a node costs 224 bytes instead of 256 with the padding, and the box
+/// test touches three lines, not four.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
+pub(super) struct NodeBoxes {
+    pub(super) bounds: [[f32; WIDTH]; 6],
+}
+
 impl Node {
     /// A node with every slot empty.
     pub(super) const EMPTY: Node = Node {
@@ -108,26 +118,51 @@ pub(super) fn safe_inverse(dir: Vec3A) -> Vec3A {
 /// exit never falls below a computed entry that the exact ones would order.
 const EXIT_SCALE: f32 = 1.0 + 4.0 * gamma(3);
 
+/// The rows of `Node::bounds` holding each axis's near and far plane, by the
+/// direction's sign bits (bit `a` set: negative along axis `a`). A table: the
+/// arithmetic version cost about 80 instructions a ray.
+const PLANES: [([usize; 3], [usize; 3]); 8] = {
+    let mut table = [([0; 3], [0; 3]); 8];
+    let mut neg = 0;
+    while neg < 8 {
+        let mut a = 0;
+        while a < 3 {
+            let flip = (neg >> a) & 1;
+            table[neg].0[a] = a + 3 * flip;
+            table[neg].1[a] = a + 3 * (1 - flip);
+            a += 1;
+        }
+        neg += 1;
+    }
+    table
+};
+
 impl BoxQuery {
     #[inline(always)]
     pub(super) fn new(origin: Vec3A, dir: Vec3A) -> Self {
         // The sign comes from the inverse so that -0.0 counts as negative.
         let inv = safe_inverse(dir);
-        let neg = inv.cmplt(Vec3A::ZERO).bitmask();
-        let plane = |a: usize, flip: u32| a + 3 * ((neg >> a & 1) ^ flip) as usize;
+        let neg = inv.cmplt(Vec3A::ZERO).bitmask() as usize;
+        let (near, far) = PLANES[neg & 7];
         Self {
             origin: origin.to_array(),
             inv_near: inv.to_array(),
             inv_far: (inv * EXIT_SCALE).to_array(),
-            near: [plane(0, 0), plane(1, 0), plane(2, 0)],
-            far: [plane(0, 1), plane(1, 1), plane(2, 1)],
+            near,
+            far,
         }
     }
 
     /// Slab test of the eight boxes: entry distances (`t_near`, written for every
     /// lane) and a bit mask of the boxes hit within `[0, t_max]`.
     #[inline(always)]
-    pub(super) fn hit(&self, isa: Isa, node: &Node, t_max: f32, t_near: &mut [f32; WIDTH]) -> u32 {
+    pub(super) fn hit(
+        &self,
+        isa: Isa,
+        node: &NodeBoxes,
+        t_max: f32,
+        t_near: &mut [f32; WIDTH],
+    ) -> u32 {
         match isa {
             // SAFETY: `Isa::Avx2` is only chosen when the CPU has AVX2.
             #[cfg(target_arch = "x86_64")]
@@ -137,7 +172,7 @@ impl BoxQuery {
     }
 
     #[inline(always)]
-    fn hit_halves(&self, node: &Node, t_max: f32, t_near: &mut [f32; WIDTH]) -> u32 {
+    fn hit_halves(&self, node: &NodeBoxes, t_max: f32, t_near: &mut [f32; WIDTH]) -> u32 {
         let mut mask = 0;
         for half in 0..2 {
             let lanes = half * 4..half * 4 + 4;
@@ -160,7 +195,7 @@ impl BoxQuery {
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     #[inline]
-    fn hit_avx2(&self, node: &Node, t_max: f32, t_near: &mut [f32; WIDTH]) -> u32 {
+    fn hit_avx2(&self, node: &NodeBoxes, t_max: f32, t_near: &mut [f32; WIDTH]) -> u32 {
         use std::arch::x86_64::*;
         // `max`/`min` take the second operand when either is NaN, as glam's SSE
         // path does, so both tests treat NaN alike.
@@ -238,7 +273,10 @@ mod tests {
             let q = BoxQuery::new(origin, dir);
             let t_max = if round % 3 == 0 { 2.0 } else { f32::INFINITY };
             let (mut a, mut b) = ([0.0; WIDTH], [0.0; WIDTH]);
-            let portable = q.hit(Isa::Portable, &node, t_max, &mut a);
+            let boxes = NodeBoxes {
+                bounds: node.bounds,
+            };
+            let portable = q.hit(Isa::Portable, &boxes, t_max, &mut a);
             if aim && t_max.is_infinite() {
                 checked += 1;
                 assert!(portable >> (round % used) & 1 == 1, "round {round}");
@@ -250,7 +288,7 @@ mod tests {
             }
             #[cfg(target_arch = "x86_64")]
             {
-                let wide = q.hit(Isa::Avx2, &node, t_max, &mut b);
+                let wide = q.hit(Isa::Avx2, &boxes, t_max, &mut b);
                 assert_eq!(wide, portable, "round {round}");
                 for lane in 0..WIDTH {
                     if portable >> lane & 1 == 1 {

@@ -123,9 +123,10 @@ impl Bvh {
                 continue;
             }
             let node = &self.nodes[cur as usize];
+            let kids = &self.children[cur as usize];
             // Visit the child whose box the packet enters first next.
             let mut next: Option<(ChildRef, Vec4, f32)> = None;
-            for (c, &child) in node.children.iter().enumerate() {
+            for (c, &child) in kids.iter().enumerate() {
                 if child == EMPTY {
                     continue;
                 }
@@ -192,7 +193,8 @@ impl Bvh {
                 continue;
             }
             let node = &self.nodes[cur as usize];
-            for (c, &child) in node.children.iter().enumerate() {
+            let kids = &self.children[cur as usize];
+            for (c, &child) in kids.iter().enumerate() {
                 if child != EMPTY && (q.hit_box(&node.bounds, c, t_max).1 & open).any() {
                     stack.push(child);
                 }
