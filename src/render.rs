@@ -446,9 +446,28 @@ impl Tile<'_> {
             samples.clone()
         };
         for s in lab_samples {
-            // 2×2 pixel quads traced together; a last odd row or column alone.
+            // 4×2 pixel blocks traced together (eight AVX2 lanes), then the last
+            // columns as 2×2 quads; a last odd row or column alone.
             for qy in (0..n_rows).step_by(2) {
-                for qx in (0..width).step_by(2) {
+                let blocks_end = if qy + 1 < n_rows { width / 4 * 4 } else { 0 };
+                for qx in (0..blocks_end).step_by(4) {
+                    let block: [(usize, usize); 8] =
+                        std::array::from_fn(|i| (qx + i % 4, qy + i / 4));
+                    let ray = |(x, y): (usize, usize)| pixel_ray(camera, seed, s, x, y0 + y, width);
+                    let primary: [Ray; 8] = std::array::from_fn(|i| ray(block[i]));
+                    rays += 8;
+                    let hits = scene.intersect8(&primary, f32::INFINITY);
+                    if AOVS {
+                        for (((x, y), ray), hit) in block.into_iter().zip(&primary).zip(hits) {
+                            gather(y * width + x, ray, hit, None);
+                        }
+                    }
+                    let values = integrator.radiance8_from(scene, &primary, hits, &mut rays);
+                    for ((x, y), v) in block.into_iter().zip(values) {
+                        add(y * width + x, v);
+                    }
+                }
+                for qx in (blocks_end..width).step_by(2) {
                     if qy + 1 < n_rows && qx + 1 < width {
                         let quad = [(qx, qy), (qx + 1, qy), (qx, qy + 1), (qx + 1, qy + 1)];
                         // Four plain calls, not `quad.map`: the compiler did not

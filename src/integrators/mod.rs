@@ -160,6 +160,58 @@ impl Integrator {
     }
 }
 
+impl Integrator {
+    /// [`Integrator::radiance4_from`] for eight coherent rays (a 4×2 pixel
+    /// block) whose closest hits are known; the shadow rays are traced together
+    /// too. Does not count the camera rays. `path` is not handled here.
+    #[inline(always)]
+    pub fn radiance8_from(
+        self,
+        scene: &Scene,
+        rays: &[Ray; 8],
+        hits: [Option<Hit>; 8],
+        count: &mut u64,
+    ) -> [Vec3A; 8] {
+        if let Integrator::Path(options) = self {
+            return std::array::from_fn(|i| path_from(scene, &rays[i], hits[i], &options, count));
+        }
+        let rho = hits.map(|h| h.map_or(Vec3A::ZERO, |h| scene.base_color(&h)));
+        if self == Integrator::Flat {
+            return rho;
+        }
+        let mut shadow = *rays;
+        let mut t_max = [0.0; 8];
+        let mut lit = [false; 8];
+        let mut irradiance = [Vec3A::ZERO; 8];
+        for lane in 0..8 {
+            if let Some((ray, t, d)) =
+                hits[lane].and_then(|h| unshadowed_light(scene, &h, rays[lane].dir))
+            {
+                (shadow[lane], t_max[lane], irradiance[lane]) = (ray, t, d);
+                lit[lane] = true;
+                *count += 1;
+            }
+        }
+        let Some(first) = lit.iter().position(|&l| l) else {
+            return rho.map(|r| r * scene.ambient);
+        };
+        for lane in 0..8 {
+            if !lit[lane] {
+                shadow[lane] = shadow[first];
+            }
+        }
+        let blocked = scene.occluded8(&shadow, t_max, lit);
+        std::array::from_fn(|lane| {
+            let d = if lit[lane] && !blocked[lane] {
+                irradiance[lane]
+            } else {
+                Vec3A::ZERO
+            };
+            rho[lane] * (d + scene.ambient)
+        })
+    }
+}
+
 /// `path`'s radiance with the fixed stream of [`Integrator::radiance`]. Out of
 /// line: inlined, the path tracer would make the lab integrators' functions too
 /// large for the render loop to inline them.

@@ -427,6 +427,43 @@ impl Scene {
         std::array::from_fn(|i| active[i] && self.occluded(&rays[i], t_max[i]))
     }
 
+    /// The closest hits of eight coherent rays (a 4×2 pixel block), traced
+    /// together where the CPU has AVX2; as [`Scene::intersect4`] otherwise.
+    #[inline]
+    pub fn intersect8(&self, rays: &[Ray; 8], t_max: f32) -> [Option<Hit>; 8] {
+        if self.has_alpha {
+            return self.intersect8_one_by_one(rays, t_max);
+        }
+        self.bvh.intersect8(rays, t_max)
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn intersect8_one_by_one(&self, rays: &[Ray; 8], t_max: f32) -> [Option<Hit>; 8] {
+        rays.map(|r| self.intersect(&r, t_max))
+    }
+
+    /// Whether anything blocks each of eight rays within its own `t_max`; lanes
+    /// not `active` answer `false`.
+    #[inline]
+    pub fn occluded8(&self, rays: &[Ray; 8], t_max: [f32; 8], active: [bool; 8]) -> [bool; 8] {
+        if self.has_alpha {
+            return self.occluded8_one_by_one(rays, t_max, active);
+        }
+        self.bvh.occluded8(rays, t_max, active)
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn occluded8_one_by_one(
+        &self,
+        rays: &[Ray; 8],
+        t_max: [f32; 8],
+        active: [bool; 8],
+    ) -> [bool; 8] {
+        std::array::from_fn(|i| active[i] && self.occluded(&rays[i], t_max[i]))
+    }
+
     /// Follows a ray past alpha holes: `first` is its closest hit; returns the
     /// first hit that is not a hole, with `t` measured along the original ray.
     #[cold]

@@ -8,8 +8,8 @@ use raylab::film::write_bytes;
 use raylab::geometry::bvh::Bvh;
 use raylab::geometry::ray::{Hit, Ray};
 use raylab::workload::{
-    self, cast_closest, cast_closest_stream, cast_closest4, cast_occluded, cast_occluded_stream,
-    encode_hits,
+    self, cast_closest, cast_closest_stream, cast_closest4, cast_closest8, cast_occluded,
+    cast_occluded_stream, encode_hits,
 };
 
 use crate::args::{BenchApi, BenchArgs};
@@ -29,6 +29,7 @@ struct Workload {
 enum Query {
     Closest,
     Closest4,
+    Closest8,
     ClosestStream,
     Any,
     AnyStream,
@@ -39,6 +40,7 @@ impl Query {
         match self {
             Query::Closest | Query::Any => "single",
             Query::Closest4 => "packet4",
+            Query::Closest8 => "packet8",
             Query::ClosestStream | Query::AnyStream => "stream",
         }
     }
@@ -54,7 +56,9 @@ impl Query {
         match api {
             BenchApi::Single => vec![single],
             BenchApi::Stream => vec![stream],
-            BenchApi::All if packets && !any => vec![single, Query::Closest4, stream],
+            BenchApi::All if packets && !any => {
+                vec![single, Query::Closest4, Query::Closest8, stream]
+            }
             BenchApi::All => vec![single, stream],
         }
     }
@@ -96,7 +100,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             let rays = workload::read_rays(path).map_err(|e| anyhow!(e))?;
             let t_max = args.tfar.unwrap_or(f32::INFINITY);
             let name = if args.shadow { "shadow" } else { "rays" };
-            Query::of(args.api.unwrap_or(BenchApi::Single), args.shadow, false)
+            Query::of(args.api.unwrap_or(BenchApi::Single), args.shadow, true)
                 .into_iter()
                 .map(|query| Workload {
                     name,
@@ -168,6 +172,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
                     match w.query {
                         Query::Closest => cast_closest(&bvh, &w.rays, w.t_max, &mut hits),
                         Query::Closest4 => cast_closest4(&bvh, &w.rays, w.t_max, &mut hits),
+                        Query::Closest8 => cast_closest8(&bvh, &w.rays, w.t_max, &mut hits),
                         Query::ClosestStream => {
                             cast_closest_stream(&bvh, &w.rays, w.t_max, &mut hits)
                         }

@@ -11,6 +11,7 @@ mod build;
 mod node;
 mod packet;
 mod ray4;
+mod ray8;
 mod sah;
 mod stream;
 

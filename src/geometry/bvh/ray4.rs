@@ -164,6 +164,41 @@ impl Bvh {
         })
     }
 
+    /// The closest hits of eight rays with `t` in `(0, t_max]`: traced together
+    /// in AVX2 lanes where the CPU has AVX2 and the rays share the triangle
+    /// test's axis order (as a 4×2 block of camera rays does), otherwise as two
+    /// groups of four. The same answers as [`Bvh::intersect`] ray by ray, except
+    /// which triangle is reported at an exact tie.
+    pub fn intersect8(&self, rays: &[Ray; 8], t_max: f32) -> [Option<Hit>; 8] {
+        #[cfg(target_arch = "x86_64")]
+        if let Some(hits) = self.intersect8_wide(rays, t_max) {
+            return hits;
+        }
+        let (a, b) = rays.split_at(4);
+        let a = self.intersect4(a.try_into().expect("four rays"), t_max);
+        let b = self.intersect4(b.try_into().expect("four rays"), t_max);
+        std::array::from_fn(|i| if i < 4 { a[i] } else { b[i - 4] })
+    }
+
+    /// For eight rays with their own `t_max`, whether anything is hit in
+    /// `(0, t_max]`; lanes not in `active` are left out and answer `false`.
+    pub fn occluded8(&self, rays: &[Ray; 8], t_max: [f32; 8], active: [bool; 8]) -> [bool; 8] {
+        #[cfg(target_arch = "x86_64")]
+        if let Some(blocked) = self.occluded8_wide(rays, t_max, active) {
+            return blocked;
+        }
+        let half = |h: usize| {
+            let r: &[Ray; 4] = rays[4 * h..4 * h + 4].try_into().expect("four rays");
+            self.occluded4(
+                r,
+                std::array::from_fn(|i| t_max[4 * h + i]),
+                std::array::from_fn(|i| active[4 * h + i]),
+            )
+        };
+        let (a, b) = (half(0), half(1));
+        std::array::from_fn(|i| if i < 4 { a[i] } else { b[i - 4] })
+    }
+
     /// For four rays with their own `t_max`, whether anything is hit in
     /// `(0, t_max]`; lanes not in `active` are left out and answer `false`.
     pub fn occluded4(&self, rays: &[Ray; 4], t_max: [f32; 4], active: [bool; 4]) -> [bool; 4] {

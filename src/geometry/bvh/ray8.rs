@@ -1,0 +1,605 @@
+//! Eight coherent rays traced together in the lanes of AVX2 registers: the
+//! eight-wide counterpart of `ray4` for CPUs with AVX2 (a 4×2 pixel block and its
+//! shadow rays). Per node each hit child's box is tested for all eight rays at
+//! once, per leaf each triangle, so a coherent packet pays for its nodes and
+//! triangles once instead of eight times.
+//!
+//! The per-lane arithmetic is the scalar watertight test's, operation for
+//! operation (no FMA), so hits agree bit for bit with [`Bvh::intersect`]; only
+//! which of two triangles at exactly the same `t` is reported may differ.
+//!
+//! The lane type [`F8`] wraps `__m256`. Its methods are `#[inline(always)]` and
+//! only ever run inside the `#[target_feature(enable = "avx2")]` entry points
+//! below, into which they inline as single instructions.
+
+#![cfg(target_arch = "x86_64")]
+
+use std::arch::x86_64::*;
+use std::ops::{Add, BitAnd, BitOr, Div, Mul, Not, Sub};
+
+use super::node::{ChildRef, EMPTY, Isa, LEAF, WIDTH, safe_inverse};
+use super::packet::Packet;
+use super::{Bvh, Stack};
+use crate::geometry::ray::{Hit, Ray, gamma};
+use crate::geometry::triangle::{self, Lanes, RayShear, axis_order, t_error_bound};
+
+/// Eight f32 lanes (also used as a mask: all bits set = true).
+#[derive(Clone, Copy, Debug)]
+#[repr(transparent)]
+pub(super) struct F8(__m256);
+
+// SAFETY (for every `unsafe` block on `F8` below): the intrinsics need AVX (and
+// AVX2 for none of them beyond AVX); `F8` values are only made and used inside
+// functions compiled with AVX2 enabled, which are only called when
+// `Isa::detect` found AVX2.
+impl F8 {
+    #[inline(always)]
+    fn splat(x: f32) -> F8 {
+        F8(unsafe { _mm256_set1_ps(x) })
+    }
+    #[inline(always)]
+    fn zero() -> F8 {
+        F8(unsafe { _mm256_setzero_ps() })
+    }
+    #[inline(always)]
+    fn from_array(a: [f32; 8]) -> F8 {
+        F8(unsafe { _mm256_loadu_ps(a.as_ptr()) })
+    }
+    #[inline(always)]
+    fn to_array(self) -> [f32; 8] {
+        let mut a = [0.0; 8];
+        unsafe { _mm256_storeu_ps(a.as_mut_ptr(), self.0) };
+        a
+    }
+    #[inline(always)]
+    fn min(self, o: F8) -> F8 {
+        F8(unsafe { _mm256_min_ps(self.0, o.0) })
+    }
+    #[inline(always)]
+    fn max_(self, o: F8) -> F8 {
+        F8(unsafe { _mm256_max_ps(self.0, o.0) })
+    }
+    #[inline(always)]
+    fn cmple(self, o: F8) -> F8 {
+        F8(unsafe { _mm256_cmp_ps::<_CMP_LE_OQ>(self.0, o.0) })
+    }
+    #[inline(always)]
+    fn cmplt(self, o: F8) -> F8 {
+        F8(unsafe { _mm256_cmp_ps::<_CMP_LT_OQ>(self.0, o.0) })
+    }
+    #[inline(always)]
+    fn cmpgt(self, o: F8) -> F8 {
+        F8(unsafe { _mm256_cmp_ps::<_CMP_GT_OQ>(self.0, o.0) })
+    }
+    #[inline(always)]
+    fn cmpeq(self, o: F8) -> F8 {
+        F8(unsafe { _mm256_cmp_ps::<_CMP_EQ_OQ>(self.0, o.0) })
+    }
+    #[inline(always)]
+    fn cmpne(self, o: F8) -> F8 {
+        F8(unsafe { _mm256_cmp_ps::<_CMP_NEQ_UQ>(self.0, o.0) })
+    }
+    /// Lanes of `a` where `mask` is set, else of `b`.
+    #[inline(always)]
+    fn select(mask: F8, a: F8, b: F8) -> F8 {
+        F8(unsafe { _mm256_blendv_ps(b.0, a.0, mask.0) })
+    }
+    #[inline(always)]
+    fn bitmask(self) -> u32 {
+        unsafe { _mm256_movemask_ps(self.0) as u32 }
+    }
+    #[inline(always)]
+    fn any(self) -> bool {
+        self.bitmask() != 0
+    }
+    /// ±1 with the sign of each lane (as `Vec4::signum` for non-NaN lanes).
+    #[inline(always)]
+    fn signum(self) -> F8 {
+        unsafe {
+            let sign = _mm256_and_ps(self.0, _mm256_set1_ps(-0.0));
+            F8(_mm256_or_ps(sign, _mm256_set1_ps(1.0)))
+        }
+    }
+    #[inline(always)]
+    fn lane(self, i: usize) -> f32 {
+        self.to_array()[i]
+    }
+    /// The smallest lane.
+    #[inline(always)]
+    fn min_element(self) -> f32 {
+        unsafe {
+            let m = _mm_min_ps(
+                _mm256_castps256_ps128(self.0),
+                _mm256_extractf128_ps::<1>(self.0),
+            );
+            let m = _mm_min_ps(m, _mm_movehl_ps(m, m));
+            let m = _mm_min_ss(m, _mm_shuffle_ps::<1>(m, m));
+            _mm_cvtss_f32(m)
+        }
+    }
+    /// All lanes set where `bits` has a bit.
+    #[inline(always)]
+    fn mask_from_bits(bits: u32) -> F8 {
+        unsafe {
+            let lanes = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+            let b = _mm256_set1_epi32(bits as i32);
+            F8(_mm256_castsi256_ps(_mm256_cmpeq_epi32(
+                _mm256_and_si256(b, lanes),
+                lanes,
+            )))
+        }
+    }
+}
+
+impl Add for F8 {
+    type Output = F8;
+    #[inline(always)]
+    fn add(self, o: F8) -> F8 {
+        F8(unsafe { _mm256_add_ps(self.0, o.0) })
+    }
+}
+impl Sub for F8 {
+    type Output = F8;
+    #[inline(always)]
+    fn sub(self, o: F8) -> F8 {
+        F8(unsafe { _mm256_sub_ps(self.0, o.0) })
+    }
+}
+impl Mul for F8 {
+    type Output = F8;
+    #[inline(always)]
+    fn mul(self, o: F8) -> F8 {
+        F8(unsafe { _mm256_mul_ps(self.0, o.0) })
+    }
+}
+impl Div for F8 {
+    type Output = F8;
+    #[inline(always)]
+    fn div(self, o: F8) -> F8 {
+        F8(unsafe { _mm256_div_ps(self.0, o.0) })
+    }
+}
+impl BitAnd for F8 {
+    type Output = F8;
+    #[inline(always)]
+    fn bitand(self, o: F8) -> F8 {
+        F8(unsafe { _mm256_and_ps(self.0, o.0) })
+    }
+}
+impl BitOr for F8 {
+    type Output = F8;
+    #[inline(always)]
+    fn bitor(self, o: F8) -> F8 {
+        F8(unsafe { _mm256_or_ps(self.0, o.0) })
+    }
+}
+impl Not for F8 {
+    type Output = F8;
+    #[inline(always)]
+    fn not(self) -> F8 {
+        F8(unsafe { _mm256_xor_ps(self.0, _mm256_castsi256_ps(_mm256_set1_epi32(-1))) })
+    }
+}
+
+impl Lanes for F8 {
+    #[inline(always)]
+    fn splat(x: f32) -> Self {
+        F8::splat(x)
+    }
+    #[inline(always)]
+    fn abs(self) -> Self {
+        F8(unsafe { _mm256_andnot_ps(_mm256_set1_ps(-0.0), self.0) })
+    }
+    /// As `Vec4::max` (SSE `maxps`): the second operand where either is NaN.
+    #[inline(always)]
+    fn max(self, other: Self) -> Self {
+        self.max_(other)
+    }
+}
+
+/// Per-packet constants: origins and safe inverse directions by axis, and the
+/// triangle test's shared axis order with per-lane origins and shears.
+struct Query8<'a> {
+    rays: &'a [Ray; 8],
+    origin: [F8; 3],
+    inv_dir: [F8; 3],
+    k: [usize; 3],
+    origin_k: [F8; 3],
+    shear: [F8; 3],
+}
+
+impl<'a> Query8<'a> {
+    /// Whether the rays can be traced together: all finite, with the same axis
+    /// order for the triangle test.
+    #[inline(always)]
+    fn shared_axes(rays: &[Ray; 8]) -> Option<[usize; 3]> {
+        let k = axis_order(rays[0].dir);
+        for r in rays {
+            let kr = axis_order(r.dir);
+            let same = kr[0] == k[0] && kr[1] == k[1] && kr[2] == k[2];
+            if !same || !r.origin.is_finite() || !r.dir.is_finite() {
+                return None;
+            }
+        }
+        Some(k)
+    }
+
+    /// The packet's constants; called inside the AVX2 functions only (the lanes
+    /// are gathered with plain stores, then loaded once).
+    #[inline(always)]
+    fn new(rays: &'a [Ray; 8], k: [usize; 3]) -> Self {
+        let mut lanes = [[0.0f32; 8]; 9];
+        for (i, r) in rays.iter().enumerate() {
+            let inv = safe_inverse(r.dir);
+            for a in 0..3 {
+                lanes[a][i] = r.origin[a];
+                lanes[3 + a][i] = r.dir[a];
+                lanes[6 + a][i] = inv[a];
+            }
+        }
+        let origin = [
+            F8::from_array(lanes[0]),
+            F8::from_array(lanes[1]),
+            F8::from_array(lanes[2]),
+        ];
+        let dir = [
+            F8::from_array(lanes[3]),
+            F8::from_array(lanes[4]),
+            F8::from_array(lanes[5]),
+        ];
+        let inv_dir = [
+            F8::from_array(lanes[6]),
+            F8::from_array(lanes[7]),
+            F8::from_array(lanes[8]),
+        ];
+        let inv_z = F8::splat(1.0) / dir[k[2]];
+        Self {
+            rays,
+            origin,
+            inv_dir,
+            k,
+            origin_k: [origin[k[0]], origin[k[1]], origin[k[2]]],
+            shear: [dir[k[0]] * inv_z, dir[k[1]] * inv_z, inv_z],
+        }
+    }
+
+    /// Entry and exit distances of the slab of axis `a` of child `c`.
+    #[inline(always)]
+    fn slab(&self, bounds: &[[f32; WIDTH]; 6], c: usize, a: usize) -> (F8, F8) {
+        let t0 = (F8::splat(bounds[a][c]) - self.origin[a]) * self.inv_dir[a];
+        let t1 = (F8::splat(bounds[a + 3][c]) - self.origin[a]) * self.inv_dir[a];
+        (t0.min(t1), t0.max_(t1))
+    }
+
+    /// Slab test of child `c` for the eight rays: entry distances and the lanes
+    /// that hit within `[0, t_max]` (as `ray4`'s test, lane by lane).
+    #[inline(always)]
+    fn hit_box(&self, bounds: &[[f32; WIDTH]; 6], c: usize, t_max: F8) -> (F8, F8) {
+        let (nx, fx) = self.slab(bounds, c, 0);
+        let (ny, fy) = self.slab(bounds, c, 1);
+        let (nz, fz) = self.slab(bounds, c, 2);
+        let near = nx.max_(ny).max_(nz).max_(F8::zero());
+        let far = fx.min(fy).min(fz) * F8::splat(1.0 + 2.0 * gamma(3));
+        (near, near.cmple(far.min(t_max)))
+    }
+}
+
+/// Hits of the eight rays on one triangle: lanes, `t` and barycentrics.
+struct Hits8 {
+    valid: F8,
+    t: F8,
+    b1: F8,
+    b2: F8,
+}
+
+/// The watertight test of the eight rays against triangle `i` of `p`, as
+/// `packet::candidates` does it lane by lane.
+#[inline(always)]
+fn test_triangle(q: &Query8<'_>, p: &Packet, i: usize, t_max: F8) -> Hits8 {
+    let tri = p.triangle(i);
+    let (ax, ay, az) = sheared(q, tri[0]);
+    let (bx, by, bz) = sheared(q, tri[1]);
+    let (cx, cy, cz) = sheared(q, tri[2]);
+    let u = cx * by - cy * bx;
+    let v = ax * cy - ay * cx;
+    let w = bx * ay - by * ax;
+    let zero = F8::zero();
+    if (u.cmpeq(zero) | v.cmpeq(zero) | w.cmpeq(zero)).any() {
+        return scalar_lanes(q, p, i, t_max);
+    }
+    let any_neg = u.cmplt(zero) | v.cmplt(zero) | w.cmplt(zero);
+    let any_pos = u.cmpgt(zero) | v.cmpgt(zero) | w.cmpgt(zero);
+    let det = u + v + w;
+    let t_scaled = (u * az + v * bz + w * cz) * det.signum();
+    let abs_det = det.abs();
+    let mut valid = !(any_neg & any_pos)
+        & det.cmpne(zero)
+        & t_scaled.cmpgt(zero)
+        & t_scaled.cmple(t_max * abs_det);
+    if !valid.any() {
+        return Hits8 {
+            valid,
+            t: zero,
+            b1: zero,
+            b2: zero,
+        };
+    }
+    let t = t_scaled / abs_det;
+    let delta_t = t_error_bound([ax, ay, az], [bx, by, bz], [cx, cy, cz], [u, v, w], abs_det);
+    valid = valid & t.cmpgt(delta_t);
+    let inv = F8::splat(1.0) / det;
+    Hits8 {
+        valid,
+        t,
+        b1: v * inv,
+        b2: w * inv,
+    }
+}
+
+/// A vertex in each ray's sheared frame (a function, not a closure: closures
+/// were left as calls, outside the AVX2 code).
+#[inline(always)]
+fn sheared(q: &Query8<'_>, v: glam::Vec3A) -> (F8, F8, F8) {
+    let [kx, ky, kz] = q.k;
+    let [sx, sy, sz] = q.shear;
+    let dx = F8::splat(v[kx]) - q.origin_k[0];
+    let dy = F8::splat(v[ky]) - q.origin_k[1];
+    let dz = F8::splat(v[kz]) - q.origin_k[2];
+    (dx - sx * dz, dy - sy * dz, sz * dz)
+}
+
+/// The scalar test lane by lane, for the rare exact-zero edge functions.
+#[cold]
+#[inline(never)]
+fn scalar_lanes(q: &Query8<'_>, p: &Packet, i: usize, t_max: F8) -> Hits8 {
+    let tri = p.triangle(i);
+    let t_max = t_max.to_array();
+    let hits: [Option<triangle::TriangleHit>; 8] = std::array::from_fn(|lane| {
+        triangle::intersect(&RayShear::new(&q.rays[lane]), &tri, t_max[lane])
+    });
+    let get = |f: fn(&triangle::TriangleHit) -> f32| {
+        F8::from_array(hits.map(|h| h.as_ref().map_or(0.0, f)))
+    };
+    let bits = hits
+        .iter()
+        .enumerate()
+        .fold(0, |m, (i, h)| m | (h.is_some() as u32) << i);
+    Hits8 {
+        valid: F8::mask_from_bits(bits),
+        t: get(|h| h.t),
+        b1: get(|h| h.b1),
+        b2: get(|h| h.b2),
+    }
+}
+
+impl Bvh {
+    /// [`Bvh::intersect8`] on AVX2 when the rays can share the triangle test's
+    /// axis order; `None` otherwise.
+    pub(super) fn intersect8_wide(&self, rays: &[Ray; 8], t_max: f32) -> Option<[Option<Hit>; 8]> {
+        if self.isa != Isa::Avx2 {
+            return None;
+        }
+        let root = self.root?;
+        let k = Query8::shared_axes(rays)?;
+        // SAFETY: `Isa::Avx2` is only chosen when the CPU has AVX2.
+        Some(unsafe { self.intersect8_avx2(rays, k, root, t_max) })
+    }
+
+    /// [`Bvh::occluded8`] on AVX2 when the rays can share the axis order.
+    pub(super) fn occluded8_wide(
+        &self,
+        rays: &[Ray; 8],
+        t_max: [f32; 8],
+        active: [bool; 8],
+    ) -> Option<[bool; 8]> {
+        if self.isa != Isa::Avx2 {
+            return None;
+        }
+        let root = self.root?;
+        let k = Query8::shared_axes(rays)?;
+        // SAFETY: as above.
+        Some(unsafe { self.occluded8_avx2(rays, k, root, t_max, active) })
+    }
+
+    #[target_feature(enable = "avx2")]
+    fn intersect8_avx2(
+        &self,
+        rays: &[Ray; 8],
+        k: [usize; 3],
+        root: ChildRef,
+        t_max: f32,
+    ) -> [Option<Hit>; 8] {
+        let q = &Query8::new(rays, k);
+        let mut best_t = F8::splat(t_max);
+        let (mut b1, mut b2) = (F8::zero(), F8::zero());
+        let mut prim = [u32::MAX; 8];
+        let mut found = 0u32;
+        let mut stack = Stack::<(ChildRef, F8)>::new();
+        stack.push((root, F8::zero()));
+        while let Some((cur, near)) = stack.pop() {
+            if !near.cmple(best_t).any() {
+                continue;
+            }
+            if cur & LEAF != 0 {
+                for p in self.leaf(cur) {
+                    for i in 0..p.len() {
+                        let hit = test_triangle(q, p, i, best_t);
+                        let mask = hit.valid.bitmask();
+                        if mask != 0 {
+                            best_t = F8::select(hit.valid, hit.t, best_t);
+                            b1 = F8::select(hit.valid, hit.b1, b1);
+                            b2 = F8::select(hit.valid, hit.b2, b2);
+                            for (lane, id) in prim.iter_mut().enumerate() {
+                                if mask >> lane & 1 != 0 {
+                                    *id = p.prim(i);
+                                }
+                            }
+                            found |= mask;
+                        }
+                    }
+                }
+                continue;
+            }
+            let node = &self.nodes[cur as usize];
+            let kids = &self.children[cur as usize];
+            // Visit next the child whose box the packet enters first.
+            let mut next: Option<(ChildRef, F8, f32)> = None;
+            for (c, &child) in kids.iter().enumerate() {
+                if child == EMPTY {
+                    continue;
+                }
+                let (near, hit) = q.hit_box(&node.bounds, c, best_t);
+                if !hit.any() {
+                    continue;
+                }
+                // Lanes that miss get NaN, which no `t` compares below.
+                let key = F8::select(hit, near, F8::splat(f32::INFINITY)).min_element();
+                let near = F8::select(hit, near, F8::splat(f32::NAN));
+                match next {
+                    Some((n, nv, nk)) if nk <= key => {
+                        stack.push((child, near));
+                        next = Some((n, nv, nk));
+                    }
+                    Some((n, nv, _)) => {
+                        stack.push((n, nv));
+                        next = Some((child, near, key));
+                    }
+                    None => next = Some((child, near, key)),
+                }
+            }
+            if let Some((n, nv, _)) = next {
+                stack.push((n, nv));
+            }
+        }
+        std::array::from_fn(|lane| {
+            (found >> lane & 1 != 0).then(|| Hit {
+                t: best_t.lane(lane),
+                prim: prim[lane],
+                b1: b1.lane(lane),
+                b2: b2.lane(lane),
+            })
+        })
+    }
+
+    #[target_feature(enable = "avx2")]
+    fn occluded8_avx2(
+        &self,
+        rays: &[Ray; 8],
+        k: [usize; 3],
+        root: ChildRef,
+        t_max: [f32; 8],
+        active: [bool; 8],
+    ) -> [bool; 8] {
+        let q = &Query8::new(rays, k);
+        let t_max = F8::from_array(t_max);
+        let bits = active
+            .iter()
+            .enumerate()
+            .fold(0, |m, (i, &a)| m | (a as u32) << i);
+        let mut open = F8::mask_from_bits(bits);
+        let mut blocked = 0u32;
+        let mut stack = Stack::<ChildRef>::new();
+        stack.push(root);
+        while let Some(cur) = stack.pop() {
+            if cur & LEAF != 0 {
+                for p in self.leaf(cur) {
+                    for i in 0..p.len() {
+                        let hit = test_triangle(q, p, i, t_max).valid & open;
+                        blocked |= hit.bitmask();
+                        open = open & !hit;
+                    }
+                }
+                if !open.any() {
+                    break;
+                }
+                continue;
+            }
+            let node = &self.nodes[cur as usize];
+            let kids = &self.children[cur as usize];
+            for (c, &child) in kids.iter().enumerate() {
+                if child != EMPTY && (q.hit_box(&node.bounds, c, t_max).1 & open).any() {
+                    stack.push(child);
+                }
+            }
+        }
+        std::array::from_fn(|lane| blocked >> lane & 1 != 0)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::triangle::Triangle;
+    use crate::sampling::sampler::Rng;
+    use glam::Vec3A;
+
+    #[test]
+    fn eight_rays_together_agree_with_one_at_a_time() {
+        let mut rng = Rng::new(23, 0);
+        let mut tris = Vec::new();
+        // A bumpy closed sphere (shared edges) and loose triangles.
+        let (n_lat, n_lon) = (16, 32);
+        let p = |i: usize, j: usize| {
+            let (th, ph) = (
+                std::f32::consts::PI * i as f32 / n_lat as f32,
+                std::f32::consts::TAU * j as f32 / n_lon as f32,
+            );
+            let r = 1.0 + 0.1 * ((3.0 * ph).sin() * (2.0 * th).cos());
+            Vec3A::new(
+                r * th.sin() * ph.cos(),
+                r * th.cos(),
+                r * th.sin() * ph.sin(),
+            )
+        };
+        for i in 0..n_lat {
+            for j in 0..n_lon {
+                let (a, b, c, d) = (p(i, j), p(i + 1, j), p(i + 1, j + 1), p(i, j + 1));
+                tris.push(Triangle::new(a, b, c));
+                tris.push(Triangle::new(a, c, d));
+            }
+        }
+        for _ in 0..60 {
+            let c = Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 3.0 - 1.5;
+            let e = Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 0.3;
+            tris.push(Triangle::new(c, c + e, c + Vec3A::new(e.z, e.x, e.y)));
+        }
+        let bvh = Bvh::build(&tris);
+        let (mut hits, mut blocked) = (0, 0);
+        for round in 0..3000 {
+            let origin = Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 6.0 - 3.0;
+            let aim = Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 2.0 - 1.0;
+            let spread = if round % 4 == 0 { 2.0 } else { 0.05 };
+            let rays: [Ray; 8] = std::array::from_fn(|_| {
+                let jitter = Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) - 0.5;
+                Ray::new(origin, (aim + spread * jitter - origin).normalize())
+            });
+            let t_max = if round % 3 == 0 { 3.0 } else { f32::INFINITY };
+            let together = bvh.intersect8(&rays, t_max);
+            let limits: [f32; 8] = std::array::from_fn(|i| [t_max, 2.0, 1.0, t_max][i % 4]);
+            let active: [bool; 8] = std::array::from_fn(|i| i != 1 || round % 2 == 0);
+            let occluded = bvh.occluded8(&rays, limits, active);
+            for lane in 0..8 {
+                let alone = bvh.intersect(&rays[lane], t_max);
+                assert_eq!(
+                    together[lane].is_some(),
+                    alone.is_some(),
+                    "round {round} lane {lane}"
+                );
+                if let (Some(a), Some(b)) = (together[lane], alone) {
+                    hits += 1;
+                    assert_eq!(a.t.to_bits(), b.t.to_bits(), "round {round}");
+                    if a.prim == b.prim {
+                        assert_eq!((a.b1, a.b2), (b.b1, b.b2));
+                    }
+                }
+                let want = active[lane] && bvh.occluded(&rays[lane], limits[lane]);
+                blocked += want as u32;
+                assert_eq!(occluded[lane], want, "round {round} lane {lane}");
+            }
+        }
+        assert!(
+            hits > 6000 && blocked > 3000,
+            "{hits} hits, {blocked} blocked"
+        );
+    }
+}
