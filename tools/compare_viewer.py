@@ -73,12 +73,12 @@ def run(cmd):
 
 
 def embree(exe, api, threads, quality):
-    """Embree's ms per frame (median of 64 after 10 of warm-up)."""
+    """Embree's ms per frame (median of 64 after 10 of warm-up) and CPU ms per frame."""
     out = run([exe, "--threads", str(threads), "--apis", api, "--quality", quality])
     for line in out.splitlines():
         kv = dict(re.findall(r"(\w+)=(\S+)", line))
         if "median_ms" in kv:
-            return float(kv["median_ms"])
+            return float(kv["median_ms"]), float(kv["cpu_ms"])
     sys.exit(f"unexpected embree_frame output: {out}")
 
 
@@ -100,7 +100,7 @@ def children_cpu_s():
 def measured(fn, tries):
     """Runs fn() until a run is clean (other processes used under 5 % of the machine
     during it), at most `tries` times, sleeping 1 s after a disturbed run. Returns
-    (value, clean): the clean run's value, or the best of the disturbed ones."""
+    (value, clean): the clean run's value, or the smallest of the disturbed ones."""
     ncpu, tick = os.cpu_count() or 1, 1.0 / os.sysconf("SC_CLK_TCK")
     seen = []
     for _ in range(max(1, tries)):
@@ -118,13 +118,15 @@ def measured(fn, tries):
 def raylab(exe, threads, out):
     cmd = [exe, "render", "cornell", "--integrator", "direct", "--width", str(SIZE),
            "--height", str(SIZE), "--spp", str(SPP), "--threads", str(threads), "-o", out]
+    c0 = children_cpu_s()
     out = subprocess.run(cmd, check=True, capture_output=True, text=True)
+    cpu = children_cpu_s() - c0
     # The summary line (`wrote ...: 500x500, direct, 64 spp, 815.4 ms, ...`) goes to stderr.
     text = (out.stdout + "\n" + out.stderr).replace("\r", "\n")
     found = re.findall(r"wrote .*: (\d+)x(\d+), direct, (\d+) spp, ([\d.]+) ms", text)
     if not found or int(found[-1][2]) != SPP:
         sys.exit(f"unexpected raylab output: {text.strip()[-300:]}")
-    return float(found[-1][3]) / SPP
+    return float(found[-1][3]) / SPP, 1e3 * cpu / SPP
 
 
 # --- Images: PFM and OpenEXR (scanline or single-level tiled; NONE, RLE, ZIPS, ZIP; float or half) ---
@@ -329,8 +331,11 @@ def main():
 
         def best(key):
             runs = got[key]
-            clean = [v for v, ok in runs if ok]
-            return (min(clean), "") if clean else (min(v for v, _ in runs), "*")
+            clean = [v[0] for v, ok in runs if ok]
+            return (min(clean), "") if clean else (min(v[0] for v, _ in runs), "*")
+
+        def cpu(key):
+            return min(v[1] for v, _ in got[key])
 
         print(f"Lab box, `direct`, {SIZE}×{SIZE}: ms per frame, best of {args.rounds} alternated rounds "
               f"(Embree {args.quality} build quality: median of 64 frames after 10; "
@@ -346,6 +351,10 @@ def main():
         total = sum(len(runs) for runs in got.values())
         print(f"\n{clean} of {total} measurements undisturbed (other processes under 5 % of the machine)"
               + ("; * = every run of that cell was disturbed" if flagged else ""))
+        r, e1, e4 = cpu(("raylab", 1)), cpu(("single", 1)), cpu(("packet4", 1))
+        print(f"1 thread, CPU time per frame (less sensitive to other load; raylab's is its whole "
+              f"process's / {SPP}, start-up included): raylab {r:.2f} ms, Embree single {e1:.2f} ms, "
+              f"2×2 {e4:.2f} ms, ratio {r / min(e1, e4):.2f}")
         if args.check:
             check(exe, args.raylab, tmp, args.quality)
     finally:
