@@ -16,9 +16,14 @@ the viewer's 64 refinement frames,
 
 whose summary line gives the time of all 64 (sample 0 through the pixel centres, the
 others jittered: the same work per frame): ms/frame = that / 64. The two are
-alternated R times (default 3) and the best of each kept; the table gives the ratio
-raylab / best Embree variant (the goal: ≤ 0.5). `cargo bench --bench frame` gives
-raylab's in-process frame time (50 renders of the frame, median) for comparison.
+alternated R times (default 3), one variant per run, and the best of each kept; a
+run during which other processes used over 5 % of the machine is repeated (up to
+--tries times) and flagged * when no run of that cell was clean. The table gives the
+ratio raylab / best Embree variant (the goal: ≤ 0.5), and a line gives CPU time per
+frame on one thread, which other load disturbs less. `cargo bench --bench frame`
+(in the main checkout) gives raylab's in-process frame time for centre rays (median
+of 40 renders after 10) for comparison. raylab: --raylab, by default this
+checkout's target/release/raylab, else ../main/target/release/raylab.
 
 --check also compares the pictures: Embree's frame against the Embree-made
 reference ../shared/refs/cornell-direct-lab-500.exr and against
@@ -304,9 +309,10 @@ def check(exe, rl, tmp, quality):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--rounds", type=int, default=3)
-    ap.add_argument("--raylab", default=default_raylab())
-    ap.add_argument("--bin", default=os.path.join(ROOT, "..", "bench-data", "bin"))
+    ap.add_argument("--rounds", type=int, default=3, help="alternated rounds (best kept)")
+    ap.add_argument("--raylab", default=default_raylab(), help="raylab binary (default: %(default)s)")
+    ap.add_argument("--bin", default=os.path.join(ROOT, "..", "bench-data", "bin"),
+                    help="where embree_frame is built (default: %(default)s)")
     ap.add_argument("--quality", default="medium", choices=["low", "medium", "high"],
                     help="Embree build quality (medium, the default, and high trace this frame fastest)")
     ap.add_argument("--tries", type=int, default=4,
