@@ -89,6 +89,7 @@ class Bench:
         if args.patience is not None:
             self.env["ANCHOR_PATIENCE_S"] = str(args.patience)
         self.raylab_api = None  # unknown until the first raylab run; False: no --api option
+        self.api_ok, self.warned = {}, set()
         self.disturbed, self.cells = 0, 0
 
     # ---- making what is missing -------------------------------------------------------
@@ -159,25 +160,35 @@ class Bench:
         return rates, build
 
     def raylab(self, mesh, rays, extra, api, hits=None):
-        """{threads: mrays}, build ms, bytes per triangle, api label; None if api unsupported."""
-        if api == "stream" and self.raylab_api is False:
+        """{threads: mrays}, build ms, bytes per triangle, api label; None if api unsupported.
+
+        A raylab without the --api option (exit code 2, "unexpected argument") runs `single`
+        without it; an api it does not know (exit code 2) reads n/a."""
+        if self.api_ok.get(api) is False:
             return None
         cmd = [self.args.raylab, "bench", obj_path(self.data, mesh), "--rays", rays,
                "--threads", ",".join(map(str, THREADS)), "--repeat", str(self.args.repeat)]
         cmd += extra + (["--hits", hits] if hits else [])
-        with_api = cmd + ["--api", api] if self.raylab_api is not False else cmd
+        with_api = cmd if self.raylab_api is False else cmd + ["--api", api]
         out = subprocess.run(with_api, capture_output=True, text=True)
-        if out.returncode == 2 and self.raylab_api is None and (
-                "unexpected argument" in out.stderr or "invalid value" in out.stderr):
-            self.raylab_api = False
-            print(f"note: raylab has no --api ({out.stderr.strip().splitlines()[0]}): "
-                  "single runs without it, stream is n/a", file=sys.stderr)
-            if api == "stream":
+        if out.returncode == 2 and self.raylab_api is not False:
+            first = (out.stderr.strip().splitlines() or [""])[0]
+            if "unexpected argument" in out.stderr and "--api" in out.stderr:
+                self.raylab_api = False
+                print(f"note: raylab has no --api ({first}): single runs without it, stream is n/a",
+                      file=sys.stderr)
+                if api != "single":
+                    self.api_ok[api] = False
+                    return None
+                with_api = cmd
+                out = subprocess.run(cmd, capture_output=True, text=True)
+            elif "invalid value" in out.stderr:
+                self.api_ok[api] = False
+                print(f"note: raylab --api {api} failed ({first}): n/a", file=sys.stderr)
                 return None
-            out = subprocess.run(cmd, capture_output=True, text=True)
         if out.returncode != 0:
             raise SystemExit(f"failed ({out.returncode}): {' '.join(with_api)}\n{out.stderr}")
-        if self.raylab_api is None and with_api is not cmd:
+        if with_api is not cmd:
             self.raylab_api = True
         rates, build, bpt, label = {}, None, None, None
         for line in out.stdout.splitlines():
@@ -188,7 +199,8 @@ class Bench:
             elif "mrays_per_s" in kv:
                 rates[int(kv["threads"])] = float(kv["mrays_per_s"])
                 label = kv.get("api", label)
-        if self.raylab_api and label and label != api:
+        if self.raylab_api and label != api and api not in self.warned:
+            self.warned.add(api)
             print(f"note: raylab --api {api} printed api={label}", file=sys.stderr)
         return rates, build, bpt, label
 
