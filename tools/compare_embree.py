@@ -164,7 +164,7 @@ class Bench:
 
         A raylab without the --api option (exit code 2, "unexpected argument") runs `single`
         without it; an api it does not know (exit code 2) reads n/a."""
-        if self.api_ok.get(api) is False:
+        if self.api_ok.get(api) is False or (self.raylab_api is False and api != "single"):
             return None
         cmd = [self.args.raylab, "bench", obj_path(self.data, mesh), "--rays", rays,
                "--threads", ",".join(map(str, THREADS)), "--repeat", str(self.args.repeat)]
