@@ -76,8 +76,9 @@ pub struct SurfaceRays {
     pub shadow: Vec<Ray>,
 }
 
-/// The surface workloads (`tools/gen_surface_rays.py` defines the same for the
-/// shared data): from the hit point of every incoherent ray that hits, pushed
+/// The surface workloads, built as `tools/gen_surface_rays.py` builds them for
+/// the shared data but from raylab's own hits and random numbers (so the same
+/// distribution, not the same rays): from the hit point of every incoherent ray that hits, pushed
 /// off the surface by 1e-4 × the largest extent along the geometric normal on
 /// the side the ray came from, a diffuse bounce and a shadow ray to the point
 /// light at `c + (0.3, 1.0, 0.6) · ext`.
