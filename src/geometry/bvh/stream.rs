@@ -162,15 +162,15 @@ impl Bvh {
         }
         let mut t_near = [0.0f32; WIDTH];
         while live != 0 {
-            for l in 0..IN_FLIGHT {
+            for (l, lane) in lanes.iter_mut().enumerate() {
                 if live >> l & 1 == 0 {
                     continue;
                 }
                 // SAFETY: lanes whose bit is set in `live` were written by `start`.
-                let ray = unsafe { lanes[l].assume_init_mut() };
+                let ray = unsafe { lane.assume_init_mut() };
                 if self.closest_step(isa, ray, &mut t_near) {
                     out[ray.index] = ray.best;
-                    if !start(&mut lanes[l], out) {
+                    if !start(lane, out) {
                         live &= !(1 << l);
                     }
                 }
@@ -287,15 +287,15 @@ impl Bvh {
         }
         let mut t_near = [0.0f32; WIDTH];
         while live != 0 {
-            for l in 0..IN_FLIGHT {
+            for (l, lane) in lanes.iter_mut().enumerate() {
                 if live >> l & 1 == 0 {
                     continue;
                 }
                 // SAFETY: lanes whose bit is set in `live` were written by `start`.
-                let ray = unsafe { lanes[l].assume_init_mut() };
+                let ray = unsafe { lane.assume_init_mut() };
                 if let Some(blocked) = self.any_step(isa, ray, &mut t_near) {
                     out[ray.index] = blocked;
-                    if !start(&mut lanes[l], out) {
+                    if !start(lane, out) {
                         live &= !(1 << l);
                     }
                 }
