@@ -400,8 +400,10 @@ class Calibration:
         e = rel_mse(img, self.ref)
         self.c = max(e - self.noise, 1e-12) * spp
         self.per_spp = t / spp
+        ratio = img.mean(axis=(0, 1)) / self.ref.mean(axis=(0, 1))
         self.log(f"{self.r.name:7} {self.scene}: {spp} spp relMSE {e:.3e} "
-                 f"(c = {self.c:.3f}) {t:.2f} s")
+                 f"(c = {self.c:.3f}) {t:.2f} s; mean / reference's R G B "
+                 + " ".join(f"{x:.4f}" for x in ratio))
         return e
 
     def needed(self, target):
