@@ -6,6 +6,8 @@ Usage (from the project folder; the raylab binary must be built):
     python3 tools/compare_mitsuba.py [--rounds 2] [--scenes cornell,cornell-area]
                                      [--targets 1e-2,1e-3] [--threads N]
                                      [--raylab PATH] [--venv DIR] [--cache DIR]
+                                     [--max-seconds S] [--ref-spp N]
+    python3 tools/compare_mitsuba.py --check 4096   # the Mitsuba scene against the shared ref
 
 Scenes, 256×256, both renderers' `path` integrator with unbounded depth:
   cornell       the lab box lit by its point light (P = 14 at (0, −0.5, −0.7)), judged
@@ -28,8 +30,8 @@ and keeps the best time per renderer (3× --rounds rounds where both renders tak
 under 5 s). A target that the reference is too noisy to judge (its own noise above a
 quarter of the target) or whose render would take longer than --max-seconds is not
 rendered: its row is an estimate, spp = c/target at the time per spp of the
-scene's largest timed render. Every timed render is checked against the reference; the table gives the
-worst relMSE of the timed renders.
+scene's largest timed render. Every timed render is checked against the reference;
+the table gives the worst relMSE of the timed renders.
 
 What is timed:
   raylab   the wall clock of the whole process (`raylab render ... -o x.exr -q`:
