@@ -117,53 +117,13 @@ impl Integrator {
         hits: [Option<Hit>; 4],
         count: &mut u64,
     ) -> [Vec3A; 4] {
-        if let Integrator::Path(options) = self {
-            return std::array::from_fn(|i| path_from(scene, &rays[i], hits[i], &options, count));
-        }
-        let rho = hits.map(|h| h.map_or(Vec3A::ZERO, |h| scene.base_color(&h)));
-        if self == Integrator::Flat {
-            return rho;
-        }
-        // One shadow ray per lit hit, all towards the light: coherent again.
-        let mut shadow = *rays;
-        let mut t_max = [0.0; 4];
-        let mut lit = [false; 4];
-        let mut irradiance = [Vec3A::ZERO; 4];
-        for lane in 0..4 {
-            if let Some((ray, t, d)) =
-                hits[lane].and_then(|h| unshadowed_light(scene, &h, rays[lane].dir))
-            {
-                (shadow[lane], t_max[lane], irradiance[lane]) = (ray, t, d);
-                lit[lane] = true;
-                *count += 1;
-            }
-        }
-        // Unlit lanes borrow a lit lane's ray so that the four can still share the
-        // triangle test's axis order; their answers are not used.
-        let Some(first) = lit.iter().position(|&l| l) else {
-            return rho.map(|r| r * scene.ambient);
-        };
-        for lane in 0..4 {
-            if !lit[lane] {
-                shadow[lane] = shadow[first];
-            }
-        }
-        let blocked = scene.occluded4(&shadow, t_max, lit);
-        std::array::from_fn(|lane| {
-            let d = if lit[lane] && !blocked[lane] {
-                irradiance[lane]
-            } else {
-                Vec3A::ZERO
-            };
-            rho[lane] * (d + scene.ambient)
+        self.radiance_n_from(scene, rays, hits, count, |shadow, t_max, lit| {
+            scene.occluded4(shadow, t_max, lit)
         })
     }
-}
 
-impl Integrator {
     /// [`Integrator::radiance4_from`] for eight coherent rays (a 4×2 pixel
-    /// block) whose closest hits are known; the shadow rays are traced together
-    /// too. Does not count the camera rays. `path` is not handled here.
+    /// block), whose shadow rays are traced together too.
     #[inline(always)]
     pub fn radiance8_from(
         self,
@@ -172,6 +132,23 @@ impl Integrator {
         hits: [Option<Hit>; 8],
         count: &mut u64,
     ) -> [Vec3A; 8] {
+        self.radiance_n_from(scene, rays, hits, count, |shadow, t_max, lit| {
+            scene.occluded8(shadow, t_max, lit)
+        })
+    }
+
+    /// The lab's integrators on `N` coherent rays with known hits: one shadow
+    /// ray per lit hit, all towards the light and traced together by `occluded`
+    /// (a packet query: rays, their `t_max`, which lanes count).
+    #[inline(always)]
+    fn radiance_n_from<const N: usize>(
+        self,
+        scene: &Scene,
+        rays: &[Ray; N],
+        hits: [Option<Hit>; N],
+        count: &mut u64,
+        occluded: impl FnOnce(&[Ray; N], [f32; N], [bool; N]) -> [bool; N],
+    ) -> [Vec3A; N] {
         if let Integrator::Path(options) = self {
             return std::array::from_fn(|i| path_from(scene, &rays[i], hits[i], &options, count));
         }
@@ -180,10 +157,10 @@ impl Integrator {
             return rho;
         }
         let mut shadow = *rays;
-        let mut t_max = [0.0; 8];
-        let mut lit = [false; 8];
-        let mut irradiance = [Vec3A::ZERO; 8];
-        for lane in 0..8 {
+        let mut t_max = [0.0; N];
+        let mut lit = [false; N];
+        let mut irradiance = [Vec3A::ZERO; N];
+        for lane in 0..N {
             if let Some((ray, t, d)) =
                 hits[lane].and_then(|h| unshadowed_light(scene, &h, rays[lane].dir))
             {
@@ -192,15 +169,17 @@ impl Integrator {
                 *count += 1;
             }
         }
+        // Unlit lanes borrow a lit lane's ray so that the packet can still share
+        // the triangle test's axis order; their answers are not used.
         let Some(first) = lit.iter().position(|&l| l) else {
             return rho.map(|r| r * scene.ambient);
         };
-        for lane in 0..8 {
+        for lane in 0..N {
             if !lit[lane] {
                 shadow[lane] = shadow[first];
             }
         }
-        let blocked = scene.occluded8(&shadow, t_max, lit);
+        let blocked = occluded(&shadow, t_max, lit);
         std::array::from_fn(|lane| {
             let d = if lit[lane] && !blocked[lane] {
                 irradiance[lane]
