@@ -6,8 +6,11 @@
 //! stream keeps [`IN_FLIGHT`] independent traversals and advances them in turn,
 //! one node or leaf each, so that their cache misses and arithmetic overlap in
 //! the out-of-order core (the CPU counterpart of a GPU running many rays per
-//! core). Each ray is traversed exactly as [`Bvh::intersect`] and
-//! [`Bvh::occluded`] do it, so the answers are the same as theirs.
+//! core). Each such ray is traversed exactly as [`Bvh::intersect`] and
+//! [`Bvh::occluded`] do it, so the answers are the same as theirs. Runs of
+//! eight coherent rays (one origin, nearly one direction) go through the
+//! eight-ray packets instead: the same `t`, bit for bit, but which of two
+//! triangles at exactly the same `t` is reported may differ.
 
 use std::mem::MaybeUninit;
 
@@ -44,7 +47,9 @@ struct Any {
 impl Bvh {
     /// Closest hits of a batch of rays, each within `(0, t_max[i]]` (`t_max` is
     /// either one value for all or one per ray), into `out`. The same answers as
-    /// [`Bvh::intersect`] ray by ray, usually in less time for large batches.
+    /// [`Bvh::intersect`] ray by ray (except which triangle is reported at an
+    /// exact tie, for runs traced as packets), usually in less time for large
+    /// batches.
     ///
     /// # Panics
     /// When `out` and `rays` differ in length, or `t_max` has neither one nor
