@@ -1,0 +1,47 @@
+//! The command line's parsing and validation: the input, split at NUL bytes,
+//! is the argument list after `raylab`. What parses is validated as `render`
+//! and `view` would (scene options, image size) without rendering.
+#![no_main]
+use clap::Parser;
+use libfuzzer_sys::fuzz_target;
+
+#[allow(dead_code)]
+#[path = "../../src/bin/raylab/args.rs"]
+mod args;
+
+fuzz_target!(|data: &[u8]| {
+    let words: Vec<String> = std::iter::once("raylab".to_string())
+        .chain(data.split(|&b| b == 0).map(|w| String::from_utf8_lossy(w).into_owned()))
+        .collect();
+    match args::Cli::try_parse_from(&words) {
+        Err(e) => {
+            // Usage errors name the argument on their first line.
+            let text = e.to_string();
+            assert!(!text.trim().is_empty());
+        }
+        Ok(cli) => {
+            let scene = match &cli.command {
+                Some(args::Command::Render(r)) => {
+                    if let Err(e) = r.with_scene_file() {
+                        raylab_fuzz::check_message(&format!("{e:#}"));
+                    }
+                    &r.scene
+                }
+                Some(args::Command::View(v)) => &v.scene,
+                _ => return,
+            };
+            let _ = scene.load_options();
+            for kind in [
+                raylab::scene::load::SceneKind::Lab,
+                raylab::scene::load::SceneKind::Gltf,
+            ] {
+                for aspect in [None, Some(0.0), Some(1.5), Some(f32::MAX)] {
+                    if let Ok((w, h)) = scene.size(kind, aspect) {
+                        assert!((1..=args::MAX_SIDE).contains(&w) && (1..=args::MAX_SIDE).contains(&h));
+                        assert!(u64::from(w) * u64::from(h) <= args::MAX_PIXELS);
+                    }
+                }
+            }
+        }
+    }
+});

@@ -1,0 +1,5 @@
+//! A binary glTF container `in.glb`, loaded and rendered.
+#![no_main]
+use libfuzzer_sys::fuzz_target;
+
+fuzz_target!(|data: &[u8]| raylab_fuzz::targets::glb(data));

@@ -1,0 +1,610 @@
+#!/usr/bin/env python3
+"""Writes the fuzz targets' seed corpora into fuzz/corpus/<target>/.
+
+Seeds are real files cut down to fuzzing size (the shared models' glTF files
+with their buffers inlined, the shared HDRIs and JPEGs scaled down) and small
+files written here to reach every feature a parser has. Run once; the fuzzers
+then grow the corpora, and `fuzz/run --minimize` shrinks them back before they
+are committed.
+
+    python3 fuzz/make_corpus.py [--shared ../shared]
+
+Needs Pillow for the PNG/JPEG seeds (`pip install pillow` in a venv); without
+it those two targets get only the hand-written PNG seeds.
+"""
+
+import argparse
+import base64
+import io
+import json
+import math
+import os
+import struct
+import zlib
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+
+
+def put(target, name, data):
+    d = os.path.join(HERE, "corpus", target)
+    os.makedirs(d, exist_ok=True)
+    if isinstance(data, str):
+        data = data.encode()
+    with open(os.path.join(d, name), "wb") as f:
+        f.write(data)
+
+
+# ---------------------------------------------------------------- OBJ and MTL
+
+CUBE = """# a cube with every index form
+mtllib in.mtl
+o cube
+v -1 -1 -1
+v 1 -1 -1
+v 1 1 -1
+v -1 1 -1
+v -1 -1 1
+v 1 -1 1
+v 1 1 1
+v -1 1 1 1.0
+vt 0 0
+vt 1 0
+vt 1 1
+vt 0 1 0
+vn 0 0 -1
+vn 0 0 1
+vn 0 -1 0
+g front back
+s 1
+usemtl red
+f 1/1/1 2/2/1 3/3/1 4/4/1
+f -4//2 -3//2 -2//2 -1//2
+usemtl lamp
+f 1/1 2/2 6/3 5/4
+s off
+f 4 3 7 8
+l 1 2
+p 3
+f 2 3 7 6
+f 1 5 8 4
+"""
+
+MTL = """# every statement raylab reads
+newmtl red
+Ka 0.1 0.1 0.1
+Kd 0.8 0.1 0.1
+Ks 0.5 0.5 0.5
+Ns 250
+Ni 1.45
+d 1.0
+Tr 0.0
+Tf 1 1 1
+illum 2
+map_Kd -s 2 2 1 -o 0.5 0 0 -clamp on fixture.png
+map_Ks fixture.png
+map_Ns fixture.png
+map_d -imfchan r fixture.png
+map_bump -bm 0.5 fixture.png
+bump fixture.png
+norm fixture.png
+disp fixture.png
+Pr 0.4
+Pm 0.2
+map_Pr fixture.png
+map_Pm fixture.png
+newmtl lamp
+Kd 0 0 0
+Ke 4 3 2
+map_Ke fixture.png
+newmtl glass
+Kd 0 0 0
+Ks 1 1 1
+Ni 1.5
+d 0.1
+illum 7
+newmtl mirror
+Ks 1 1 1
+illum 3
+newmtl a
+Kd 0.5 0.5 0.5
+newmtl b
+Tr 0.5
+Ns 0
+"""
+
+
+def obj_seeds(shared):
+    put("obj", "cube", CUBE + "\0" + MTL)
+    put("obj", "fixture", open(os.path.join(HERE, "src", "lib.rs")).read().split('FIXTURE_OBJ: &str = "')[1].split('";')[0].replace("\\n\\\n", "\n").replace("\\n", "\n"))
+    put("obj", "quads-negative", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf -4 -3 -2 -1\nf 1 2 3\n")
+    # The first 150 lines of each shared mesh: real exporters' formatting.
+    for name in ("teapot.obj", "stanford-bunny.obj", "ogre.obj"):
+        path = os.path.join(shared, "models", name)
+        if os.path.exists(path):
+            with open(path, "rb") as f:
+                lines = f.read().split(b"\n")
+            vs = [l for l in lines if l.startswith(b"v ")][:60]
+            others = [l for l in lines if l.startswith((b"vt", b"vn"))][:30]
+            faces = [l for l in lines if l.startswith(b"f ")][:40]
+            put("obj", "head-" + name, b"\n".join(vs + others + faces) + b"\n")
+    put("mtl", "all", MTL)
+    put("mtl", "small", "newmtl a\nKd 1 0 0\nnewmtl b\nKe 1 1 1\n")
+    put("mtl", "textured", "newmtl m\nKd 1 1 1\nmap_Kd fixture.png\nnorm -bm 2 fixture.png\n")
+
+
+# ----------------------------------------------------------------------- glTF
+
+def f32(*v):
+    return struct.pack("<%df" % len(v), *v)
+
+
+def feature_gltf():
+    """A glTF with most features raylab reads, and its binary buffer."""
+    buf = bytearray()
+
+    def view(data, stride=None, target=None):
+        while len(buf) % 4:
+            buf.append(0)
+        off = len(buf)
+        buf.extend(data)
+        v = {"buffer": 0, "byteOffset": off, "byteLength": len(data)}
+        if stride:
+            v["byteStride"] = stride
+        if target:
+            v["target"] = target
+        views.append(v)
+        return len(views) - 1
+
+    views, accessors = [], []
+
+    def acc(view_i, ctype, count, typ, **kw):
+        a = {"bufferView": view_i, "componentType": ctype, "count": count, "type": typ}
+        a.update(kw)
+        accessors.append(a)
+        return len(accessors) - 1
+
+    pos = [(-1, -1, 0), (1, -1, 0), (1, 1, 0), (-1, 1, 0)]
+    # Interleaved position + normal + uv.
+    inter = b"".join(f32(*p) + f32(0, 0, 1) + f32((p[0] + 1) / 2, (p[1] + 1) / 2) for p in pos)
+    iv = view(inter, stride=32)
+    a_pos = acc(iv, 5126, 4, "VEC3", byteOffset=0, min=[-1, -1, 0], max=[1, 1, 0])
+    a_nrm = acc(iv, 5126, 4, "VEC3", byteOffset=12)
+    a_uv = acc(iv, 5126, 4, "VEC2", byteOffset=24)
+    a_tan = acc(view(b"".join(f32(1, 0, 0, 1) for _ in pos)), 5126, 4, "VEC4")
+    a_uv1 = acc(view(struct.pack("<8H", 0, 0, 65535, 0, 65535, 65535, 0, 65535)), 5123, 4, "VEC2", normalized=True)
+    a_col = acc(view(struct.pack("<16B", *([255, 128, 0, 255] * 4))), 5121, 4, "VEC4", normalized=True)
+    a_idx8 = acc(view(bytes([0, 1, 2, 0, 2, 3])), 5121, 6, "SCALAR")
+    a_idx32 = acc(view(struct.pack("<4I", 0, 1, 3, 2)), 5125, 4, "SCALAR")
+    # Quantized positions (KHR_mesh_quantization) and a sparse accessor.
+    a_qpos = acc(view(struct.pack("<12h", -100, -100, 0, 100, -100, 0, 0, 100, 0, 0, 0, 0)), 5122, 4, "VEC3",
+                 normalized=True, min=[-0.003, -0.003, 0], max=[0.003, 0.003, 0])
+    sparse_idx = view(struct.pack("<2H", 1, 3))
+    sparse_val = view(f32(2, 0, 0, 0, 2, 0))
+    a_sparse = acc(views and iv, 5126, 4, "VEC3", byteOffset=0, min=[-1, -1, 0], max=[2, 2, 0],
+                   sparse={"count": 2, "indices": {"bufferView": sparse_idx, "componentType": 5123},
+                           "values": {"bufferView": sparse_val}})
+    while len(buf) % 4:
+        buf.append(0)
+    png = base64.b64encode(fixture_png()).decode()
+    doc = {
+        "asset": {"version": "2.0", "generator": "raylab fuzz seeds"},
+        "extensionsUsed": ["KHR_lights_punctual", "KHR_materials_emissive_strength", "KHR_materials_ior",
+                           "KHR_materials_specular", "KHR_materials_transmission", "KHR_materials_volume",
+                           "KHR_texture_transform", "KHR_mesh_quantization"],
+        "extensions": {"KHR_lights_punctual": {"lights": [
+            {"type": "point", "intensity": 5, "color": [1, 0.9, 0.8]},
+            {"type": "spot", "intensity": 20, "spot": {"innerConeAngle": 0.2, "outerConeAngle": 0.5}},
+            {"type": "directional", "intensity": 2, "range": 10}]}},
+        "scene": 0,
+        "scenes": [{"nodes": [0, 5]}],
+        "nodes": [
+            {"children": [1, 2, 3, 4], "rotation": [0, 0.3826834, 0, 0.9238795]},
+            {"mesh": 0, "translation": [0, 0, -1], "scale": [1, 1, -1]},
+            {"mesh": 0, "matrix": [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 2, 0, 0, 1]},
+            {"camera": 0, "translation": [0, 0, 5]},
+            {"extensions": {"KHR_lights_punctual": {"light": 0}}, "translation": [0, 3, 3]},
+            {"children": [6, 7], "camera": 1},
+            {"mesh": 1, "extensions": {"KHR_lights_punctual": {"light": 1}}},
+            {"mesh": 2, "extensions": {"KHR_lights_punctual": {"light": 2}}},
+        ],
+        "cameras": [
+            {"type": "perspective", "perspective": {"yfov": 0.8, "aspectRatio": 1.5, "znear": 0.1, "zfar": 100}},
+            {"type": "orthographic", "orthographic": {"xmag": 2, "ymag": 2, "znear": 0.1, "zfar": 10}},
+        ],
+        "meshes": [
+            {"primitives": [{"attributes": {"POSITION": a_pos, "NORMAL": a_nrm, "TEXCOORD_0": a_uv,
+                                            "TANGENT": a_tan, "TEXCOORD_1": a_uv1, "COLOR_0": a_col},
+                             "indices": a_idx8, "material": 0}]},
+            {"primitives": [{"attributes": {"POSITION": a_pos}, "indices": a_idx32, "mode": 5, "material": 1},
+                            {"attributes": {"POSITION": a_sparse}, "mode": 6, "material": 2},
+                            {"attributes": {"POSITION": a_pos}, "mode": 1}]},
+            {"primitives": [{"attributes": {"POSITION": a_qpos}, "material": 3}]},
+        ],
+        "materials": [
+            {"pbrMetallicRoughness": {"baseColorFactor": [1, 1, 1, 0.5],
+                                      "baseColorTexture": {"index": 0, "texCoord": 1,
+                                                           "extensions": {"KHR_texture_transform": {
+                                                               "offset": [0.5, 0], "rotation": 0.3,
+                                                               "scale": [2, 2]}}},
+                                      "metallicRoughnessTexture": {"index": 0},
+                                      "metallicFactor": 0.5, "roughnessFactor": 0.3},
+             "normalTexture": {"index": 0, "scale": 0.7}, "occlusionTexture": {"index": 0},
+             "emissiveTexture": {"index": 0}, "emissiveFactor": [1, 0.5, 0],
+             "alphaMode": "BLEND", "doubleSided": True,
+             "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 4},
+                            "KHR_materials_ior": {"ior": 1.7},
+                            "KHR_materials_specular": {"specularFactor": 0.5, "specularColorFactor": [1, 0.5, 0.5]}}},
+            {"alphaMode": "MASK", "alphaCutoff": 0.6,
+             "extensions": {"KHR_materials_transmission": {"transmissionFactor": 1}}},
+            {"extensions": {"KHR_materials_transmission": {"transmissionFactor": 0.8},
+                            "KHR_materials_volume": {"thicknessFactor": 0.5, "attenuationDistance": 2,
+                                                     "attenuationColor": [0.9, 0.5, 0.5]}}},
+            {"pbrMetallicRoughness": {"metallicFactor": 1, "roughnessFactor": 0}},
+        ],
+        "textures": [{"source": 0, "sampler": 0}],
+        "samplers": [{"wrapS": 33648, "wrapT": 33071, "magFilter": 9729}],
+        "images": [{"uri": "data:image/png;base64," + png}],
+        "buffers": [{"byteLength": len(buf)}],
+        "bufferViews": views,
+        "accessors": accessors,
+    }
+    return doc, bytes(buf)
+
+
+def gltf_text(doc, buf):
+    d = json.loads(json.dumps(doc))
+    d["buffers"][0]["uri"] = "data:application/octet-stream;base64," + base64.b64encode(buf).decode()
+    return json.dumps(d, separators=(",", ":"))
+
+
+def glb(doc, buf):
+    js = json.dumps(doc, separators=(",", ":")).encode()
+    js += b" " * (-len(js) % 4)
+    buf = buf + b"\0" * (-len(buf) % 4)
+    body = struct.pack("<II", len(js), 0x4E4F534A) + js
+    if buf:
+        body += struct.pack("<II", len(buf), 0x004E4942) + buf
+    return struct.pack("<III", 0x46546C67, 2, 12 + len(body)) + body
+
+
+def gltf_seeds(shared):
+    doc, buf = feature_gltf()
+    put("gltf_json", "features.gltf", gltf_text(doc, buf))
+    put("glb", "features.glb", glb(doc, buf))
+    fixture = open(os.path.join(HERE, "src", "lib.rs")).read().split('FIXTURE_GLTF: &str = r#"')[1].split('"#;')[0]
+    put("gltf_json", "fixture.gltf", fixture)
+    put("gltf_json", "minimal.gltf", '{"asset":{"version":"2.0"}}')
+    put("glb", "minimal.glb", glb({"asset": {"version": "2.0"}}, b""))
+    for name in ("OrientationTest", "TextureCoordinateTest", "NormalTangentTest", "DamagedHelmet"):
+        folder = os.path.join(shared, "models", name)
+        path = os.path.join(folder, name + ".gltf")
+        if not os.path.exists(path):
+            continue
+        d = json.load(open(path))
+        # Images become the fixture texture (the real ones are too big to fuzz).
+        for im in d.get("images", []):
+            im.pop("mimeType", None)
+            im.pop("bufferView", None)
+            im["uri"] = "fixture.png"
+        b = open(os.path.join(folder, d["buffers"][0]["uri"]), "rb").read()
+        if len(b) <= 64 * 1024:
+            put("gltf_json", name + ".gltf", gltf_text(d, b))
+            dd = json.loads(json.dumps(d))
+            dd["buffers"][0].pop("uri")
+            put("glb", name + ".glb", glb(dd, b))
+        else:
+            # The big buffer stays outside: a seed for the JSON's structure.
+            d["buffers"][0]["uri"] = "fixture.bin"
+            put("gltf_json", name + "-structure.gltf", json.dumps(d, separators=(",", ":")))
+
+
+# ------------------------------------------------------------------ scene files
+
+def toml_seeds(repo):
+    put("scene_toml", "full.toml", """# every section
+[render]
+width = 64
+height = 48
+spp = 4
+time = 1.5
+integrator = "path"
+max_depth = 5
+exposure = 0.5
+tonemap = "aces"
+seed = 3
+
+[camera]
+position = [0, 1, 5]
+target = [0, 0, 0]
+up = [0, 1, 0]
+fov = 40
+
+[environment]
+file = "fixture.hdr"
+strength = 2.0
+rotate = 90
+
+[[model]]
+name = "tri"
+file = "fixture.obj"
+translate = [0, 0, 0]
+rotate = [0, 45, 0]
+scale = 2.0
+materials = { m = "gold:0.2", "*" = "glass:1.5" }
+
+[[model]]
+file = "fixture.gltf"
+scale = [1, 2, 1]
+fit = 1.5
+
+[[model]]
+builtin = "cornell-area"
+materials = { tall = "mirror", short = "glass" }
+
+[[material]]
+name = "m"
+base_color = [0.8, 0.2, 0.2]
+roughness = 0.3
+metallic = 0.0
+ior = 1.4
+transmission = 0.5
+emission = [1, 1, 1]
+
+[[light]]
+type = "point"
+position = [1, 3, 2]
+intensity = 5
+color = [1, 0.9, 0.8]
+
+[[light]]
+type = "spot"
+position = [0, 3, 0]
+target = [0, 0, 0]
+intensity = 10
+inner = 10
+outer = 30
+
+[[light]]
+type = "directional"
+direction = [0, -1, 0]
+irradiance = 3
+
+[[light]]
+type = "area"
+corner = [-0.5, 2, -0.5]
+u = [1, 0, 0]
+v = [0, 0, 1]
+radiance = [4, 4, 4]
+two_sided = true
+""")
+    put("scene_toml", "camera-model.toml", '[camera]\nmodel = "t"\nindex = 0\n[[model]]\nname = "t"\nfile = "fixture.gltf"\n[environment]\ncolor = [0.2, 0.3, 0.4]\n')
+    import re
+    for folder in ("scenes",):
+        d = os.path.join(repo, folder)
+        for name in sorted(os.listdir(d)):
+            if name.endswith(".toml"):
+                text = open(os.path.join(d, name)).read()
+                # Models and maps become the fixtures beside the fuzz input.
+                text = re.sub(r'file = "[^"]*\.(obj)"', 'file = "fixture.obj"', text)
+                text = re.sub(r'file = "[^"]*\.(gltf|glb)"', 'file = "fixture.gltf"', text)
+                text = re.sub(r'file = "[^"]*\.(hdr|exr)"', 'file = "fixture.hdr"', text)
+                put("scene_toml", name, text)
+
+
+# ------------------------------------------------------------ environment maps
+
+def rgbe(c):
+    m = max(c)
+    if m < 1e-32:
+        return bytes(4)
+    e = math.frexp(m)[1]
+    s = 256.0 / 2 ** e
+    return bytes([int(c[0] * s), int(c[1] * s), int(c[2] * s), e + 128])
+
+
+def hdr(width, height, pixel, rle=True, header=b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\nEXPOSURE=1.0\n\n"):
+    out = bytearray(header + b"-Y %d +X %d\n" % (height, width))
+    for y in range(height):
+        row = [rgbe(pixel(x, y)) for x in range(width)]
+        if rle and 8 <= width < 32768:
+            out += bytes([2, 2, width >> 8, width & 255])
+            for ch in range(4):
+                vals = [p[ch] for p in row]
+                i = 0
+                while i < width:
+                    run = 1
+                    while i + run < width and vals[i + run] == vals[i] and run < 127:
+                        run += 1
+                    if run >= 3:
+                        out += bytes([128 + run, vals[i]])
+                        i += run
+                    else:
+                        n = min(128, width - i)
+                        out += bytes([n]) + bytes(vals[i:i + n])
+                        i += n
+        else:
+            out += b"".join(row)
+    return bytes(out)
+
+
+def env_seeds(shared):
+    put("hdr", "flat-4x2.hdr", hdr(4, 2, lambda x, y: (1 + x, 1, 0.5 + y), rle=False))
+    put("hdr", "rle-16x8.hdr", hdr(16, 8, lambda x, y: (x / 4, y / 8, 1.0 if x < 8 else 0.0)))
+    put("hdr", "sun-32x16.hdr", hdr(32, 16, lambda x, y: (5e4, 5e4, 4e4) if (x, y) == (10, 3) else (0.2, 0.3, 0.5)))
+    put("hdr", "x-first.hdr", hdr(4, 2, lambda x, y: (1, 1, 1), rle=False).replace(b"-Y 2 +X 4", b"+X 4 -Y 2"))
+    # The shared HDRIs, scaled down to 32×16 (their first bytes keep the real header).
+    for name in sorted(os.listdir(os.path.join(shared, "envmaps"))) if os.path.isdir(os.path.join(shared, "envmaps")) else []:
+        data = open(os.path.join(shared, "envmaps", name), "rb").read()
+        head_end = data.index(b"\n\n") + 2
+        header = data[:head_end]
+        put("hdr", "small-" + name, hdr(32, 16, lambda x, y: (2 - y / 8, 1.5 - y / 10, 1 + x / 32), header=header))
+    exr_seeds()
+
+
+def exr_seeds():
+    """Tiny scanline EXRs, uncompressed, half and float channels."""
+    def attr(name, typ, value):
+        return name.encode() + b"\0" + typ.encode() + b"\0" + struct.pack("<i", len(value)) + value
+
+    def exr(w, h, channels, ptype):  # ptype 1 = half, 2 = float
+        size = 2 if ptype == 1 else 4
+        chl = b"".join(c.encode() + b"\0" + struct.pack("<iB3xii", ptype, 0, 1, 1) for c in sorted(channels)) + b"\0"
+        box = struct.pack("<iiii", 0, 0, w - 1, h - 1)
+        header = (struct.pack("<ii", 20000630, 2)
+                  + attr("channels", "chlist", chl)
+                  + attr("compression", "compression", b"\0")
+                  + attr("dataWindow", "box2i", box)
+                  + attr("displayWindow", "box2i", box)
+                  + attr("lineOrder", "lineOrder", b"\0")
+                  + attr("pixelAspectRatio", "float", struct.pack("<f", 1))
+                  + attr("screenWindowCenter", "v2f", struct.pack("<ff", 0, 0))
+                  + attr("screenWindowWidth", "float", struct.pack("<f", 1))
+                  + b"\0")
+        table_at = len(header)
+        offsets, blocks = [], b""
+        start = table_at + 8 * h
+        for y in range(h):
+            row = b""
+            for ci, c in enumerate(sorted(channels)):
+                for x in range(w):
+                    v = 0.5 + x / w + ci
+                    row += struct.pack("<e", v) if ptype == 1 else struct.pack("<f", v)
+            block = struct.pack("<ii", y, len(row)) + row
+            offsets.append(start + len(blocks))
+            blocks += block
+        return header + b"".join(struct.pack("<Q", o) for o in offsets) + blocks
+
+    put("exr", "rgb-half-4x2.exr", exr(4, 2, ["R", "G", "B"], 1))
+    put("exr", "rgb-float-8x4.exr", exr(8, 4, ["R", "G", "B"], 2))
+    put("exr", "rgba-half-4x2.exr", exr(4, 2, ["R", "G", "B", "A"], 1))
+    put("exr", "y-half-4x2.exr", exr(4, 2, ["Y"], 1))
+
+
+# --------------------------------------------------------------------- images
+
+def fixture_png():
+    def chunk(kind, data):
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
+    raw = bytes([0, 255, 0, 0, 0, 255, 0, 0, 0, 0, 255, 128, 128, 255])
+    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", 2, 2, 8, 2, 0, 0, 0))
+            + chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b""))
+
+
+def png(w, h, color_type, depth, pixel_bytes, palette=None):
+    def chunk(kind, data):
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
+    raw = b"".join(b"\0" + pixel_bytes(y) for y in range(h))
+    out = b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, depth, color_type, 0, 0, 0))
+    if palette:
+        out += chunk(b"PLTE", palette)
+    return out + chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b"")
+
+
+def image_seeds(shared):
+    put("png", "fixture.png", fixture_png())
+    put("png", "gray8.png", png(4, 4, 0, 8, lambda y: bytes(range(y * 16, y * 16 + 4))))
+    put("png", "gray-alpha8.png", png(3, 2, 4, 8, lambda y: bytes([100, 255, 50, 128, 0, 0])))
+    put("png", "rgba8.png", png(3, 3, 6, 8, lambda y: bytes([255, 0, 0, 255, 0, 255, 0, 128, 0, 0, 255, 0])))
+    put("png", "rgb16.png", png(2, 2, 2, 16, lambda y: struct.pack(">6H", 65535, 0, 1000, 0, 65535, 30000)))
+    put("png", "palette.png", png(4, 2, 3, 8, lambda y: bytes([0, 1, 2, 1]), palette=bytes([255, 0, 0, 0, 255, 0, 0, 0, 255])))
+    put("png", "gray1.png", png(8, 2, 0, 1, lambda y: bytes([0b10101010])))
+    try:
+        from PIL import Image
+    except ImportError:
+        print("no Pillow: JPEG seeds skipped")
+        return
+    sources = []
+    for folder, name in (("DamagedHelmet", "Default_albedo.jpg"), ("DamagedHelmet", "Default_normal.jpg"),
+                         ("TextureCoordinateTest", "TextureCoordinateTemplate.png"),
+                         ("NormalTangentTest", "NormalTangentTest_Normal.png")):
+        p = os.path.join(shared, "models", folder, name)
+        if os.path.exists(p):
+            sources.append((name.rsplit(".", 1)[0], Image.open(p).convert("RGB").resize((16, 16))))
+    for stem, im in sources:
+        for mode in ("RGB", "L"):
+            b = io.BytesIO()
+            im.convert(mode).save(b, "JPEG", quality=75)
+            put("jpeg", "%s-%s.jpg" % (stem, mode), b.getvalue())
+        b = io.BytesIO()
+        im.save(b, "JPEG", quality=90, progressive=True)
+        put("jpeg", stem + "-progressive.jpg", b.getvalue())
+        b = io.BytesIO()
+        im.save(b, "JPEG", quality=50, subsampling=2, optimize=True)
+        put("jpeg", stem + "-420.jpg", b.getvalue())
+        b = io.BytesIO()
+        im.convert("CMYK").save(b, "JPEG")
+        put("jpeg", stem + "-cmyk.jpg", b.getvalue())
+        b = io.BytesIO()
+        im.convert("RGBA").save(b, "PNG")
+        put("png", stem + "-rgba.png", b.getvalue())
+        b = io.BytesIO()
+        im.save(b, "PNG", interlace=1) if False else im.convert("P").save(b, "PNG")
+        put("png", stem + "-palette.png", b.getvalue())
+
+
+# ----------------------------------------------------------- rays, BVH, CLI
+
+def ray_seeds(shared):
+    rays = []
+    for i in range(16):
+        a = 2 * math.pi * i / 16
+        rays.append((3 * math.cos(a), 0.3, 3 * math.sin(a), -math.cos(a), -0.1, -math.sin(a)))
+    rays.append((0, 0, 0, 1, 0, 0))  # from inside
+    rays.append((0, 5, 0, 0, -1, 0))  # straight down through a vertex
+    rays.append((0, 0, 5, 0, 0, 0))  # zero direction
+    rays.append((float("nan"), 0, 0, 1, 0, 0))
+    put("rays", "ring.rays", b"".join(struct.pack("<6f", *r) for r in rays))
+    # Eight rays from one point (a packet), then eight incoherent ones.
+    pack = [(0, 0, 4, 0.01 * i, 0.01 * (i % 3), -1) for i in range(8)]
+    put("rays", "packet.rays", b"".join(struct.pack("<6f", *r) for r in pack + rays[:8]))
+    put("rays", "one.rays", struct.pack("<6f", 0, 0, 3, 0, 0, -1))
+    tri = lambda *v: struct.pack("<9f", *v)
+    bvh = bytes([16]) + b"".join(struct.pack("<6f", *r) for r in rays[:16])
+    bvh += tri(-1, -1, 0, 1, -1, 0, 0, 1, 0) + tri(-1, -1, 1, 1, -1, 1, 0, 1, 1) + tri(0, 0, 0, 0, 0, 0, 1, 1, 1)
+    bvh += tri(-1, 0, -1, 1, 0, -1, 0, 0, 1) * 3
+    put("bvh", "small", bvh)
+    put("bvh", "grid", bytes([8]) + b"".join(struct.pack("<6f", *r) for r in pack) + b"".join(
+        tri(x, y, 0, x + 1, y, 0, x, y + 1, 0) for x in range(-4, 4) for y in range(-4, 4)))
+
+
+def cli_seeds():
+    lines = [
+        ["render"],
+        ["render", "--spp", "16", "-o", "docs/cornell.png"],
+        ["render", "--integrator", "flat", "--spp", "16", "-o", "x.png"],
+        ["render", "cornell-area", "--integrator", "path", "--material", "tall=mirror,short=glass", "--spp", "512"],
+        ["render", "--integrator", "path", "--material", "floor=gold:0.2,left=mirror", "--spp", "256", "-o", "gold.exr"],
+        ["render", "model.glb", "--env", "sky.hdr", "--env-rotate", "200", "--env-strength", "2"],
+        ["render", "--camera-pos=-0.3,0.2,-2", "--yaw", "10", "--pitch", "-5", "--light-pos", "0,-0.5,-0.7"],
+        ["render", "--width", "640", "--height", "480", "--time", "2.5", "--seed", "7", "--threads", "2"],
+        ["render", "--aov", "albedo,normal,depth,position", "-o", "out.exr", "--exposure", "1.5", "--tonemap", "aces"],
+        ["render", "mesh.obj", "--add", "a.obj", "--transform", "scale=0.5,rotate-y=30,translate=0,0.2,0"],
+        ["render", "scene.toml", "--camera", "1", "--default-light", "off", "--env-color", "0.1,0.2,0.3"],
+        ["render", "--max-depth", "8", "--sampler", "independent", "--ambient", "0.2", "--light-power", "20", "--quiet"],
+        ["view", "--width", "300"],
+        ["bench", "mesh.obj", "--rays", "r.bin", "--hits", "h.bin", "--tfar", "10", "--threads", "1,2", "--api", "all"],
+    ]
+    for i, words in enumerate(lines):
+        put("cli", "args%02d" % i, "\0".join(words))
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--shared", default=os.path.join(HERE, "..", "..", "shared"))
+    a = ap.parse_args()
+    repo = os.path.join(HERE, "..")
+    obj_seeds(a.shared)
+    gltf_seeds(a.shared)
+    toml_seeds(repo)
+    env_seeds(a.shared)
+    image_seeds(a.shared)
+    ray_seeds(a.shared)
+    cli_seeds()
+    for t in sorted(os.listdir(os.path.join(HERE, "corpus"))):
+        files = os.listdir(os.path.join(HERE, "corpus", t))
+        size = sum(os.path.getsize(os.path.join(HERE, "corpus", t, f)) for f in files)
+        print("%-12s %3d seeds, %7d bytes" % (t, len(files), size))
+
+
+if __name__ == "__main__":
+    main()

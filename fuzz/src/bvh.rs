@@ -1,0 +1,131 @@
+//! The BVH oracle: every query kind against brute force over the triangles.
+
+use std::sync::OnceLock;
+
+use glam::Vec3A;
+use raylab::geometry::bvh::{Bvh, brute_force};
+use raylab::{Hit, Ray, Triangle};
+
+/// A small closed mesh (an octahedron) with a degenerate triangle and a sliver
+/// in it: the `rays` target's fixed scene.
+pub fn fixture_mesh() -> &'static [Triangle] {
+    static MESH: OnceLock<Vec<Triangle>> = OnceLock::new();
+    MESH.get_or_init(|| {
+        let p = [
+            Vec3A::X,
+            Vec3A::NEG_X,
+            Vec3A::Y,
+            Vec3A::NEG_Y,
+            Vec3A::Z,
+            Vec3A::NEG_Z,
+        ];
+        let mut t = Vec::new();
+        for &(a, b) in &[(0, 2), (2, 1), (1, 3), (3, 0)] {
+            t.push(Triangle::new(p[a], p[b], p[4]));
+            t.push(Triangle::new(p[b], p[a], p[5]));
+        }
+        t.push(Triangle::new(p[0], p[0], p[1]));
+        t.push(Triangle::new(p[0], p[1], p[1] + Vec3A::splat(1e-7)));
+        t
+    })
+}
+
+fn f32s(bytes: &[u8]) -> impl Iterator<Item = f32> + '_ {
+    bytes
+        .chunks_exact(4)
+        .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+}
+
+/// Rays from 24 bytes each (origin, direction).
+pub fn rays_from(bytes: &[u8]) -> Vec<Ray> {
+    let v: Vec<f32> = f32s(bytes).collect();
+    v.chunks_exact(6)
+        .map(|r| Ray::new(Vec3A::new(r[0], r[1], r[2]), Vec3A::new(r[3], r[4], r[5])))
+        .collect()
+}
+
+/// Triangles from 36 bytes each.
+pub fn triangles_from(bytes: &[u8]) -> Vec<Triangle> {
+    let v: Vec<f32> = f32s(bytes).collect();
+    v.chunks_exact(9)
+        .map(|t| {
+            Triangle::new(
+                Vec3A::new(t[0], t[1], t[2]),
+                Vec3A::new(t[3], t[4], t[5]),
+                Vec3A::new(t[6], t[7], t[8]),
+            )
+        })
+        .collect()
+}
+
+fn finite(ray: &Ray) -> bool {
+    ray.origin.is_finite() && ray.dir.is_finite()
+}
+
+/// The ray parameter of a hit, by its bits (`None` for a miss): what every
+/// query kind must agree on (which triangle wins an exact tie may differ).
+fn t_of(hit: Option<Hit>) -> Option<u32> {
+    hit.map(|h| h.t.to_bits())
+}
+
+/// Builds the BVH over `triangles` and checks every query kind on `rays`
+/// against brute force: closest hits by `t`, occlusion by hit or miss, for
+/// an infinite and a finite `t_max`.
+pub fn check_queries(triangles: &[Triangle], rays: &[Ray]) {
+    let bvh = Bvh::build(triangles);
+    for t_max in [f32::INFINITY, 2.5] {
+        let expected: Vec<Option<Hit>> = rays
+            .iter()
+            .map(|r| {
+                if finite(r) {
+                    brute_force(triangles, r, t_max)
+                } else {
+                    None
+                }
+            })
+            .collect();
+        let single: Vec<Option<Hit>> = rays.iter().map(|r| bvh.intersect(r, t_max)).collect();
+        for (i, r) in rays.iter().enumerate().filter(|(_, r)| finite(r)) {
+            assert_eq!(
+                t_of(single[i]),
+                t_of(expected[i]),
+                "single ray {i} {r:?}, t_max {t_max}: BVH {:?}, brute force {:?}",
+                single[i],
+                expected[i]
+            );
+            assert_eq!(
+                bvh.occluded(r, t_max),
+                expected[i].is_some(),
+                "occluded ray {i} {r:?}, t_max {t_max}"
+            );
+        }
+        let mut stream = vec![None; rays.len()];
+        bvh.intersect_stream(rays, &[t_max], &mut stream);
+        let mut blocked = vec![false; rays.len()];
+        bvh.occluded_stream(rays, &[t_max], &mut blocked);
+        for i in 0..rays.len() {
+            assert_eq!(t_of(stream[i]), t_of(single[i]), "stream ray {i}, t_max {t_max}");
+            assert_eq!(blocked[i], single[i].is_some(), "occluded stream ray {i}");
+        }
+        for (k, chunk) in rays.chunks_exact(8).enumerate() {
+            let r8: &[Ray; 8] = chunk.try_into().expect("eight");
+            let hits = bvh.intersect8(r8, t_max);
+            let occ = bvh.occluded8(r8, [t_max; 8], [true; 8]);
+            for j in 0..8 {
+                let i = 8 * k + j;
+                assert_eq!(t_of(hits[j]), t_of(single[i]), "8-packet ray {i}, t_max {t_max}");
+                assert_eq!(occ[j], single[i].is_some(), "8-packet occluded ray {i}");
+            }
+            for h in 0..2 {
+                let r4: &[Ray; 4] = chunk[4 * h..4 * h + 4].try_into().expect("four");
+                let hits = bvh.intersect4(r4, t_max);
+                let occ = bvh.occluded4(r4, [t_max; 4], [true; 4]);
+                for j in 0..4 {
+                    let i = 8 * k + 4 * h + j;
+                    assert_eq!(t_of(hits[j]), t_of(single[i]), "4-packet ray {i}, t_max {t_max}");
+                    assert_eq!(occ[j], single[i].is_some(), "4-packet occluded ray {i}");
+                }
+            }
+        }
+    }
+}
