@@ -42,7 +42,6 @@ put("obj-normal-index-garbage.obj", TRI + "vn 0 0 1\nf 1//x 2//1 3//1\n")
 put("obj-nan-texcoord.obj", TRI + "vt nan 0\nf 1/1 2/1 3/1\n")
 put("obj-non-utf8.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\n\xff\xfe\xfd garbage\nf 1 2 3\n")
 put("obj-binary-garbage.obj", bytes(range(256)) * 4)
-put("obj-no-faces.obj", TRI)
 # MTL: the OBJ names the library; the error must name the .mtl.
 MTL_OBJ = "mtllib {}\n" + TRI + "usemtl m\nf 1 2 3\n"
 for stem, mtl in [
@@ -50,7 +49,7 @@ for stem, mtl in [
     ("mtl-kd-nan", "newmtl m\nKd nan 0 0\n"),
     ("mtl-newmtl-without-name", "newmtl\nKd 1 1 1\n"),
     ("mtl-illum-garbage", "newmtl m\nillum fancy\n"),
-    ("mtl-map-option-without-value", "newmtl m\nmap_Kd -bm\n"),
+    ("mtl-map-option-not-finite", "newmtl m\nmap_Kd -bm inf tex.png\n"),
     ("mtl-non-utf8", b"newmtl m\nKd 1 1 1\n\xff\xfe\n"),
 ]:
     put(stem + ".obj", MTL_OBJ.format(stem + ".mtl"))
@@ -244,12 +243,12 @@ put("hdr-resolution-garbage.hdr", HDR_HEAD + b"-Y many +X lots\n")
 put("hdr-zero-size.hdr", HDR_HEAD + b"-Y 0 +X 16\n")
 put("hdr-65536-square-10-bytes.hdr", HDR_HEAD + b"-Y 65536 +X 65536\n" + b"\x80" * 10)
 put("hdr-lying-header-10-bytes.hdr", HDR_HEAD + b"-Y 8192 +X 16384\n" + b"\x80" * 10)
-put("hdr-truncated-flat.hdr", HDR_HEAD + b"-Y 4 +X 4\n" + b"\x80\x80\x80\x80" * 7)
+put("hdr-truncated-flat.hdr", HDR_HEAD + b"-Y 4 +X 4\n" + b"\x80\x80\x80\x80" * 14)
 put("hdr-truncated-rle.hdr", HDR_HEAD + b"-Y 2 +X 16\n" + b"\x02\x02\x00\x10" + b"\x90\x80" * 4 + b"\x02\x02\x00\x10\x90")
 put("hdr-run-past-scanline.hdr", HDR_HEAD + b"-Y 1 +X 16\n" + b"\x02\x02\x00\x10" + b"\xff\x80" * 4)
 put("hdr-literal-zero.hdr", HDR_HEAD + b"-Y 1 +X 16\n" + b"\x02\x02\x00\x10" + b"\x00" * 8)
 put("hdr-rle-width-mismatch.hdr", HDR_HEAD + b"-Y 1 +X 16\n" + b"\x02\x02\x00\x20" + b"\x90\x80" * 4)
-put("hdr-repeat-before-pixel.hdr", HDR_HEAD + b"-Y 1 +X 4\n" + b"\x01\x01\x01\x04")
+put("hdr-repeat-before-pixel.hdr", HDR_HEAD + b"-Y 1 +X 4\n" + b"\x01\x01\x01\x04" * 2)
 
 # ---------------------------------------------------------------- EXR
 def exr_attr(name, kind, data):

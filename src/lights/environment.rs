@@ -238,7 +238,13 @@ fn read_image(path: &Path, ledger: &Ledger) -> Result<RgbImage, EnvError> {
                 path: path.to_owned(),
                 cause,
             })?;
-            if let Ok(h) = rgbe::read_header(&bytes) {
+            // Within the limits (else decoding says which is broken), the
+            // map is charged before its texels are allocated.
+            if let Ok(h) = rgbe::read_header(&bytes)
+                && h.width <= MAX_SIDE
+                && h.height <= MAX_SIDE
+                && h.width.saturating_mul(h.height) <= MAX_TEXELS
+            {
                 charge(path, ledger, h.width, h.height)?;
             }
             rgbe::decode(&bytes, MAX_SIDE, MAX_TEXELS).map_err(format)
