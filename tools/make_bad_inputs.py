@@ -311,3 +311,41 @@ put("rays-nan-origin.rays", struct.pack("<6f", float("nan"), 0, 0, 0, 0, -1))
 put("rays-zero-direction.rays", struct.pack("<6f", 0, 0, 5, 0, 0, 0))
 put("rays-inf-direction.rays", struct.pack("<6f", 0, 0, 5, 0, float("inf"), -1))
 put("rays-empty.rays", b"")
+
+# ---------------------------------------------------------------- strange but valid (tests/data/ok)
+OK = os.path.join(os.path.dirname(__file__), "..", "tests", "data", "ok")
+
+
+def put_ok(name, data):
+    if isinstance(data, str):
+        data = data.encode()
+    with open(os.path.join(OK, name), "wb") as f:
+        f.write(data)
+
+
+put_ok("one-triangle.obj", TRI + "f 1 2 3\n")
+put_ok("empty.obj", "# nothing here\n")
+put_ok("empty.gltf", json.dumps({"asset": {"version": "2.0"}}))
+put_ok("empty-scene.gltf", json.dumps({"asset": {"version": "2.0"}, "scenes": [{"nodes": []}], "scene": 0}))
+put_ok("all-degenerate.obj", "v 0 0 0\nv 1 1 1\nv 2 2 2\nv 0 0 0\nf 1 2 3\nf 1 1 1\nf 1 4 1\nf 2 3 1\n")
+put_ok("nan-normals.obj", TRI + "vn nan nan nan\nvn inf 0 0\nf 1//1 2//1 3//2\n")
+nan_normals = TRI_BYTES + struct.pack("<9f", *([float("nan")] * 9))
+put_ok("nan-normals.gltf", gltf(
+    meshes=[{"primitives": [{"attributes": {"POSITION": 0, "NORMAL": 2}, "indices": 1}]}],
+    buffers=[{"byteLength": len(nan_normals), "uri": buffer_uri(nan_normals)}],
+    bufferViews=[{"buffer": 0, "byteOffset": 0, "byteLength": 36},
+                 {"buffer": 0, "byteOffset": 36, "byteLength": 6},
+                 {"buffer": 0, "byteOffset": 44, "byteLength": 36}],
+    accessors=[{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                "min": [0, 0, 0], "max": [1, 1, 0]},
+               {"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"},
+               {"bufferView": 2, "componentType": 5126, "count": 3, "type": "VEC3"}]))
+# All UVs equal: tangent generation divides by a zero UV area.
+put_ok("normal-map.png", png(1, 1, raw=b"\0\x80\x80\xff"))
+put_ok("one-texel.png", png(1, 1, raw=b"\0\xc0\x40\x20"))
+put_ok("zero-area-uvs.mtl", "newmtl m\nKd 0.8 0.8 0.8\nmap_Kd one-texel.png\nnorm normal-map.png\n")
+put_ok("zero-area-uvs.obj", "mtllib zero-area-uvs.mtl\n" + TRI + "v 1 1 0\nvt 0.5 0.5\nvn 0 0 1\nusemtl m\nf 1/1/1 2/1/1 3/1/1\nf 2/1/1 4/1/1 3/1/1\n")
+put_ok("huge-coordinates.obj", "v -1e30 -1e30 0\nv 1e30 -1e30 0\nv 0 1e30 0\nv 0 0 1e30\nf 1 2 3\nf 1 2 4\nf 2 3 4\nf 1 3 4\n")
+put_ok("tiny-extent.obj", "v 0 0 0\nv 1e-30 0 0\nv 0 1e-30 0\nv 0 0 1e-30\nf 1 2 3\nf 1 2 4\nf 2 3 4\nf 1 3 4\n")
+put_ok("one-texel.hdr", HDR_HEAD + b"-Y 1 +X 1\n" + bytes([128, 128, 128, 129]))
+put_ok("missing-mtllib.obj", "mtllib no-such-library.mtl\n" + TRI + "usemtl m\nf 1 2 3\n")

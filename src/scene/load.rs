@@ -518,7 +518,9 @@ pub fn load(name: &str, options: &LoadOptions) -> Result<Loaded, LoadError> {
     match environment {
         Some(env) => scene.set_environment(env),
         None if options.environment.is_given() => {
-            let env = options.environment.apply_with(scene.environment(), &ledger)?;
+            let env = options
+                .environment
+                .apply_with(scene.environment(), &ledger)?;
             scene.set_environment(env);
         }
         None => {}

@@ -975,8 +975,8 @@ impl Loader<'_> {
             };
             sources.push((name.clone(), bytes));
         }
-        self.parts.textures =
-            TextureStore::decode_all_within(sources, self.ledger, &self.name).map_err(|e| match e {
+        self.parts.textures = TextureStore::decode_all_within(sources, self.ledger, &self.name)
+            .map_err(|e| match e {
                 TextureError::Memory(m) => GltfError::Memory(m),
                 e => GltfError::invalid(e.to_string()),
             })?;
