@@ -64,7 +64,7 @@ impl Needs {
             ("environment", self.environment),
             ("film", self.film),
         ];
-        parts.sort_by(|a, b| b.1.cmp(&a.1));
+        parts.sort_by_key(|p| std::cmp::Reverse(p.1));
         parts
             .iter()
             .filter(|(_, b)| *b > 0)

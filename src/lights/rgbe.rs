@@ -363,15 +363,24 @@ mod tests {
         assert!(err(&header("-Y 1 +X 100")).contains("at most 64"));
         assert!(err(&header("-Y 40 +X 40")).contains("1000 pixels"));
         assert!(err(&header("+X 4 -Y 4")).contains("not supported"));
-        assert!(err(&header("-Y 1 +X 8")).contains("ends inside"));
+        // Fewer bytes than any scanline of that width takes (8 here: a
+        // pixel and one repeat marker): refused before the pixels are
+        // allocated.
+        assert!(err(&header("-Y 1 +X 8")).contains("says 8×1 but only 0 bytes"));
+        let mut lying = header("-Y 60 +X 1");
+        lying.extend_from_slice(&[128; 236]);
+        assert!(err(&lying).contains("only 236 bytes"));
+        let mut short = header("-Y 1 +X 8");
+        short.extend_from_slice(&[128, 0, 0, 129, 128, 0, 0, 129]);
+        assert!(err(&short).contains("ends inside"));
         let mut long = header("-Y 1 +X 8");
-        long.extend_from_slice(&[2, 2, 0, 8, 128 + 9, 0]);
+        long.extend_from_slice(&[2, 2, 0, 8, 128 + 9, 0, 0, 0]);
         assert!(err(&long).contains("passes the end"));
         let mut zero = header("-Y 1 +X 8");
-        zero.extend_from_slice(&[2, 2, 0, 8, 0]);
+        zero.extend_from_slice(&[2, 2, 0, 8, 0, 0, 0, 0]);
         assert!(err(&zero).contains("does not fit"));
         let mut lead = header("-Y 1 +X 2");
-        lead.extend_from_slice(&[1, 1, 1, 1]);
+        lead.extend_from_slice(&[1, 1, 1, 1, 1, 1, 1, 1]);
         assert!(err(&lead).contains("before any pixel"));
         assert!(err(&header("-Y 0 +X 4")).contains("0"));
         assert!(err(&header("-Y -4 +X 4")).contains("not a size"));
