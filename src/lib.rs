@@ -36,6 +36,7 @@ pub mod geometry;
 pub mod integrators;
 pub mod lights;
 pub mod materials;
+pub mod memory;
 pub mod render;
 pub mod sampling;
 pub mod scene;

@@ -120,8 +120,15 @@ pub fn surface(
 }
 
 /// Reads a ray file: little-endian f32, six per ray (`ox oy oz dx dy dz`).
+/// A file that is empty, not a whole number of rays, or holds a ray with a
+/// non-finite coordinate or a zero direction is refused, naming the first bad
+/// ray: the kernels assume finite rays, and a benchmark of garbage measures
+/// nothing.
 pub fn read_rays(path: &Path) -> Result<Vec<Ray>, String> {
     let bytes = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    if bytes.is_empty() {
+        return Err(format!("{}: the file holds no rays", path.display()));
+    }
     if bytes.len() % 24 != 0 {
         return Err(format!(
             "{}: {} bytes is not a whole number of rays (24 bytes each)",
@@ -129,14 +136,25 @@ pub fn read_rays(path: &Path) -> Result<Vec<Ray>, String> {
             bytes.len()
         ));
     }
-    Ok(bytes
+    bytes
         .chunks_exact(24)
-        .map(|r| {
+        .enumerate()
+        .map(|(i, r)| {
             let f =
                 |i: usize| f32::from_le_bytes([r[4 * i], r[4 * i + 1], r[4 * i + 2], r[4 * i + 3]]);
-            Ray::new(Vec3A::new(f(0), f(1), f(2)), Vec3A::new(f(3), f(4), f(5)))
+            let (o, d) = (Vec3A::new(f(0), f(1), f(2)), Vec3A::new(f(3), f(4), f(5)));
+            if !(o.is_finite() && d.is_finite()) {
+                return Err(format!(
+                    "{}: ray {i} has a NaN or infinite coordinate",
+                    path.display()
+                ));
+            }
+            if d == Vec3A::ZERO {
+                return Err(format!("{}: ray {i} has a zero direction", path.display()));
+            }
+            Ok(Ray::new(o, d))
         })
-        .collect())
+        .collect()
 }
 
 /// Closest hits of all rays within `(0, t_max]`, one ray at a time on every

@@ -258,7 +258,7 @@ fn hdr_and_exr_files_load_to_the_same_radiance() {
     let bad = dir.path().join("bad.hdr");
     std::fs::write(
         &bad,
-        b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 2 +X 2\n\x01",
+        b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 2 +X 2\n\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01",
     )
     .unwrap();
     let err = Environment::load(&bad).unwrap_err().to_string();

@@ -25,6 +25,7 @@ use rayon::prelude::*;
 use thiserror::Error;
 
 use super::rgbe::{self, RgbImage};
+use crate::memory::{ENVIRONMENT_BYTES_PER_TEXEL, Ledger, Needs};
 use crate::sampling::distribution::Distribution2D;
 
 /// The widest or tallest environment map read.
@@ -57,6 +58,9 @@ pub enum EnvError {
         /// The file.
         path: PathBuf,
     },
+    /// The map would need more memory than the budget allows.
+    #[error(transparent)]
+    Memory(#[from] crate::memory::MemoryError),
 }
 
 /// How the path tracer picks directions of the environment for next-event
@@ -152,7 +156,13 @@ impl EnvMap {
 
     /// Reads a Radiance `.hdr` or OpenEXR `.exr` file (by extension).
     pub fn load(path: &Path) -> Result<Self, EnvError> {
-        Ok(Self::from_image(read_image(path)?))
+        Self::load_with(path, &Ledger::unlimited())
+    }
+
+    /// [`load`](Self::load), charging the map and its sampling tables to
+    /// `ledger` from the file's header, before the texels are allocated.
+    pub fn load_with(path: &Path, ledger: &Ledger) -> Result<Self, EnvError> {
+        Ok(Self::from_image(read_image(path, ledger)?))
     }
 
     /// Width in texels.
@@ -198,8 +208,22 @@ impl EnvMap {
     }
 }
 
-/// Reads an environment image, checking its size before allocating.
-fn read_image(path: &Path) -> Result<RgbImage, EnvError> {
+/// Charges a `width × height` map to `ledger`.
+fn charge(path: &Path, ledger: &Ledger, width: usize, height: usize) -> Result<(), EnvError> {
+    let texels = (width as u64).saturating_mul(height as u64);
+    ledger.charge(
+        &path.display().to_string(),
+        Needs {
+            environment: texels.saturating_mul(ENVIRONMENT_BYTES_PER_TEXEL),
+            ..Needs::default()
+        },
+    )?;
+    Ok(())
+}
+
+/// Reads an environment image, checking its size (against the limits, the
+/// bytes present and the budget) before allocating.
+fn read_image(path: &Path, ledger: &Ledger) -> Result<RgbImage, EnvError> {
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
@@ -214,32 +238,64 @@ fn read_image(path: &Path) -> Result<RgbImage, EnvError> {
                 path: path.to_owned(),
                 cause,
             })?;
+            // Within the limits (else decoding says which is broken), the
+            // map is charged before its texels are allocated.
+            if let Ok(h) = rgbe::read_header(&bytes)
+                && h.width <= MAX_SIDE
+                && h.height <= MAX_SIDE
+                && h.width.saturating_mul(h.height) <= MAX_TEXELS
+            {
+                charge(path, ledger, h.width, h.height)?;
+            }
             rgbe::decode(&bytes, MAX_SIDE, MAX_TEXELS).map_err(format)
         }
-        Some("exr") => read_exr(path).map_err(format),
+        Some("exr") => read_exr(path, &|w, h| charge(path, ledger, w, h)).map_err(|e| match e {
+            ExrError::Env(e) => e,
+            ExrError::Message(m) => format(m),
+        }),
         _ => Err(EnvError::UnknownFormat {
             path: path.to_owned(),
         }),
     }
 }
 
+/// Why [`read_exr`] failed: a message about the file, or the budget.
+enum ExrError {
+    Message(String),
+    Env(EnvError),
+}
+
+impl From<String> for ExrError {
+    fn from(m: String) -> Self {
+        ExrError::Message(m)
+    }
+}
+
 /// Reads the first RGB(A) layer of an OpenEXR file (alpha ignored; a file
-/// with only luminance `Y` is not read).
-fn read_exr(path: &Path) -> Result<RgbImage, String> {
+/// with only luminance `Y` is not read); `charge` is asked about the size
+/// before the texels are allocated.
+fn read_exr(
+    path: &Path,
+    charge: &dyn Fn(usize, usize) -> Result<(), EnvError>,
+) -> Result<RgbImage, ExrError> {
     use exr::prelude::*;
     let meta = exr::meta::MetaData::read_from_file(path, false).map_err(|e| e.to_string())?;
-    let header = meta.headers.first().ok_or("the file has no layer")?;
+    let header = meta
+        .headers
+        .first()
+        .ok_or_else(|| "the file has no layer".to_string())?;
     let size = header.layer_size;
     if size.width() > MAX_SIDE
         || size.height() > MAX_SIDE
         || size.width().saturating_mul(size.height()) > MAX_TEXELS
     {
-        return Err(format!(
+        return Err(ExrError::Message(format!(
             "the image is {}×{}; at most {MAX_SIDE} a side and {MAX_TEXELS} pixels are read",
             size.width(),
             size.height()
-        ));
+        )));
     }
+    charge(size.width(), size.height()).map_err(ExrError::Env)?;
     let image = read()
         .no_deep_data()
         .largest_resolution_level()
@@ -341,6 +397,12 @@ impl Environment {
     /// Reads a map from a Radiance `.hdr` or OpenEXR `.exr` file.
     pub fn load(path: &Path) -> Result<Self, EnvError> {
         Ok(Self::map(EnvMap::load(path)?))
+    }
+
+    /// [`load`](Self::load) within `ledger`'s budget (see
+    /// [`EnvMap::load_with`]).
+    pub fn load_with(path: &Path, ledger: &Ledger) -> Result<Self, EnvError> {
+        Ok(Self::map(EnvMap::load_with(path, ledger)?))
     }
 
     fn from_source(source: Source) -> Self {

@@ -58,10 +58,23 @@ pub fn rgb_to_rgbe(c: [f32; 3]) -> [u8; 4] {
     [q(c[0]), q(c[1]), q(c[2]), (e + 128) as u8]
 }
 
-/// Decodes a Radiance `.hdr` file's bytes. Images of more than `max_pixels`
-/// pixels or wider or taller than `max_side` are refused before anything is
-/// allocated for them. Errors say what is wrong, without the file name.
-pub fn decode(bytes: &[u8], max_side: usize, max_pixels: usize) -> Result<RgbImage, String> {
+/// What a Radiance header says: the image's size, its orientation and where
+/// its pixels start.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Header {
+    /// Width in pixels.
+    pub width: usize,
+    /// Height in pixels.
+    pub height: usize,
+    /// Whether the rows are stored bottom-up (`+Y H +X W`).
+    pub bottom_up: bool,
+    /// Offset of the first scanline in the file.
+    pub data_start: usize,
+}
+
+/// Reads a Radiance `.hdr` file's header (no pixel is read or allocated).
+/// Errors say what is wrong, without the file name.
+pub fn read_header(bytes: &[u8]) -> Result<Header, String> {
     let mut pos = 0usize;
     let next_line = |pos: &mut usize| -> Option<String> {
         let rest = bytes.get(*pos..)?;
@@ -73,7 +86,6 @@ pub fn decode(bytes: &[u8], max_side: usize, max_pixels: usize) -> Result<RgbIma
     if !first.starts_with("#?") {
         return Err("not a Radiance HDR file (it does not start with '#?')".into());
     }
-    let mut format_ok = true;
     let mut header_lines = 0;
     loop {
         let line = next_line(&mut pos).ok_or("the header does not end (no empty line)")?;
@@ -84,18 +96,17 @@ pub fn decode(bytes: &[u8], max_side: usize, max_pixels: usize) -> Result<RgbIma
         if line.is_empty() {
             break;
         }
-        if let Some(f) = line.strip_prefix("FORMAT=") {
-            format_ok = f.trim() == "32-bit_rle_rgbe";
-            if !format_ok {
-                return Err(format!(
-                    "pixel format '{}' is not supported (only 32-bit_rle_rgbe)",
-                    f.trim()
-                ));
-            }
+        if let Some(f) = line.strip_prefix("FORMAT=")
+            && f.trim() != "32-bit_rle_rgbe"
+        {
+            return Err(format!(
+                "pixel format '{}' is not supported (only 32-bit_rle_rgbe)",
+                crate::scene::obj::quote(f.trim())
+            ));
         }
     }
-    debug_assert!(format_ok);
     let size = next_line(&mut pos).ok_or("no resolution line after the header")?;
+    let size = crate::scene::obj::quote(&size);
     let words: Vec<&str> = size.split_ascii_whitespace().collect();
     let parse = |w: &str| {
         w.parse::<usize>()
@@ -110,6 +121,39 @@ pub fn decode(bytes: &[u8], max_side: usize, max_pixels: usize) -> Result<RgbIma
             ));
         }
     };
+    Ok(Header {
+        width,
+        height,
+        bottom_up,
+        data_start: pos,
+    })
+}
+
+/// The fewest bytes a scanline of `width` pixels can take: one pixel and the
+/// old-style repeat markers for the rest (4 bytes per 8 bits of the count), or
+/// an adaptive run-length scanline (a 4-byte head, then per channel a 2-byte
+/// run per 127 pixels), whichever is smaller.
+fn min_scanline_bytes(width: usize) -> usize {
+    let repeat_bytes = (usize::BITS - (width - 1).leading_zeros()).div_ceil(8) as usize;
+    let flat = 4 + 4 * repeat_bytes;
+    if (8..=0x7fff).contains(&width) {
+        flat.min(4 + 4 * 2 * width.div_ceil(127))
+    } else {
+        flat
+    }
+}
+
+/// Decodes a Radiance `.hdr` file's bytes. Images of more than `max_pixels`
+/// pixels or wider or taller than `max_side`, or whose header promises more
+/// scanlines than the bytes after it can hold, are refused before anything
+/// is allocated for them. Errors say what is wrong, without the file name.
+pub fn decode(bytes: &[u8], max_side: usize, max_pixels: usize) -> Result<RgbImage, String> {
+    let Header {
+        width,
+        height,
+        bottom_up,
+        data_start,
+    } = read_header(bytes)?;
     if width == 0 || height == 0 {
         return Err(format!("the image is {width}×{height}"));
     }
@@ -118,7 +162,13 @@ pub fn decode(bytes: &[u8], max_side: usize, max_pixels: usize) -> Result<RgbIma
             "the image is {width}×{height}; at most {max_side} a side and {max_pixels} pixels are read"
         ));
     }
-    let data = &bytes[pos..];
+    let data = &bytes[data_start..];
+    if data.len() / min_scanline_bytes(width) < height {
+        return Err(format!(
+            "the header says {width}×{height} but only {} bytes of pixels follow; the file is cut short or corrupt",
+            data.len()
+        ));
+    }
     let mut pixels = vec![[0.0f32; 3]; width * height];
     let mut scanline = vec![[0u8; 4]; width];
     let mut at = 0usize;
@@ -313,15 +363,24 @@ mod tests {
         assert!(err(&header("-Y 1 +X 100")).contains("at most 64"));
         assert!(err(&header("-Y 40 +X 40")).contains("1000 pixels"));
         assert!(err(&header("+X 4 -Y 4")).contains("not supported"));
-        assert!(err(&header("-Y 1 +X 8")).contains("ends inside"));
+        // Fewer bytes than any scanline of that width takes (8 here: a
+        // pixel and one repeat marker): refused before the pixels are
+        // allocated.
+        assert!(err(&header("-Y 1 +X 8")).contains("says 8×1 but only 0 bytes"));
+        let mut lying = header("-Y 60 +X 1");
+        lying.extend_from_slice(&[128; 236]);
+        assert!(err(&lying).contains("only 236 bytes"));
+        let mut short = header("-Y 1 +X 8");
+        short.extend_from_slice(&[128, 0, 0, 129, 128, 0, 0, 129]);
+        assert!(err(&short).contains("ends inside"));
         let mut long = header("-Y 1 +X 8");
-        long.extend_from_slice(&[2, 2, 0, 8, 128 + 9, 0]);
+        long.extend_from_slice(&[2, 2, 0, 8, 128 + 9, 0, 0, 0]);
         assert!(err(&long).contains("passes the end"));
         let mut zero = header("-Y 1 +X 8");
-        zero.extend_from_slice(&[2, 2, 0, 8, 0]);
+        zero.extend_from_slice(&[2, 2, 0, 8, 0, 0, 0, 0]);
         assert!(err(&zero).contains("does not fit"));
         let mut lead = header("-Y 1 +X 2");
-        lead.extend_from_slice(&[1, 1, 1, 1]);
+        lead.extend_from_slice(&[1, 1, 1, 1, 1, 1, 1, 1]);
         assert!(err(&lead).contains("before any pixel"));
         assert!(err(&header("-Y 0 +X 4")).contains("0"));
         assert!(err(&header("-Y -4 +X 4")).contains("not a size"));

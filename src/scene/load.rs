@@ -11,14 +11,15 @@ use thiserror::Error;
 
 use super::cornell::{self, MaterialChoice};
 use super::framing;
-use super::gltf::{GltfError, load_gltf};
-use super::obj::{ObjError, load_obj, load_obj_scene};
-use super::shot::{ShotCamera, ShotError, ShotSettings, load_shot};
+use super::gltf::{GltfError, load_gltf_with};
+use super::obj::{ObjError, load_obj, load_obj_scene_with};
+use super::shot::{ShotCamera, ShotError, ShotSettings, load_shot_with};
 use super::transform::Transform;
 use super::{PointLight, Scene, SceneError};
 use crate::camera::{Lens, SceneCamera, Y_UP_TOWARDS_MINUS_Z};
 use crate::geometry::triangle::Triangle;
 use crate::lights::environment::{EnvError, Environment};
+use crate::memory::{GEOMETRY_BYTES_PER_TRIANGLE, Ledger, MemoryBudget, MemoryError, Needs};
 
 /// What a scene was made from; decides defaults (integrator, image size, tone
 /// mapping) that differ between the lab's scenes and real ones.
@@ -64,6 +65,11 @@ pub struct LoadOptions {
     pub default_light: DefaultLight,
     /// The environment around the scene.
     pub environment: EnvironmentOptions,
+    /// The most memory the scene (geometry, textures, environment map) may
+    /// need, checked from headers and counts before the big allocations
+    /// (default: unlimited; `raylab` passes `--max-memory`, by default
+    /// [`MemoryBudget::machine_default`]).
+    pub max_memory: MemoryBudget,
 }
 
 /// Where an environment's radiance comes from.
@@ -97,8 +103,17 @@ impl EnvironmentOptions {
     /// the source replaced if given, then strength and rotation applied.
     /// Strength or rotation without any environment is a usage error.
     pub fn apply(&self, current: &Environment) -> Result<Environment, LoadError> {
+        self.apply_with(current, &Ledger::unlimited())
+    }
+
+    /// [`apply`](Self::apply), charging a map read from a file to `ledger`.
+    pub fn apply_with(
+        &self,
+        current: &Environment,
+        ledger: &Ledger,
+    ) -> Result<Environment, LoadError> {
         let mut env = match &self.source {
-            Some(EnvSource::File(path)) => Environment::load(path)?,
+            Some(EnvSource::File(path)) => Environment::load_with(path, ledger)?,
             Some(EnvSource::Color(c)) => Environment::constant(*c),
             None => current.clone(),
         };
@@ -189,6 +204,8 @@ pub struct LoadSummary {
     pub environment_time: Duration,
     /// Time to read, decode and build.
     pub time: Duration,
+    /// The memory estimate the load was checked against (no film yet).
+    pub needs: Needs,
 }
 
 /// A loaded scene with its starting view.
@@ -243,6 +260,23 @@ pub enum LoadError {
     /// A scene file is unreadable, malformed or inconsistent.
     #[error(transparent)]
     Shot(#[from] ShotError),
+    /// The scene would need more memory than [`LoadOptions::max_memory`].
+    #[error(transparent)]
+    Memory(#[from] MemoryError),
+}
+
+/// Charges `triangles` triangles' geometry to `ledger`, less what the loader
+/// has already charged (glTF charges each instance as it makes it).
+fn charge_geometry(ledger: &Ledger, name: &str, triangles: usize) -> Result<(), MemoryError> {
+    let estimate = triangles as u64 * GEOMETRY_BYTES_PER_TRIANGLE;
+    let more = estimate.saturating_sub(ledger.needs().geometry);
+    ledger.charge(
+        name,
+        Needs {
+            geometry: more,
+            ..Needs::default()
+        },
+    )
 }
 
 /// Ambient term of mesh and glTF scenes unless the user gives one.
@@ -301,9 +335,14 @@ pub fn load(name: &str, options: &LoadOptions) -> Result<Loaded, LoadError> {
     let mut default_light = false;
     let mut settings = ShotSettings::default();
     // The environment first: a scene lit by one gets no default lighting.
+    let ledger = Ledger::new(options.max_memory);
     let env_start = Instant::now();
     let environment = match &options.environment.source {
-        Some(_) => Some(options.environment.apply(&Environment::none())?),
+        Some(_) => Some(
+            options
+                .environment
+                .apply_with(&Environment::none(), &ledger)?,
+        ),
         None => None,
     };
     let mut environment_time = env_start.elapsed();
@@ -337,6 +376,7 @@ pub fn load(name: &str, options: &LoadOptions) -> Result<Loaded, LoadError> {
             };
             let default_ambient = if area { 0.0 } else { cornell::AMBIENT };
             let ambient = Vec3A::splat(options.ambient.unwrap_or(default_ambient));
+            charge_geometry(&ledger, name, tris.len())?;
             let mut scene = Scene::new(tris, rho, light, ambient).map_err(scene_err)?;
             if area {
                 cornell::light_area_patch(&mut scene);
@@ -356,13 +396,18 @@ pub fn load(name: &str, options: &LoadOptions) -> Result<Loaded, LoadError> {
             (scene, view)
         }
         SceneKind::Mesh => {
-            let obj = load_obj_scene(Path::new(name))?;
+            let obj = load_obj_scene_with(Path::new(name), &ledger)?;
             warnings.extend(obj.warnings);
             let mut parts = obj.parts;
             parts.ambient = Vec3A::splat(options.ambient.unwrap_or(MESH_AMBIENT));
-            let (lo, hi) = crate::workload::bounds(&parts.triangles);
+            // An empty OBJ (a warning) is framed as a point at the origin.
+            let (lo, hi) = match parts.triangles.is_empty() {
+                true => (Vec3A::ZERO, Vec3A::ZERO),
+                false => crate::workload::bounds(&parts.triangles),
+            };
             let framing = framing::frame(lo, hi);
             parts.light = framing.light;
+            charge_geometry(&ledger, name, parts.triangles.len())?;
             let mut scene = Scene::from_parts(parts).map_err(scene_err)?;
             // The framing light lights a bare mesh; an OBJ whose emitters
             // light it (a room with a ceiling lamp) keeps only those, unless
@@ -388,11 +433,12 @@ pub fn load(name: &str, options: &LoadOptions) -> Result<Loaded, LoadError> {
             (scene, view)
         }
         SceneKind::Gltf => {
-            let loaded = load_gltf(Path::new(name))?;
+            let loaded = load_gltf_with(Path::new(name), &ledger)?;
             warnings.extend(loaded.warnings);
             let mut parts = loaded.parts;
             parts.ambient = Vec3A::splat(options.ambient.unwrap_or(MESH_AMBIENT));
             let cameras = parts.cameras.len();
+            charge_geometry(&ledger, name, parts.triangles.len())?;
             let mut scene = Scene::from_parts(parts).map_err(scene_err)?;
             let (lo, hi) = scene.bounds();
             let framing = framing::frame(lo, hi);
@@ -417,12 +463,13 @@ pub fn load(name: &str, options: &LoadOptions) -> Result<Loaded, LoadError> {
             (scene, view)
         }
         SceneKind::Shot => {
-            let shot = load_shot(Path::new(name))?;
+            let shot = load_shot_with(Path::new(name), &ledger)?;
             warnings.extend(shot.warnings);
             settings = shot.settings;
             let mut parts = shot.parts;
             parts.ambient = Vec3A::splat(options.ambient.unwrap_or(MESH_AMBIENT));
             let cameras = parts.cameras.len();
+            charge_geometry(&ledger, name, parts.triangles.len())?;
             let mut scene = Scene::from_parts(parts).map_err(scene_err)?;
             if environment.is_none()
                 && let Some(e) = shot.environment
@@ -437,7 +484,7 @@ pub fn load(name: &str, options: &LoadOptions) -> Result<Loaded, LoadError> {
                     rotation: e.rotate,
                 };
                 let env_start = Instant::now();
-                let env = from_file.apply(&Environment::none())?;
+                let env = from_file.apply_with(&Environment::none(), &ledger)?;
                 environment_time = env_start.elapsed();
                 scene.set_environment(env);
             }
@@ -471,7 +518,9 @@ pub fn load(name: &str, options: &LoadOptions) -> Result<Loaded, LoadError> {
     match environment {
         Some(env) => scene.set_environment(env),
         None if options.environment.is_given() => {
-            let env = options.environment.apply(scene.environment())?;
+            let env = options
+                .environment
+                .apply_with(scene.environment(), &ledger)?;
             scene.set_environment(env);
         }
         None => {}
@@ -494,6 +543,7 @@ pub fn load(name: &str, options: &LoadOptions) -> Result<Loaded, LoadError> {
             .map_or(0, |m| m.memory_bytes()),
         environment_time,
         time: start.elapsed(),
+        needs: ledger.needs(),
     };
     Ok(Loaded {
         scene,

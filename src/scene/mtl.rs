@@ -100,10 +100,16 @@ pub fn parse_mtl(
                 .split_ascii_whitespace()
                 .map(|w| w.parse::<f32>())
                 .collect::<Result<_, _>>()
-                .map_err(|_| syntax(format!("{keyword} needs {n} number(s), got '{rest}'")))?;
+                .map_err(|_| {
+                    syntax(format!(
+                        "{keyword} needs {n} number(s), got '{}'",
+                        super::obj::quote(rest)
+                    ))
+                })?;
             if v.len() < n || v.iter().any(|x| !x.is_finite()) {
                 return Err(syntax(format!(
-                    "{keyword} needs {n} finite number(s), got '{rest}'"
+                    "{keyword} needs {n} finite number(s), got '{}'",
+                    super::obj::quote(rest)
                 )));
             }
             Ok(v)
@@ -148,10 +154,12 @@ pub fn parse_mtl(
             "Pr" => m.pr = Some(numbers(1)?[0].clamp(0.0, 1.0)),
             "Pm" => m.pm = Some(numbers(1)?[0].clamp(0.0, 1.0)),
             "illum" => {
-                m.illum = Some(
-                    rest.parse::<u32>()
-                        .map_err(|_| syntax(format!("illum needs a model number, got '{rest}'")))?,
-                )
+                m.illum = Some(rest.parse::<u32>().map_err(|_| {
+                    syntax(format!(
+                        "illum needs a model number, got '{}'",
+                        super::obj::quote(rest)
+                    ))
+                })?)
             }
             "map_Kd" | "map_Ks" | "map_d" | "map_Bump" | "map_bump" | "bump" | "norm"
             | "map_Pr" | "map_Pm" | "map_Ke" => {

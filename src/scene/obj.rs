@@ -79,6 +79,9 @@ pub enum ObjError {
     /// A texture could not be decoded.
     #[error("{0}")]
     Texture(String),
+    /// The scene would need more memory than the budget allows.
+    #[error(transparent)]
+    Memory(#[from] crate::memory::MemoryError),
 }
 
 /// One corner of a face: indices into the file's positions, texture
@@ -115,20 +118,42 @@ pub struct ObjFile {
     pub libraries: Vec<PathBuf>,
     /// Statement kinds skipped, with their counts.
     pub skipped: BTreeMap<String, usize>,
+    /// `vn` lines with a NaN or infinite coordinate (kept as zero normals).
+    pub bad_normals: usize,
 }
 
-/// Reads `n` finite numbers (at least `min`) after a keyword.
+/// Longest word quoted in a message, in characters: a malformed file may
+/// hold a 100 MB token, and the message must stay one readable line.
+pub const QUOTE_CHARS: usize = 40;
+
+/// `word` for an error message: cut to [`QUOTE_CHARS`] characters (with `…`
+/// and the full length) when longer.
+pub fn quote(word: &str) -> String {
+    match word.char_indices().nth(QUOTE_CHARS) {
+        None => word.to_string(),
+        Some((cut, _)) => format!("{}… ({} bytes)", &word[..cut], word.len()),
+    }
+}
+
+/// Reads `n` numbers (at least `min`) after a keyword; finite ones only unless
+/// `any` (normals: a non-finite one is repaired by the caller).
 fn numbers<'a>(
     words: impl Iterator<Item = &'a str>,
     min: usize,
     max: usize,
     what: &str,
+    any: bool,
 ) -> Result<Vec<f32>, String> {
     let mut out = Vec::with_capacity(max);
     for word in words.take(max) {
         match word.parse::<f32>() {
-            Ok(v) if v.is_finite() => out.push(v),
-            _ => return Err(format!("{what} coordinate '{word}' is not a finite number")),
+            Ok(v) if v.is_finite() || any => out.push(v),
+            _ => {
+                return Err(format!(
+                    "{what} coordinate '{}' is not a finite number",
+                    quote(word)
+                ));
+            }
         }
     }
     if out.len() < min {
@@ -145,7 +170,7 @@ fn numbers<'a>(
 fn resolve(word: &str, count: usize, what: &str) -> Result<u32, String> {
     let n: i64 = word
         .parse()
-        .map_err(|_| format!("face {what} '{word}' is not an index"))?;
+        .map_err(|_| format!("face {what} '{}' is not an index", quote(word)))?;
     let resolved = match n {
         0 => return Err(format!("face {what} index 0 (OBJ counts from 1)")),
         n if n > 0 => n - 1,
@@ -191,18 +216,29 @@ pub fn parse_obj_file(text: &str, path: &Path) -> Result<ObjFile, ObjError> {
         let rest = line[keyword.len()..].trim();
         match keyword {
             "v" => {
-                let c = numbers(words, 3, 3, "vertex").map_err(|m| syntax(line_no, m))?;
+                let c = numbers(words, 3, 3, "vertex", false).map_err(|m| syntax(line_no, m))?;
                 obj.positions.push(Vec3A::new(c[0], c[1], c[2]));
             }
             "vt" => {
-                let c = numbers(words, 1, 2, "texture").map_err(|m| syntax(line_no, m))?;
+                let c = numbers(words, 1, 2, "texture", false).map_err(|m| syntax(line_no, m))?;
                 obj.uvs
                     .push(Vec2::new(c[0], c.get(1).copied().unwrap_or(0.0)));
             }
             "vn" => {
-                let c = numbers(words, 3, 3, "normal").map_err(|m| syntax(line_no, m))?;
-                obj.normals
-                    .push(Vec3::new(c[0], c[1], c[2]).normalize_or_zero());
+                // A NaN or infinite normal (exporters write them for
+                // degenerate faces) is repaired, not refused: the zero
+                // normal stands for "none", and shading falls back to the
+                // geometric normal.
+                let c = numbers(words, 3, 3, "normal", true).map_err(|m| syntax(line_no, m))?;
+                let n = Vec3::new(c[0], c[1], c[2]);
+                if !n.is_finite() {
+                    obj.bad_normals += 1;
+                }
+                obj.normals.push(if n.is_finite() {
+                    n.normalize_or_zero()
+                } else {
+                    Vec3::ZERO
+                });
             }
             "f" => {
                 polygon.clear();
@@ -276,11 +312,6 @@ pub fn parse_obj_file(text: &str, path: &Path) -> Result<ObjFile, ObjError> {
     let n = obj.triangles.len();
     close(&mut group, n, &mut obj.parts);
     close(&mut object, n, &mut obj.parts);
-    if obj.triangles.is_empty() {
-        return Err(ObjError::Empty {
-            path: path.to_owned(),
-        });
-    }
     for (t, line_no) in obj.triangles.iter().zip(lines_of) {
         for c in t {
             let checks = [
@@ -326,6 +357,15 @@ fn read_libraries(
                     materials.insert(m.name.clone(), m);
                 }
             }
+            // A library that is there but unreadable (not UTF-8, a folder)
+            // is an error, as an unreadable OBJ is; only a missing one is
+            // forgiven, as exporters often name one they did not write.
+            Err(cause) if cause.kind() != std::io::ErrorKind::NotFound => {
+                return Err(ObjError::Io {
+                    path: lib.clone(),
+                    cause,
+                });
+            }
             Err(e) => warnings.push(format!(
                 "{}: material library {}: {e}; its materials are grey",
                 path.display(),
@@ -366,6 +406,13 @@ pub fn load_obj(path: &Path) -> Result<Mesh, ObjError> {
 /// and locates `mtllib` files.
 pub fn parse_obj(text: &str, path: &Path) -> Result<Mesh, ObjError> {
     let obj = parse_obj_file(text, path)?;
+    // A mesh to place or to benchmark must have triangles (a scene may be
+    // empty: see `load_obj_scene`).
+    if obj.triangles.is_empty() {
+        return Err(ObjError::Empty {
+            path: path.to_owned(),
+        });
+    }
     let mut warnings = Vec::new();
     let mut skipped = obj.skipped.clone();
     let materials = read_libraries(&obj, path, &mut skipped, &mut warnings)?;
@@ -417,11 +464,33 @@ pub struct ObjScene {
 /// sided, as OBJ windings vary; emitters emit from their counter-clockwise
 /// side).
 pub fn load_obj_scene(path: &Path) -> Result<ObjScene, ObjError> {
+    load_obj_scene_with(path, &crate::memory::Ledger::unlimited())
+}
+
+/// [`load_obj_scene`], charging the decoded textures to `ledger` before
+/// decoding them.
+pub fn load_obj_scene_with(
+    path: &Path,
+    ledger: &crate::memory::Ledger,
+) -> Result<ObjScene, ObjError> {
     let obj = parse_obj_file(&read_text(path)?, path)?;
     let mut warnings = Vec::new();
     let mut skipped = obj.skipped.clone();
     let library = read_libraries(&obj, path, &mut skipped, &mut warnings)?;
     warnings.extend(skipped_warning(path, &skipped));
+    if obj.triangles.is_empty() {
+        warnings.push(format!(
+            "{}: no triangles (no 'f' lines with three or more vertices); the image shows only the background",
+            path.display()
+        ));
+    }
+    if obj.bad_normals > 0 {
+        warnings.push(format!(
+            "{}: {} 'vn' normals are not finite; their corners use the face's normal",
+            path.display(),
+            obj.bad_normals
+        ));
+    }
 
     // Textures: every map file once, read (missing: a warning), then decoded
     // in parallel.
@@ -450,7 +519,12 @@ pub fn load_obj_scene(path: &Path) -> Result<ObjScene, ObjError> {
         }
     }
     let mut textures =
-        TextureStore::decode_all(sources).map_err(|e| ObjError::Texture(e.to_string()))?;
+        TextureStore::decode_all_within(sources, ledger, &path.display().to_string()).map_err(
+            |e| match e {
+                crate::textures::TextureError::Memory(m) => ObjError::Memory(m),
+                e => ObjError::Texture(e.to_string()),
+            },
+        )?;
 
     // Bump maps that are height fields become normal maps (with `-bm`
     // applied); those that are normal maps already are used as they are (with

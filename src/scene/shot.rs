@@ -16,7 +16,6 @@ use serde::Deserialize;
 use thiserror::Error;
 
 use super::cornell::{self, MaterialChoice};
-use super::gltf::load_gltf;
 use super::{PointLight, SceneParts};
 use crate::Integrator;
 use crate::camera::{Lens, SceneCamera};
@@ -337,12 +336,21 @@ pub fn read_settings(path: &Path) -> Result<ShotSettings, ShotError> {
 /// material overrides, adds its lights. The environment is returned as
 /// written (the caller loads it, so that the command line can replace it).
 pub fn load_shot(path: &Path) -> Result<Shot, super::LoadError> {
+    load_shot_with(path, &crate::memory::Ledger::unlimited())
+}
+
+/// [`load_shot`], charging the models' decoded textures to `ledger` before
+/// decoding them.
+pub fn load_shot_with(
+    path: &Path,
+    ledger: &crate::memory::Ledger,
+) -> Result<Shot, super::LoadError> {
     let text = std::fs::read_to_string(path).map_err(|cause| ShotError::Io {
         path: path.to_owned(),
         cause,
     })?;
     let file = parse(&text, path)?;
-    compose(file, path)
+    compose_with(file, path, ledger)
 }
 
 fn invalid(path: &Path, message: String) -> ShotError {
@@ -514,6 +522,7 @@ fn load_model(
     base: &Path,
     m: &ModelSection,
     index: usize,
+    ledger: &crate::memory::Ledger,
 ) -> Result<ModelParts, super::LoadError> {
     match (&m.file, &m.builtin) {
         (Some(_), Some(_)) | (None, None) => Err(invalid(
@@ -582,7 +591,7 @@ fn load_model(
                 .map(str::to_ascii_lowercase);
             match ext.as_deref() {
                 Some("gltf" | "glb") => {
-                    let g = load_gltf(&file)?;
+                    let g = super::gltf::load_gltf_with(&file, ledger)?;
                     Ok(ModelParts {
                         parts: g.parts,
                         named_ranges: Vec::new(),
@@ -591,7 +600,7 @@ fn load_model(
                     })
                 }
                 Some("obj") => {
-                    let obj = super::obj::load_obj_scene(&file)?;
+                    let obj = super::obj::load_obj_scene_with(&file, ledger)?;
                     Ok(ModelParts {
                         parts: obj.parts,
                         named_ranges: obj.named_parts,
@@ -671,6 +680,15 @@ fn placement(
 
 /// Composes a parsed scene file (`path` locates relative paths).
 pub fn compose(file: ShotFile, path: &Path) -> Result<Shot, super::LoadError> {
+    compose_with(file, path, &crate::memory::Ledger::unlimited())
+}
+
+/// [`compose`], charging the models' decoded textures to `ledger`.
+pub fn compose_with(
+    file: ShotFile,
+    path: &Path,
+    ledger: &crate::memory::Ledger,
+) -> Result<Shot, super::LoadError> {
     let base = path.parent().unwrap_or(Path::new("")).to_path_buf();
     let settings = settings(path, &file.render)?;
     let mut defined = BTreeMap::new();
@@ -709,7 +727,7 @@ pub fn compose(file: ShotFile, path: &Path) -> Result<Shot, super::LoadError> {
                 _ => format!("model {}", index + 1),
             });
         let what = format!("[[model]] '{name}'");
-        let mut model = load_model(path, &base, m, index)?;
+        let mut model = load_model(path, &base, m, index, ledger)?;
         warnings.append(&mut model.warnings);
         // Overrides: "*" for the whole model, a part name, else every material
         // of that name.

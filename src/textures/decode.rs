@@ -12,6 +12,13 @@ const PNG_SIGNATURE: &[u8] = b"\x89PNG\r\n\x1a\n";
 /// A JPEG file's start-of-image marker and the first byte of the next marker.
 const JPEG_SIGNATURE: &[u8] = &[0xFF, 0xD8, 0xFF];
 
+/// Most decoded bytes per byte of file: PNG's deflate expands at most 1032
+/// times and a 1-bit palette image with transparency decodes to 32 bits a
+/// texel (33 024 in all); JPEG needs at least a bit per 8×8 block and
+/// channel. A header announcing more than this from the bytes present lies
+/// (or the file is cut), and is refused before its texels are allocated.
+pub const MAX_EXPANSION: u64 = 1 << 16;
+
 /// The decoder's limits: at most [`MAX_SIDE`] texels a side (checked by the
 /// decoders on the header, before they allocate), and allocations bounded by
 /// the largest image allowed in the widest format (RGBA, 16 bits) plus slack
@@ -92,8 +99,32 @@ impl Image {
         if u64::from(width) * u64::from(height) > MAX_TEXELS {
             return Err(too_large(width, height));
         }
+        if decoder.total_bytes() > (bytes.len() as u64).saturating_mul(MAX_EXPANSION) {
+            return Err(TextureError::Truncated {
+                name: name.into(),
+                width,
+                height,
+                bytes: bytes.len(),
+            });
+        }
         let decoded = DynamicImage::from_decoder(decoder).map_err(decode_error)?;
         Ok(Self::from_dynamic(decoded))
+    }
+
+    /// The bytes `bytes` would decode to, from its header alone (no texel
+    /// decoded); `None` if the header is unreadable or refused (decoding then
+    /// says why).
+    pub fn decoded_bytes(bytes: &[u8]) -> Option<u64> {
+        let format = if bytes.starts_with(PNG_SIGNATURE) {
+            ImageFormat::Png
+        } else if bytes.starts_with(JPEG_SIGNATURE) {
+            ImageFormat::Jpeg
+        } else {
+            return None;
+        };
+        let mut reader = ImageReader::with_format(Cursor::new(bytes), format);
+        reader.limits(limits());
+        Some(reader.into_decoder().ok()?.total_bytes())
     }
 
     /// Takes over a decoded image's buffer as is (no copy) when its layout is

@@ -125,6 +125,23 @@ pub enum TextureError {
         /// Its height in texels, as its header says.
         height: u32,
     },
+    /// The header announces more texels than the file's bytes can hold.
+    #[error(
+        "{name}: the header says {width}×{height} texels but {bytes} bytes cannot hold them; the file is cut short or corrupt"
+    )]
+    Truncated {
+        /// The image.
+        name: String,
+        /// Its width in texels, as its header says.
+        width: u32,
+        /// Its height in texels, as its header says.
+        height: u32,
+        /// The bytes there are.
+        bytes: usize,
+    },
+    /// Decoding the images would exceed the memory budget.
+    #[error(transparent)]
+    Memory(#[from] crate::memory::MemoryError),
     /// The header announces no texels.
     #[error("{name}: the image is empty (a side of 0 texels)")]
     Empty {
@@ -167,6 +184,28 @@ impl TextureStore {
     /// image `k` of `sources` gets id `k`. If any fails, the error of the first
     /// failing one in `sources`' order is returned (whichever finished first).
     pub fn decode_all(sources: Vec<(String, Vec<u8>)>) -> Result<TextureStore, TextureError> {
+        Self::decode_all_within(sources, &crate::memory::Ledger::unlimited(), "")
+    }
+
+    /// [`decode_all`](Self::decode_all), first charging the decoded sizes
+    /// their headers announce to `ledger` (an error naming `scene` if they do
+    /// not fit), so that nothing is decoded for a scene over budget.
+    pub fn decode_all_within(
+        sources: Vec<(String, Vec<u8>)>,
+        ledger: &crate::memory::Ledger,
+        scene: &str,
+    ) -> Result<TextureStore, TextureError> {
+        let textures = sources
+            .iter()
+            .map(|(_, bytes)| Image::decoded_bytes(bytes).unwrap_or(0))
+            .fold(0u64, u64::saturating_add);
+        ledger.charge(
+            scene,
+            crate::memory::Needs {
+                textures,
+                ..Default::default()
+            },
+        )?;
         let decoded: Vec<Result<Image, TextureError>> = sources
             .into_par_iter()
             .with_max_len(1)

@@ -174,6 +174,10 @@ pub struct SceneArgs {
     /// light) [default: 0.5 in the box, 0.15 for a mesh].
     #[arg(long, value_name = "N", allow_hyphen_values = true, value_parser = parse_non_negative)]
     pub ambient: Option<f32>,
+    /// Most memory the scene, textures, environment map and film may need
+    /// (e.g. 4G, 512M; 0 or none: no limit) [default: 3/4 of physical memory].
+    #[arg(long, value_name = "SIZE", allow_hyphen_values = true, value_parser = raylab::memory::parse_budget)]
+    pub max_memory: Option<raylab::memory::MemoryBudget>,
 }
 
 #[derive(Debug, Clone, Args)]
@@ -344,7 +348,14 @@ impl SceneArgs {
                 strength: self.env_strength,
                 rotation: self.env_rotate,
             },
+            max_memory: self.memory_budget(),
         }
+    }
+
+    /// `--max-memory`, or its default.
+    pub fn memory_budget(&self) -> raylab::memory::MemoryBudget {
+        self.max_memory
+            .unwrap_or_else(raylab::memory::MemoryBudget::machine_default)
     }
 }
 

@@ -149,7 +149,23 @@ pub fn display(
 /// Loads the scene of the arguments through the library, prints its warnings
 /// and (unless `quiet`) a summary line for files, and sets up the view.
 fn load(args: &SceneArgs, quiet: bool) -> anyhow::Result<Session> {
+    load_for(args, quiet, 0)
+}
+
+/// [`load`] for a film with `aov_channels` AOV channels: the scene's memory
+/// estimate and the film's must fit `--max-memory` together.
+pub fn load_for(args: &SceneArgs, quiet: bool, aov_channels: usize) -> anyhow::Result<Session> {
     let loaded = raylab::scene::load(&args.scene, &args.load_options())?;
+    let size = args
+        .size(loaded.kind, loaded.view.aspect_ratio)
+        .map_err(|e| anyhow::anyhow!(e.trim_start_matches("error: ").to_string()))?;
+    // The film is allocated when the render starts: check it with the scene
+    // (already loaded within the budget) before then.
+    let needs = raylab::memory::Needs {
+        film: raylab::memory::film_bytes(size.0, size.1, aov_channels),
+        ..loaded.summary.needs
+    };
+    args.memory_budget().check(&args.scene, &needs)?;
     for w in &loaded.warnings {
         eprintln!("warning: {w}");
     }
@@ -184,9 +200,6 @@ fn load(args: &SceneArgs, quiet: bool) -> anyhow::Result<Session> {
             s.environment_time.as_secs_f64() * 1e3
         );
     }
-    let size = args
-        .size(kind, loaded.view.aspect_ratio)
-        .map_err(|e| anyhow::anyhow!(e.trim_start_matches("error: ").to_string()))?;
     let v = &loaded.view;
     let view = raylab::controls::ViewState {
         camera_pos: args.camera_pos.unwrap_or(v.position),

@@ -39,7 +39,8 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             dir.display()
         );
     }
-    let session = crate::load(&args.scene, args.quiet)?;
+    let aov_channels = aovs.iter().map(|a| a.channels().len()).sum();
+    let session = crate::load_for(&args.scene, args.quiet, aov_channels)?;
     let (scene, view) = (&session.scene, &session.view);
     let camera = view.camera(session.size.0, session.size.1);
     let integrator = view.integrator;

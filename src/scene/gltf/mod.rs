@@ -26,7 +26,8 @@ use crate::camera::{Lens, SceneCamera};
 use crate::geometry::triangle::Triangle;
 use crate::lights::Light;
 use crate::materials::surface::{AlphaMode, GltfMaterial, MaterialKind, SurfaceMaterial};
-use crate::textures::{TextureRef, TextureStore, TextureTransform, Wrap};
+use crate::memory::{GEOMETRY_BYTES_PER_TRIANGLE, Ledger, Needs};
+use crate::textures::{TextureError, TextureRef, TextureStore, TextureTransform, Wrap};
 
 /// Extensions raylab reads; a file that requires any other is refused.
 pub const SUPPORTED_EXTENSIONS: [&str; 8] = [
@@ -62,6 +63,9 @@ pub enum GltfError {
     /// The content is malformed or inconsistent.
     #[error("{0}")]
     Invalid(String),
+    /// The scene would need more memory than the budget allows.
+    #[error(transparent)]
+    Memory(#[from] crate::memory::MemoryError),
 }
 
 impl GltfError {
@@ -85,8 +89,14 @@ pub struct GltfScene {
 
 /// Reads a glTF or GLB file. Errors carry the file's name.
 pub fn load_gltf(path: &Path) -> Result<GltfScene, GltfError> {
+    load_gltf_with(path, &Ledger::unlimited())
+}
+
+/// [`load_gltf`], charging the decoded textures to `ledger` before decoding
+/// them.
+pub fn load_gltf_with(path: &Path, ledger: &Ledger) -> Result<GltfScene, GltfError> {
     let name = path.display().to_string();
-    load_gltf_inner(path).map_err(|e| match e {
+    load_gltf_inner(path, ledger).map_err(|e| match e {
         GltfError::Invalid(m) => GltfError::Invalid(format!("{name}: {m}")),
         io => io,
     })
@@ -154,7 +164,7 @@ fn split_glb(bytes: &[u8]) -> Result<(&[u8], Option<&[u8]>), GltfError> {
     Ok((json, bin))
 }
 
-fn load_gltf_inner(path: &Path) -> Result<GltfScene, GltfError> {
+fn load_gltf_inner(path: &Path, ledger: &Ledger) -> Result<GltfScene, GltfError> {
     let bytes = read_file(path)?;
     let (json_bytes, glb_bin) = if bytes.starts_with(b"glTF") {
         split_glb(&bytes)?
@@ -191,6 +201,8 @@ fn load_gltf_inner(path: &Path) -> Result<GltfScene, GltfError> {
         root: &root,
         buffers: &buffers,
         base,
+        ledger,
+        name: path.display().to_string(),
         parts: SceneParts {
             two_sided: true,
             ..SceneParts::default()
@@ -322,6 +334,10 @@ struct Loader<'a> {
     root: &'a json::Root,
     buffers: &'a Buffers<'a>,
     base: &'a Path,
+    /// Where the decoded textures are charged.
+    ledger: &'a Ledger,
+    /// The file, naming it in a memory error.
+    name: String,
     parts: SceneParts,
     /// (mesh, primitive) → mesh data index.
     mesh_ids: HashMap<(usize, usize), u32>,
@@ -559,6 +575,15 @@ impl Loader<'_> {
                     "the scene has more than {MAX_TRIANGLES} triangles after instancing"
                 )));
             }
+            // Each instance's triangles are charged before they are made: a
+            // small file may instance a big mesh many times.
+            self.ledger.charge(
+                &self.name,
+                Needs {
+                    geometry: data.indices.len() as u64 * GEOMETRY_BYTES_PER_TRIANGLE,
+                    ..Needs::default()
+                },
+            )?;
             let instance = Instance::new(id, first as u32, to_world);
             let sign = if instance.mirrors { -1.0 } else { 1.0 };
             let instance_id = self.parts.instances.len() as u32;
@@ -950,8 +975,11 @@ impl Loader<'_> {
             };
             sources.push((name.clone(), bytes));
         }
-        self.parts.textures =
-            TextureStore::decode_all(sources).map_err(|e| GltfError::invalid(e.to_string()))?;
+        self.parts.textures = TextureStore::decode_all_within(sources, self.ledger, &self.name)
+            .map_err(|e| match e {
+                TextureError::Memory(m) => GltfError::Memory(m),
+                e => GltfError::invalid(e.to_string()),
+            })?;
         let has_punctual_lights = !self.point_lights.is_empty() || !self.parts.lights.is_empty();
         let mut points = self.point_lights.into_iter();
         if let Some((position, intensity)) = points.next() {
