@@ -11,7 +11,7 @@
 //! | --- | --- |
 //! | 8 | magic `RAYLABCP` |
 //! | 4 | format version (1) |
-//! | 4 | AOVs gathered (bit `i` for [`Aov::ALL`]`[i]`) |
+//! | 4 | AOVs gathered, in order: nibble `k` is the `k`-th one's index in [`Aov::ALL`] + 1 |
 //! | 24 | the key: build, scene, settings (three u64) |
 //! | 4 + 4 | width, height |
 //! | 4 | samples per pixel taken |
@@ -206,18 +206,26 @@ fn invalid(s: impl Into<String>) -> CheckpointError {
     CheckpointError::Invalid(s.into())
 }
 
+/// The AOVs in their order (which is the order of their sums in a record):
+/// nibble `k` is the `k`-th AOV's index in [`Aov::ALL`] plus one, 0 after the
+/// last.
 fn aov_bits(set: AovSet) -> u32 {
-    set.iter().fold(0, |b, a| b | 1 << (a as u32))
+    set.iter()
+        .enumerate()
+        .fold(0, |b, (k, a)| b | (a as u32 + 1) << (4 * k))
 }
 
 fn aovs_from_bits(bits: u32) -> Option<AovSet> {
-    if bits >> Aov::ALL.len() != 0 {
-        return None;
+    let mut list = Vec::new();
+    let mut rest = bits;
+    while rest != 0 {
+        let i = (rest & 15) as usize;
+        list.push(*Aov::ALL.get(i.checked_sub(1)?)?);
+        rest >>= 4;
+        if list.len() > Aov::ALL.len() {
+            return None;
+        }
     }
-    let list: Vec<Aov> = Aov::ALL
-        .into_iter()
-        .filter(|a| bits & 1 << (*a as u32) != 0)
-        .collect();
     AovSet::new(&list).ok()
 }
 
@@ -465,6 +473,7 @@ mod tests {
     fn checkpoints_round_trip_and_damage_is_refused() {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("c");
+        // Not in `Aov::ALL`'s order: the records follow the set's.
         let set: AovSet = "depth,normal".parse().unwrap();
         let stride = Accumulator::aov_stride(set);
         let image: Vec<DVec3> = (0..6).map(|i| DVec3::splat(i as f64 * 0.1)).collect();
