@@ -285,7 +285,9 @@ pub fn write_image_layers(
 
 /// [`write_image_layers`] with `metadata`: attributes of the EXR header (e.g.
 /// `raylab.spp`, which every EXR reader shows, `exrheader` among them), and
-/// nothing for PNG (which keeps its pixels only).
+/// nothing for PNG (which keeps its pixels only). At most two, since the EXR
+/// writer keeps attributes in hash maps, two of them, whose order is random:
+/// with one attribute in each, the same image still gives the same bytes.
 pub fn write_image_meta(
     film: &Film,
     extra: Vec<Channel>,
@@ -297,6 +299,12 @@ pub fn write_image_meta(
     if !extra.is_empty() && format != Format::Exr {
         return Err(OutputError::ChannelsNeedExr {
             path: path.to_owned(),
+        });
+    }
+    if metadata.len() > 2 {
+        return Err(OutputError::Encode {
+            path: path.to_owned(),
+            message: format!("{} metadata attributes, at most 2", metadata.len()),
         });
     }
     if let Some(c) = extra.iter().find(|c| c.values.len() != film.pixels.len()) {
@@ -419,7 +427,7 @@ fn write_format(
                 )
                 .collect();
             let mut image = Image::from_channels(size, AnyChannels::sort(channels));
-            for (name, value) in metadata {
+            for (k, (name, value)) in metadata.iter().enumerate() {
                 let value = match value {
                     MetaValue::Int(v) => AttributeValue::I32(*v),
                     MetaValue::Text(t) => match Text::new_or_none(t) {
@@ -428,7 +436,11 @@ fn write_format(
                     },
                 };
                 if let Some(name) = Text::new_or_none(name) {
-                    image.attributes.other.insert(name, value);
+                    // One in each map (see above).
+                    match k {
+                        0 => image.attributes.other.insert(name, value),
+                        _ => image.layer_data.attributes.other.insert(name, value),
+                    };
                 }
             }
             // Blocks written in order, not by a thread pool: the same image gives

@@ -273,24 +273,23 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         .take()
         .map(|a| a.into_channels())
         .unwrap_or_default();
-    let mut metadata = vec![
+    // The samples taken as a number any EXR tool shows, and the rest as
+    // text (see `write_image_meta` for why two attributes).
+    let requested = match (budget, args.spp) {
+        (Some(_), None) => String::new(),
+        _ => format!(" spp_requested={}", settings.spp),
+    };
+    let metadata = [
         ("raylab.spp".to_string(), MetaValue::Int(acc.spp() as i32)),
-        ("raylab.seed".to_string(), MetaValue::Text(seed.to_string())),
         (
-            "raylab.integrator".to_string(),
-            MetaValue::Text(integrator.to_string()),
-        ),
-        (
-            "raylab.interrupted".to_string(),
-            MetaValue::Int(i32::from(stopped)),
+            "raylab.render".to_string(),
+            MetaValue::Text(format!(
+                "spp={}{requested} seed={seed} integrator={integrator} interrupted={}",
+                acc.spp(),
+                u8::from(stopped)
+            )),
         ),
     ];
-    if budget.is_none() || args.spp.is_some() {
-        metadata.push((
-            "raylab.spp_requested".to_string(),
-            MetaValue::Int(settings.spp as i32),
-        ));
-    }
     let existed = output.exists();
     if let Err(e) = write_image_meta(&rendered.film, channels, &output, display, &metadata) {
         // Keep the samples for a later try: a checkpoint of them all (which
