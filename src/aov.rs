@@ -206,7 +206,7 @@ pub(crate) struct Layout {
 }
 
 impl Layout {
-    fn new(set: AovSet) -> Self {
+    pub(crate) fn new(set: AovSet) -> Self {
         let mut offset = [None; 4];
         let mut next = 0;
         for a in set.iter() {
@@ -347,10 +347,6 @@ impl AovSums {
     /// The AOVs gathered.
     pub fn set(&self) -> AovSet {
         self.set
-    }
-
-    pub(crate) fn layout(&self) -> Layout {
-        self.layout
     }
 
     /// The means over `samples` samples per pixel (see the module

@@ -23,6 +23,7 @@
 //! * [`aov`]: first-hit albedo, normal, depth and position per pixel (a
 //!   denoiser's guides), gathered by the render;
 //! * [`film`]: the image buffer, tone mapping and atomic PNG/EXR output;
+//! * [`checkpoint`]: a render's sums saved to resume it after a stop or a kill;
 //! * [`controls`]: the viewer's camera/light state and how input changes it;
 //! * [`workload`]: the ray-casting workloads of `raylab bench`.
 
@@ -30,6 +31,7 @@
 
 pub mod aov;
 pub mod camera;
+pub mod checkpoint;
 pub mod controls;
 pub mod film;
 pub mod geometry;

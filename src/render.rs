@@ -2,10 +2,12 @@
 //! sample) so the result is bit-identical for any number of threads.
 
 use std::ops::Range;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use glam::{DVec3, Vec3A};
 use rayon::prelude::*;
+use thiserror::Error;
 
 use crate::aov::{AovImage, AovSet, AovSums, FirstHit, Layout};
 use crate::camera::Camera;
@@ -82,8 +84,9 @@ impl std::iter::Sum for Tally {
     }
 }
 
-/// Renders `settings.spp` samples per pixel and averages them. `progress` is called
-/// with the number of rows finished after each tile, from any thread.
+/// Renders `settings.spp` samples per pixel and averages them. `progress` is
+/// called after each tile with the rows it finished times the samples it took
+/// of them (the render is done at `height × spp`), from any thread.
 pub fn render(
     scene: &Scene,
     camera: &Camera,
@@ -102,27 +105,17 @@ pub fn render_with_aovs(
     aovs: AovSet,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Rendered {
-    let mut film = Film::new(camera.width, camera.height);
-    let mut aov_sums = (!aovs.is_empty()).then(|| AovSums::new(aovs, camera.width, camera.height));
-    let tally = accumulate_into(
+    let mut acc = Accumulator::new(camera.width, camera.height, aovs);
+    render_passes(
         scene,
         camera,
-        settings.integrator,
-        settings.seed,
-        0..settings.spp.max(1),
-        Target {
-            film: &mut film,
-            aovs: aov_sums.as_mut(),
-        },
+        settings,
+        &mut acc,
+        &Passes::default(),
+        &mut |_, _| {},
         progress,
     );
-    film.average(settings.spp);
-    Rendered {
-        film,
-        rays: tally.rays,
-        dropped: tally.dropped,
-        aovs: aov_sums.map(|a| a.average(settings.spp)),
-    }
+    acc.rendered()
 }
 
 /// A render that took as many samples per pixel as fitted a time budget.
@@ -134,9 +127,14 @@ pub struct Progressive {
     pub spp: u32,
 }
 
-/// Longest pass of a progressive render: short enough to stop close to the
+/// Longest pass of a time-limited render: short enough to stop close to the
 /// budget and to report progress.
 const MAX_PASS: Duration = Duration::from_millis(250);
+
+/// Longest pass of a render of a given number of samples: short enough that a
+/// stop request (Ctrl-C) is answered within about half a second, long enough
+/// that the pass's end (the last tiles on one core) costs under 1 %.
+const MAX_SPP_PASS: Duration = Duration::from_millis(500);
 
 /// Renders in passes of whole samples per pixel (sample `k` is the same as in a
 /// render with `--spp` above `k`) until `budget` is spent or `max_spp` reached,
@@ -161,7 +159,9 @@ pub fn render_for(
 }
 
 /// [`render_for`] that also gathers `aovs` (see [`crate::aov`]) over the
-/// samples taken; `settings.spp` is the most samples per pixel to take.
+/// samples taken; `settings.spp` is the most samples per pixel to take. The
+/// image is the one [`render_with_aovs`] gives for the samples taken, bit for
+/// bit.
 pub fn render_for_with_aovs(
     scene: &Scene,
     camera: &Camera,
@@ -171,51 +171,293 @@ pub fn render_for_with_aovs(
     progress: &(dyn Fn(Duration) + Sync),
 ) -> Progressive {
     let start = Instant::now();
-    let mut film = Film::new(camera.width, camera.height);
-    let mut aov_sums = (!aovs.is_empty()).then(|| AovSums::new(aovs, camera.width, camera.height));
-    let mut tally = Tally::default();
-    let mut spp = 0u32;
-    let max_spp = settings.spp.max(1);
-    while spp < max_spp {
-        let elapsed = start.elapsed();
-        let remaining = budget.saturating_sub(elapsed);
-        let per_sample = if spp == 0 {
-            Duration::ZERO
-        } else {
-            elapsed / spp
-        };
-        let n = if spp == 0 {
-            1
-        } else if remaining < per_sample / 2 {
-            break;
-        } else {
-            let fit = remaining.min(MAX_PASS).as_secs_f64() / per_sample.as_secs_f64().max(1e-9);
-            (fit.round() as u32).clamp(1, max_spp - spp)
-        };
-        tally = tally
-            + accumulate_into(
-                scene,
-                camera,
-                settings.integrator,
-                settings.seed,
-                spp..spp + n,
-                Target {
-                    film: &mut film,
-                    aovs: aov_sums.as_mut(),
-                },
-                &|_| progress(start.elapsed()),
-            );
-        spp += n;
-    }
-    film.average(spp);
+    let mut acc = Accumulator::new(camera.width, camera.height, aovs);
+    let passes = Passes {
+        budget: Some(budget),
+        ..Passes::default()
+    };
+    render_passes(
+        scene,
+        camera,
+        settings,
+        &mut acc,
+        &passes,
+        &mut |_, _| {},
+        &|_| progress(start.elapsed()),
+    );
     Progressive {
-        rendered: Rendered {
+        rendered: acc.rendered(),
+        spp: acc.spp(),
+    }
+}
+
+/// The per-pixel sums of a render in progress: samples `0..spp` of every
+/// pixel, summed in f64 in ascending sample order, so that any split of the
+/// samples into calls of [`Accumulator::add`] (passes, or a render stopped,
+/// saved and resumed) gives the same sums bit for bit. 24 bytes a pixel, and
+/// 8 per AOV channel.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Accumulator {
+    width: u32,
+    height: u32,
+    spp: u32,
+    image: Vec<DVec3>,
+    aovs: Option<(AovSet, Vec<f64>)>,
+    tally: Tally,
+}
+
+/// Why [`Accumulator::from_parts`] refused its parts.
+#[derive(Clone, Debug, PartialEq, Eq, Error)]
+#[error("{0}")]
+pub struct PartsError(String);
+
+impl Accumulator {
+    /// No samples yet of a `width × height` image, with the AOVs `aovs`.
+    pub fn new(width: u32, height: u32, aovs: AovSet) -> Self {
+        let pixels = width as usize * height as usize;
+        let aovs = (!aovs.is_empty()).then(|| (aovs, zeroed(pixels * Self::aov_stride(aovs))));
+        Self {
+            width,
+            height,
+            spp: 0,
+            image: vec![DVec3::ZERO; pixels],
+            aovs,
+            tally: Tally::default(),
+        }
+    }
+
+    /// Sums read back (e.g. from a checkpoint): `image` holds `width × height`
+    /// RGB sums, `aov_sums` the AOV records (see [`Accumulator::aov_sums`]).
+    pub fn from_parts(
+        width: u32,
+        height: u32,
+        aovs: AovSet,
+        spp: u32,
+        tally: Tally,
+        image: Vec<DVec3>,
+        aov_sums: Vec<f64>,
+    ) -> Result<Self, PartsError> {
+        let mut acc = Self {
+            width,
+            height,
+            spp,
+            image,
+            aovs: None,
+            tally,
+        };
+        let pixels = width as usize * height as usize;
+        if acc.image.len() != pixels {
+            return Err(PartsError(format!(
+                "{} image sums for {width}×{height} pixels",
+                acc.image.len()
+            )));
+        }
+        let want = pixels * Self::aov_stride(aovs);
+        if aov_sums.len() != want {
+            return Err(PartsError(format!(
+                "{} AOV sums where {aovs} need {want}",
+                aov_sums.len()
+            )));
+        }
+        acc.aovs = (!aovs.is_empty()).then_some((aovs, aov_sums));
+        Ok(acc)
+    }
+
+    /// AOV values per pixel that [`Accumulator::aov_sums`] holds for `aovs`:
+    /// their channels in the set's order, then the number of samples that hit.
+    pub fn aov_stride(aovs: AovSet) -> usize {
+        if aovs.is_empty() {
+            0
+        } else {
+            Layout::new(aovs).stride
+        }
+    }
+
+    /// Image width in pixels.
+    pub fn width(&self) -> u32 {
+        self.width
+    }
+
+    /// Image height in pixels.
+    pub fn height(&self) -> u32 {
+        self.height
+    }
+
+    /// Samples per pixel summed: samples `0..spp` of every pixel.
+    pub fn spp(&self) -> u32 {
+        self.spp
+    }
+
+    /// Rays cast and samples dropped so far.
+    pub fn tally(&self) -> Tally {
+        self.tally
+    }
+
+    /// The AOVs gathered.
+    pub fn aov_set(&self) -> AovSet {
+        self.aovs.as_ref().map_or(AovSet::NONE, |(set, _)| *set)
+    }
+
+    /// The image's per-pixel sums, row-major from the top-left.
+    pub fn image_sums(&self) -> &[DVec3] {
+        &self.image
+    }
+
+    /// The AOVs' per-pixel records ([`Accumulator::aov_stride`] values each),
+    /// row-major; empty without AOVs.
+    pub fn aov_sums(&self) -> &[f64] {
+        self.aovs.as_ref().map_or(&[], |(_, s)| s)
+    }
+
+    /// Adds samples `spp..spp + n` of every pixel (see [`accumulate`] for what a
+    /// sample is) and returns what they cost. `progress` as for [`render`].
+    pub fn add(
+        &mut self,
+        scene: &Scene,
+        camera: &Camera,
+        integrator: Integrator,
+        seed: u64,
+        n: u32,
+        progress: &(dyn Fn(u64) + Sync),
+    ) -> Tally {
+        assert_eq!((self.width, self.height), (camera.width, camera.height));
+        let samples = self.spp..self.spp.saturating_add(n);
+        let k = samples.len() as u64;
+        let aovs = self
+            .aovs
+            .as_mut()
+            .map(|(set, sums)| (Layout::new(*set), &mut sums[..]));
+        let tally = accumulate_into(
+            scene,
+            camera,
+            integrator,
+            seed,
+            samples.clone(),
+            Target::Wide {
+                image: &mut self.image,
+                aovs,
+            },
+            &|rows| progress(rows * k),
+        );
+        self.spp = samples.end;
+        self.tally = self.tally + tally;
+        tally
+    }
+
+    /// The image and AOVs averaged over the samples taken. The sums are rounded
+    /// to f32 and then averaged, as a render in one call always did, so that
+    /// renders keep their values bit for bit.
+    pub fn rendered(&self) -> Rendered {
+        let mut film = Film::new(self.width, self.height);
+        film.pixels
+            .par_iter_mut()
+            .zip(self.image.par_iter())
+            // `0 + x`, not `x`: what adding the sum to a zeroed f32 film gave.
+            .for_each(|(p, w)| *p = Vec3A::ZERO + w.as_vec3a());
+        film.average(self.spp);
+        let aovs = self.aovs.as_ref().map(|(set, wide)| {
+            let mut sums = AovSums::new(*set, self.width, self.height);
+            sums.sums
+                .par_iter_mut()
+                .zip(wide.par_iter())
+                .for_each(|(s, w)| *s = 0.0 + *w as f32);
+            sums.average(self.spp)
+        });
+        Rendered {
             film,
-            rays: tally.rays,
-            dropped: tally.dropped,
-            aovs: aov_sums.map(|a| a.average(spp)),
-        },
-        spp,
+            rays: self.tally.rays,
+            dropped: self.tally.dropped,
+            aovs,
+        }
+    }
+}
+
+/// `len` zeros, written rather than lazily zeroed (see [`AovSums::new`]).
+fn zeroed(len: usize) -> Vec<f64> {
+    let mut v = Vec::with_capacity(len);
+    v.resize(len, 0.0);
+    v
+}
+
+/// How [`render_passes`] goes about its passes.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Passes<'a> {
+    /// Stop when this much time is spent (counting `spent`), rather than
+    /// only at `settings.spp`; at least one sample is always taken.
+    pub budget: Option<Duration>,
+    /// Time already spent on the accumulator (by an earlier, stopped run).
+    pub spent: Duration,
+    /// Checked between passes: when set, the render stops after the samples in
+    /// flight, with whole samples of every pixel.
+    pub stop: Option<&'a AtomicBool>,
+}
+
+/// How [`render_passes`] ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Ended {
+    /// Every sample asked for was taken.
+    Complete,
+    /// The time budget was spent.
+    Budget,
+    /// The stop flag was set.
+    Stopped,
+}
+
+/// Adds samples to `acc` in passes of whole samples per pixel, each pass sized
+/// to take about [`MAX_SPP_PASS`] (or [`MAX_PASS`] under a budget) by the time
+/// per sample so far, until `settings.spp` samples are taken, the budget is
+/// spent or `passes.stop` is set (checked before every pass). After each pass
+/// `after_pass` is given the sums and the time spent in all (with
+/// `passes.spent`), e.g. to save them. `progress` as for [`render`]. The
+/// sums, and so the image, do not depend on how the samples fell into passes.
+pub fn render_passes(
+    scene: &Scene,
+    camera: &Camera,
+    settings: &RenderSettings,
+    acc: &mut Accumulator,
+    passes: &Passes<'_>,
+    after_pass: &mut dyn FnMut(&Accumulator, Duration),
+    progress: &(dyn Fn(u64) + Sync),
+) -> Ended {
+    let start = Instant::now();
+    let max_spp = settings.spp.max(1);
+    let longest = if passes.budget.is_some() {
+        MAX_PASS
+    } else {
+        MAX_SPP_PASS
+    };
+    loop {
+        if acc.spp >= max_spp {
+            return Ended::Complete;
+        }
+        if passes.stop.is_some_and(|s| s.load(Ordering::Relaxed)) {
+            return Ended::Stopped;
+        }
+        let spent = passes.spent + start.elapsed();
+        let n = if acc.spp == 0 {
+            1
+        } else {
+            let per_sample = spent / acc.spp;
+            let mut room = longest;
+            if let Some(budget) = passes.budget {
+                let remaining = budget.saturating_sub(spent);
+                if remaining < per_sample / 2 {
+                    return Ended::Budget;
+                }
+                room = room.min(remaining);
+            }
+            let fit = room.as_secs_f64() / per_sample.as_secs_f64().max(1e-9);
+            (fit.round().min(u32::MAX as f64) as u32).clamp(1, max_spp - acc.spp)
+        };
+        acc.add(
+            scene,
+            camera,
+            settings.integrator,
+            settings.seed,
+            n,
+            progress,
+        );
+        after_pass(acc, passes.spent + start.elapsed());
     }
 }
 
@@ -226,7 +468,7 @@ pub fn render_for_with_aovs(
 /// Mitsuba's `box`), its random numbers keyed by (seed, pixel, sample,
 /// dimension). A sample that is NaN or infinite is dropped and counted. The viewer
 /// refines by calls for `0..1`, `1..2`, ...; one call for `0..n` gives the same
-/// sums up to f32 rounding.
+/// sums up to f32 rounding ([`Accumulator`] keeps them exact).
 pub fn accumulate(
     scene: &Scene,
     camera: &Camera,
@@ -236,18 +478,33 @@ pub fn accumulate(
     sums: &mut Film,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Tally {
-    let target = Target {
-        film: sums,
-        aovs: None,
-    };
-    accumulate_into(scene, camera, integrator, seed, samples, target, progress)
+    accumulate_into(
+        scene,
+        camera,
+        integrator,
+        seed,
+        samples,
+        Target::Narrow(sums),
+        progress,
+    )
 }
 
-/// Where [`accumulate_into`] adds its samples: the image's sums and, if asked
-/// for, the AOVs'.
-struct Target<'a> {
-    film: &'a mut Film,
-    aovs: Option<&'a mut AovSums>,
+/// Where [`accumulate_into`] adds its samples.
+enum Target<'a> {
+    /// An f32 film (the viewer's refinement): one sample is added to it
+    /// straight, several are summed in f64 per tile first.
+    Narrow(&'a mut Film),
+    /// f64 sums kept across calls ([`Accumulator`]), with the AOVs' if any.
+    Wide {
+        image: &'a mut [DVec3],
+        aovs: Option<(Layout, &'a mut [f64])>,
+    },
+}
+
+/// One tile's part of a [`Target`].
+enum TileSums<'a> {
+    Narrow(&'a mut [Vec3A]),
+    Wide(&'a mut [DVec3]),
 }
 
 /// [`accumulate`] into `target`, gathering the AOVs (if any) from the same
@@ -263,42 +520,57 @@ fn accumulate_into(
     progress: &(dyn Fn(u64) + Sync),
 ) -> Tally {
     let width = camera.width as usize;
-    let sums = target.film;
-    assert_eq!((sums.width, sums.height), (camera.width, camera.height));
     let tile_pixels = width * TILE_ROWS;
-    let tiles = sums.pixels.len().div_ceil(tile_pixels);
-    // Each tile's slice of the AOV sums (empty ones without AOVs, so that the
-    // tiles still zip with them).
-    let (layout, aov_tiles): (_, Vec<&mut [f32]>) = match target.aovs {
-        Some(a) => {
-            assert_eq!((a.width, a.height), (camera.width, camera.height));
-            let layout = a.layout();
-            (
-                Some(layout),
-                a.sums.chunks_mut(tile_pixels * layout.stride).collect(),
-            )
+    // Each tile's slice of the sums and of the AOV sums (empty ones without
+    // AOVs, so that the tiles still zip with them).
+    let (tiles, layout, aov_tiles): (Vec<TileSums>, _, Vec<&mut [f64]>) = match target {
+        Target::Narrow(film) => {
+            assert_eq!((film.width, film.height), (camera.width, camera.height));
+            let tiles: Vec<_> = film
+                .pixels
+                .chunks_mut(tile_pixels)
+                .map(TileSums::Narrow)
+                .collect();
+            let empty = (0..tiles.len()).map(|_| &mut [][..]).collect();
+            (tiles, None, empty)
         }
-        None => (None, (0..tiles).map(|_| &mut [][..]).collect()),
+        Target::Wide { image, aovs } => {
+            assert_eq!(image.len(), width * camera.height as usize);
+            let tiles: Vec<_> = image.chunks_mut(tile_pixels).map(TileSums::Wide).collect();
+            match aovs {
+                Some((layout, sums)) => {
+                    let aov_tiles = sums.chunks_mut(tile_pixels * layout.stride).collect();
+                    (tiles, Some(layout), aov_tiles)
+                }
+                None => {
+                    let empty = (0..tiles.len()).map(|_| &mut [][..]).collect();
+                    (tiles, None, empty)
+                }
+            }
+        }
     };
-    sums.pixels
-        .par_chunks_mut(tile_pixels)
+    tiles
+        .into_par_iter()
         .zip(aov_tiles)
         .enumerate()
-        // Each worker reuses one buffer for the tiles' AOV sums: a fresh one per
-        // tile would be fresh pages from the system, and faulting those in cost
-        // more than gathering the AOVs.
-        .map_init(Vec::new, |aov_wide, (tile, (rows, aov_rows))| {
+        .map(|(tile, (sums, aov_rows))| {
             let y0 = tile * TILE_ROWS;
-            let n_rows = rows.len() / width;
             let mut dropped = 0u64;
-            // Many samples are summed in f64 (one buffer per tile), so that even
-            // 2^20 of them lose nothing to f32 rounding; one sample goes straight
-            // into `sums`, which keeps progressive refinement exact.
-            let mut wide = if samples.len() > 1 {
-                vec![DVec3::ZERO; rows.len()]
-            } else {
-                Vec::new()
+            // Many samples are summed in f64, so that even 2^20 of them lose
+            // nothing to f32 rounding: into the accumulator's sums, or for an
+            // f32 film into one buffer per tile. One sample goes straight into
+            // an f32 film, which keeps progressive refinement exact.
+            let mut local = Vec::new();
+            let (rows, wide): (&mut [Vec3A], &mut [DVec3]) = match sums {
+                TileSums::Wide(w) => (&mut [], w),
+                TileSums::Narrow(rows) => {
+                    if samples.len() > 1 {
+                        local = vec![DVec3::ZERO; rows.len()];
+                    }
+                    (rows, &mut local[..])
+                }
             };
+            let n_rows = rows.len().max(wide.len()) / width;
             let mut add = |i: usize, v: Vec3A| {
                 if !v.is_finite() {
                     dropped += 1;
@@ -309,13 +581,10 @@ fn accumulate_into(
                     None => rows[i] += v,
                 }
             };
-            // The AOVs are summed in f64 too, for any number of samples (one
-            // sample's f64 sum rounds back to the same f32).
-            aov_wide.clear();
-            aov_wide.resize(aov_rows.len(), 0.0);
+            // The AOVs are summed in f64 too, into the accumulator's sums.
             let mut gather = |i: usize, ray: &Ray, hit: Option<Hit>, shaded: Option<&FirstHit>| {
                 if let Some(layout) = &layout {
-                    let record = &mut aov_wide[i * layout.stride..(i + 1) * layout.stride];
+                    let record = &mut aov_rows[i * layout.stride..(i + 1) * layout.stride];
                     layout.gather(scene, camera, ray, hit, shaded, record);
                 }
             };
@@ -333,11 +602,11 @@ fn accumulate_into(
                 Some(layout) => tile.trace::<true>(Some(layout), &mut add, &mut gather),
                 None => tile.trace::<false>(None, &mut add, &mut gather),
             };
-            for (sum, w) in rows.iter_mut().zip(&wide) {
-                *sum += w.as_vec3a();
-            }
-            for (sum, w) in aov_rows.iter_mut().zip(aov_wide.iter()) {
-                *sum += *w as f32;
+            // Only an f32 film's tile has both (`rows` is empty otherwise).
+            if !rows.is_empty() {
+                for (sum, w) in rows.iter_mut().zip(wide.iter()) {
+                    *sum += w.as_vec3a();
+                }
             }
             progress(n_rows as u64);
             Tally { rays, dropped }

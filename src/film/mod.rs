@@ -257,6 +257,15 @@ pub struct Channel {
     pub values: Vec<f32>,
 }
 
+/// A value of a metadata attribute (see [`write_image_meta`]).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum MetaValue {
+    /// A whole number (an EXR `int`).
+    Int(i32),
+    /// Text (an EXR `string`; Latin-1 only, others are left out).
+    Text(String),
+}
+
 /// [`write_image_with`] with `extra` channels (AOVs) beside the image's: one
 /// single-part EXR whose `R`, `G`, `B` are the image (what [`read_exr`] and
 /// every EXR reader take as the picture) and whose other channels are named
@@ -271,10 +280,31 @@ pub fn write_image_layers(
     path: &Path,
     display: Display,
 ) -> Result<(), OutputError> {
+    write_image_meta(film, extra, path, display, &[])
+}
+
+/// [`write_image_layers`] with `metadata`: attributes of the EXR header (e.g.
+/// `raylab.spp`, which every EXR reader shows, `exrheader` among them), and
+/// nothing for PNG (which keeps its pixels only). At most two, since the EXR
+/// writer keeps attributes in hash maps, two of them, whose order is random:
+/// with one attribute in each, the same image still gives the same bytes.
+pub fn write_image_meta(
+    film: &Film,
+    extra: Vec<Channel>,
+    path: &Path,
+    display: Display,
+    metadata: &[(String, MetaValue)],
+) -> Result<(), OutputError> {
     let format = Format::from_path(path)?;
     if !extra.is_empty() && format != Format::Exr {
         return Err(OutputError::ChannelsNeedExr {
             path: path.to_owned(),
+        });
+    }
+    if metadata.len() > 2 {
+        return Err(OutputError::Encode {
+            path: path.to_owned(),
+            message: format!("{} metadata attributes, at most 2", metadata.len()),
         });
     }
     if let Some(c) = extra.iter().find(|c| c.values.len() != film.pixels.len()) {
@@ -289,7 +319,7 @@ pub fn write_image_layers(
         });
     }
     write_atomic(path, |tmp| {
-        write_format(film, extra, format, path, tmp, display)
+        write_format(film, extra, format, path, tmp, display, metadata)
     })
 }
 
@@ -300,6 +330,22 @@ pub fn write_bytes(bytes: &[u8], path: &Path) -> Result<(), OutputError> {
             path: path.to_owned(),
             source,
         })
+    })
+}
+
+/// Creates the hidden temporary sibling of `path`, has `write` fill it, then
+/// makes it `path` as [`write_image`] does.
+pub(crate) fn write_atomic_with(
+    path: &Path,
+    write: impl FnOnce(File) -> std::io::Result<()>,
+) -> Result<(), OutputError> {
+    write_atomic(path, |tmp| {
+        File::create(tmp)
+            .and_then(write)
+            .map_err(|source| OutputError::Io {
+                path: path.to_owned(),
+                source,
+            })
     })
 }
 
@@ -340,6 +386,7 @@ fn write_format(
     path: &Path,
     tmp: &Path,
     display: Display,
+    metadata: &[(String, MetaValue)],
 ) -> Result<(), OutputError> {
     let io_err = |source| OutputError::Io {
         path: path.to_owned(),
@@ -379,9 +426,26 @@ fn write_format(
                         .map(|c| AnyChannel::new(c.name.as_str(), FlatSamples::F32(c.values))),
                 )
                 .collect();
+            let mut image = Image::from_channels(size, AnyChannels::sort(channels));
+            for (k, (name, value)) in metadata.iter().enumerate() {
+                let value = match value {
+                    MetaValue::Int(v) => AttributeValue::I32(*v),
+                    MetaValue::Text(t) => match Text::new_or_none(t) {
+                        Some(t) => AttributeValue::Text(t),
+                        None => continue,
+                    },
+                };
+                if let Some(name) = Text::new_or_none(name) {
+                    // One in each map (see above).
+                    match k {
+                        0 => image.attributes.other.insert(name, value),
+                        _ => image.layer_data.attributes.other.insert(name, value),
+                    };
+                }
+            }
             // Blocks written in order, not by a thread pool: the same image gives
             // the same bytes (pixels were identical before, the files not).
-            Image::from_channels(size, AnyChannels::sort(channels))
+            image
                 .write()
                 .non_parallel()
                 .to_file(tmp)
@@ -393,8 +457,10 @@ fn write_format(
     }
 }
 
-/// A hidden sibling of `path`, unique to this process.
-fn temp_path(path: &Path) -> PathBuf {
+/// The hidden sibling of `path` that this process writes before renaming it
+/// to `path` (`.NAME.PID.tmp`): a program that must abort mid-write may
+/// remove it.
+pub fn temp_path(path: &Path) -> PathBuf {
     let name = path
         .file_name()
         .map_or_else(|| "image".into(), |n| n.to_string_lossy().into_owned());
@@ -443,6 +509,36 @@ impl ExrChannels {
     pub fn names(&self) -> Vec<&str> {
         self.channels.iter().map(|c| c.name.as_str()).collect()
     }
+}
+
+/// The `raylab.*`-style attributes of an EXR file's header that
+/// [`write_image_meta`] writes (every `int` and `string` attribute that is not
+/// one of the format's own), sorted by name.
+pub fn read_exr_metadata(path: &Path) -> Result<Vec<(String, MetaValue)>, OutputError> {
+    use exr::meta::attribute::AttributeValue;
+    let meta =
+        exr::meta::MetaData::read_from_file(path, false).map_err(|e| OutputError::Encode {
+            path: path.to_owned(),
+            message: e.to_string(),
+        })?;
+    let mut out = Vec::new();
+    for header in meta.headers.iter().take(1) {
+        for (name, value) in header
+            .shared_attributes
+            .other
+            .iter()
+            .chain(&header.own_attributes.other)
+        {
+            let value = match value {
+                AttributeValue::I32(v) => MetaValue::Int(*v),
+                AttributeValue::Text(t) => MetaValue::Text(t.to_string()),
+                _ => continue,
+            };
+            out.push((name.to_string(), value));
+        }
+    }
+    out.sort_by(|a, b| a.0.cmp(&b.0));
+    Ok(out)
 }
 
 /// Reads every channel of an OpenEXR file's first part (the image and the AOVs

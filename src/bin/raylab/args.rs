@@ -206,6 +206,19 @@ pub struct RenderArgs {
     /// Worker threads [default: one per core].
     #[arg(long, value_name = "N", allow_hyphen_values = true, value_parser = parse_threads)]
     pub threads: Option<usize>,
+    /// Save the render's sums to FILE every --checkpoint-every seconds and when
+    /// stopped, and resume from FILE if it holds samples of the same render:
+    /// the image is then the same, bit for bit, as without a stop. A FILE made
+    /// for another scene or settings is refused. Removed once the image is
+    /// written. Without it, a render stopped by Ctrl-C or SIGTERM saves its sums
+    /// to .NAME.raylab-checkpoint beside the output, and the same command
+    /// resumes from there.
+    #[arg(long, value_name = "FILE")]
+    pub checkpoint: Option<PathBuf>,
+    /// Seconds between saves of --checkpoint (longer when a save takes more
+    /// than a twentieth of that).
+    #[arg(long, value_name = "SECONDS", default_value_t = 10.0, requires = "checkpoint", allow_hyphen_values = true, value_parser = parse_every)]
+    pub checkpoint_every: f64,
     /// No progress bar and no summary line.
     #[arg(short, long)]
     pub quiet: bool,
@@ -486,6 +499,13 @@ fn parse_time(s: &str) -> Result<f64, String> {
         _ => Err(format!(
             "expected a time in seconds > 0 and at most {MAX_TIME}"
         )),
+    }
+}
+
+fn parse_every(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if (0.0..=MAX_TIME).contains(&v) => Ok(v),
+        _ => Err(format!("expected seconds from 0 to {MAX_TIME}")),
     }
 }
 

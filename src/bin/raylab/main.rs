@@ -4,6 +4,7 @@ mod args;
 mod bench;
 mod keys;
 mod render_cmd;
+mod signals;
 mod viewer;
 
 use std::process::ExitCode;
@@ -52,7 +53,12 @@ fn main() -> ExitCode {
         return ExitCode::from(2);
     }
     match run(cli) {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(()) => {
+            // A render stopped by SIGINT or SIGTERM wrote what it had; it ends
+            // by the signal, as the caller asked.
+            signals::exit_if_received();
+            ExitCode::SUCCESS
+        }
         // A reader that stopped early (`raylab bench ... | head -1`) is not a failure.
         Err(e) if is_broken_pipe(&e) => ExitCode::SUCCESS,
         Err(e) => {

@@ -1,16 +1,19 @@
 //! `raylab render`: one image to a file, with a progress bar and a summary line.
 
-use std::io::IsTerminal;
-use std::path::PathBuf;
+use std::io::{IsTerminal, Read};
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use raylab::film::{Format, write_image_layers};
-use raylab::render::{Progressive, RenderSettings, render_for_with_aovs, render_with_aovs};
+use raylab::checkpoint::{self, Fingerprint, Key};
+use raylab::film::{Format, MetaValue, write_image_meta};
+use raylab::render::{Accumulator, Ended, Passes, RenderSettings, render_passes};
 
 use crate::args::{MAX_SPP, RenderArgs};
+use crate::signals;
 
 /// A render shorter than this shows no progress bar.
 const PROGRESS_DELAY: Duration = Duration::from_millis(300);
@@ -61,6 +64,63 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         );
     }
 
+    let seed = args.seed.unwrap_or(0);
+    let budget = args.time.map(Duration::from_secs_f64);
+    // Without --time, exactly --spp samples; with it, at most --spp.
+    let settings = RenderSettings {
+        integrator,
+        spp: match budget {
+            Some(_) => args.spp.unwrap_or(MAX_SPP),
+            None => args.spp.unwrap_or(1),
+        },
+        seed,
+    };
+
+    // The checkpoint: the one named, else the one a stopped render leaves
+    // beside its output.
+    let explicit = args.checkpoint.is_some();
+    let ckpt_path = args
+        .checkpoint
+        .clone()
+        .unwrap_or_else(|| default_checkpoint(&output));
+    let key_cell = OnceLock::new();
+    let key =
+        || *key_cell.get_or_init(|| render_key(args, &session.scene, &camera, &settings, aovs));
+    let mut acc = Accumulator::new(camera.width, camera.height, aovs);
+    let mut spent = Duration::ZERO;
+    // The spp of the checkpoint on disk that is this render's (resumed from or
+    // saved by this run), if any.
+    let mut on_disk: Option<u32> = None;
+    if ckpt_path.exists() {
+        match resume(&ckpt_path, key(), &settings, budget.is_none()) {
+            Ok((a, s)) => {
+                if !args.quiet {
+                    let of = match budget {
+                        None => format!(" of {}", settings.spp),
+                        Some(_) => String::new(),
+                    };
+                    eprintln!("resuming from {}: {}{of} spp", ckpt_path.display(), a.spp());
+                }
+                on_disk = Some(a.spp());
+                (acc, spent) = (a, s);
+            }
+            Err(why) if explicit => anyhow::bail!(
+                "{} {why}: remove it to start over, or name another --checkpoint file",
+                ckpt_path.display()
+            ),
+            Err(why) => {
+                if !args.quiet {
+                    eprintln!(
+                        "warning: not resuming from {}: {why}; rendering from the start",
+                        ckpt_path.display()
+                    );
+                }
+            }
+        }
+    }
+    let resumed_spp = acc.spp();
+    let tally_before = acc.tally();
+
     let bar = ProgressBar::hidden();
     let template = match args.time {
         // Time-limited: the bar fills with the time spent.
@@ -76,40 +136,93 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             bar.set_draw_target(ProgressDrawTarget::stderr());
         }
     };
-    let rows_done = |rows: u64| {
-        bar.inc(rows);
-        reveal();
-    };
-    let time_spent = |t: Duration| {
-        bar.set_position(t.as_millis() as u64);
-        reveal();
-    };
-    let work = || match args.time {
-        Some(seconds) => {
-            let budget = Duration::from_secs_f64(seconds);
-            bar.set_length(budget.as_millis() as u64);
-            let settings = RenderSettings {
-                integrator,
-                spp: args.spp.unwrap_or(MAX_SPP),
-                seed: args.seed.unwrap_or(0),
-            };
-            render_for_with_aovs(scene, &camera, &settings, aovs, budget, &time_spent)
+    match budget {
+        Some(b) => {
+            bar.set_length(b.as_millis() as u64);
+            bar.set_position(spent.as_millis() as u64);
         }
         None => {
-            let spp = args.spp.unwrap_or(1);
-            bar.set_length(camera.height as u64);
-            let settings = RenderSettings {
-                integrator,
-                spp,
-                seed: args.seed.unwrap_or(0),
-            };
-            Progressive {
-                rendered: render_with_aovs(scene, &camera, &settings, aovs, &rows_done),
-                spp,
+            bar.set_length(camera.height as u64 * settings.spp as u64);
+            bar.set_position(camera.height as u64 * acc.spp() as u64);
+        }
+    }
+    let progress = |row_samples: u64| {
+        match budget {
+            Some(_) => bar.set_position((spent + start.elapsed()).as_millis() as u64),
+            None => bar.inc(row_samples),
+        }
+        reveal();
+    };
+
+    // Ctrl-C and SIGTERM from here on: the first stops the render between
+    // passes, the second aborts (removing the temporary files of writes in
+    // progress).
+    signals::remove_on_abort(&[
+        &raylab::film::temp_path(&output),
+        &raylab::film::temp_path(&ckpt_path),
+    ]);
+    let said = bar.clone();
+    signals::install(move |sig| {
+        let again = match sig {
+            libc::SIGINT => "press Ctrl-C again to abort",
+            _ => "a second signal aborts",
+        };
+        said.suspend(|| {
+            eprintln!(
+                "{}: stopping after the samples in flight; {again}",
+                signals::name(sig)
+            )
+        });
+    })
+    .context("cannot handle SIGINT and SIGTERM")?;
+
+    let every = Duration::from_secs_f64(args.checkpoint_every);
+    let mut last_save = Instant::now();
+    let mut save_cost = Duration::ZERO;
+    let mut save_error: Option<String> = None;
+    let passes = Passes {
+        budget,
+        spent,
+        stop: Some(&signals::STOP),
+    };
+    let mut after_pass = |acc: &Accumulator, spent: Duration| {
+        // Periodic saves only when asked for (--checkpoint), never after the
+        // last pass (the image is about to be written), and at most every
+        // twentieth of the time on saving.
+        let done = acc.spp() >= settings.spp
+            || budget.is_some_and(|b| spent >= b)
+            || signals::STOP.load(Ordering::Relaxed);
+        if !explicit || done || last_save.elapsed() < every.max(save_cost * 20) {
+            return;
+        }
+        let t = Instant::now();
+        match checkpoint::write(&ckpt_path, &key(), acc, spent) {
+            Ok(()) => {
+                on_disk = Some(acc.spp());
+                save_error = None;
+            }
+            Err(e) => {
+                if save_error.is_none() && !args.quiet {
+                    bar.suspend(|| eprintln!("warning: {:#}", anyhow::Error::from(e)));
+                }
+                save_error = Some(String::new());
             }
         }
+        save_cost = t.elapsed();
+        last_save = Instant::now();
     };
-    let mut done = match args.threads {
+    let mut work = || {
+        render_passes(
+            scene,
+            &camera,
+            &settings,
+            &mut acc,
+            &passes,
+            &mut after_pass,
+            &progress,
+        )
+    };
+    let ended = match args.threads {
         Some(n) => rayon::ThreadPoolBuilder::new()
             .num_threads(n)
             .build()
@@ -118,7 +231,35 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         None => work(),
     };
     let elapsed = start.elapsed();
+    let spent = spent + elapsed;
     bar.finish_and_clear();
+    let stopped = ended == Ended::Stopped;
+
+    if acc.spp() == 0 {
+        // Stopped before the first sample: nothing to write or to keep.
+        if !args.quiet {
+            eprintln!(
+                "interrupted before the first sample: {} not written",
+                output.display()
+            );
+        }
+        return Ok(());
+    }
+    // A stopped render keeps its samples (unless the checkpoint on disk
+    // already holds them all).
+    let mut saved_now = false;
+    if stopped && on_disk != Some(acc.spp()) {
+        match checkpoint::write(&ckpt_path, &key(), &acc, spent) {
+            Ok(()) => {
+                on_disk = Some(acc.spp());
+                saved_now = true;
+            }
+            Err(e) => eprintln!(
+                "warning: {:#}; the samples cannot be resumed",
+                anyhow::Error::from(e)
+            ),
+        }
+    }
 
     let display = crate::display(
         session.kind,
@@ -126,19 +267,62 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         args.scene.exposure.unwrap_or(0.0),
         session.tonemap,
     );
+    let mut rendered = acc.rendered();
     // The AOVs as EXR planes; they and the image are written, then freed.
-    let channels = done
-        .rendered
+    let channels = rendered
         .aovs
         .take()
         .map(|a| a.into_channels())
         .unwrap_or_default();
-    write_image_layers(&done.rendered.film, channels, &output, display)?;
+    // The samples taken as a number any EXR tool shows, and the rest as
+    // text (see `write_image_meta` for why two attributes).
+    let requested = match (budget, args.spp) {
+        (Some(_), None) => String::new(),
+        _ => format!(" spp_requested={}", settings.spp),
+    };
+    let metadata = [
+        ("raylab.spp".to_string(), MetaValue::Int(acc.spp() as i32)),
+        (
+            "raylab.render".to_string(),
+            MetaValue::Text(format!(
+                "spp={}{requested} seed={seed} integrator={integrator} interrupted={}",
+                acc.spp(),
+                u8::from(stopped)
+            )),
+        ),
+    ];
+    let existed = output.exists();
+    if let Err(e) = write_image_meta(&rendered.film, channels, &output, display, &metadata) {
+        // Keep the samples for a later try: a checkpoint of them all (which
+        // may fail too, on a full disk), else the one already on disk.
+        if on_disk != Some(acc.spp()) && checkpoint::write(&ckpt_path, &key(), &acc, spent).is_ok()
+        {
+            on_disk = Some(acc.spp());
+        }
+        let previous = if existed {
+            format!("the previous {} is unchanged", output.display())
+        } else {
+            "nothing was written".to_string()
+        };
+        let kept = match on_disk {
+            Some(n) => format!(
+                "; {} keeps {n} spp: the same command resumes from it",
+                ckpt_path.display()
+            ),
+            None => String::new(),
+        };
+        anyhow::bail!("{:#}; {previous}{kept}", anyhow::Error::from(e));
+    }
+    // The image is out: its checkpoint is spent, unless the render was stopped.
+    if !stopped && on_disk.is_some() {
+        let _ = std::fs::remove_file(&ckpt_path);
+    }
     if !args.quiet {
         let secs = elapsed.as_secs_f64();
-        let rays = done.rendered.rays;
-        let dropped = if integrator.is_physical() || done.rendered.dropped > 0 {
-            format!(", {} NaN/Inf samples dropped", done.rendered.dropped)
+        let rays = acc.tally().rays - tally_before.rays;
+        let dropped = acc.tally().dropped;
+        let dropped = if integrator.is_physical() || dropped > 0 {
+            format!(", {dropped} NaN/Inf samples dropped")
         } else {
             String::new()
         };
@@ -147,17 +331,125 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         } else {
             format!(" (with AOVs {aovs})")
         };
+        let spp = match (stopped, budget) {
+            (false, _) => format!("{} spp", acc.spp()),
+            (true, None) => format!("interrupted after {} of {} spp", acc.spp(), settings.spp),
+            (true, Some(b)) => format!(
+                "interrupted after {} spp, {:.1} of {} s",
+                acc.spp(),
+                spent.as_secs_f64().min(b.as_secs_f64()),
+                b.as_secs_f64()
+            ),
+        };
+        let resumed = if resumed_spp > 0 {
+            format!(" ({} resumed)", resumed_spp)
+        } else {
+            String::new()
+        };
         eprintln!(
-            "wrote {}{with_aovs}: {}x{}, {}, {} spp, {:.1} ms, {} rays, {:.1} Mrays/s{dropped}",
+            "wrote {}{with_aovs}: {}x{}, {}, {spp}{resumed}, {:.1} ms, {} rays, {:.1} Mrays/s{dropped}",
             output.display(),
             camera.width,
             camera.height,
             integrator,
-            done.spp,
             secs * 1e3,
             rays,
             rays as f64 / secs / 1e6,
         );
+        if stopped && on_disk.is_some() {
+            let how = if saved_now { "saved in" } else { "kept in" };
+            eprintln!(
+                "the samples are {how} {}: the same command resumes from them",
+                ckpt_path.display()
+            );
+        }
     }
     Ok(())
+}
+
+/// `.NAME.raylab-checkpoint` beside `output`.
+fn default_checkpoint(output: &Path) -> PathBuf {
+    let name = output
+        .file_name()
+        .map_or_else(|| "image".into(), |n| n.to_string_lossy().into_owned());
+    output.with_file_name(format!(".{name}.raylab-checkpoint"))
+}
+
+/// The sums of the checkpoint at `path` if it is one of the render `key`
+/// names with no more samples than asked for (`exact`: without --time),
+/// with the time they took; else why not.
+fn resume(
+    path: &Path,
+    key: Key,
+    settings: &RenderSettings,
+    exact: bool,
+) -> Result<(Accumulator, Duration), String> {
+    let header = checkpoint::read_header(path).map_err(|e| format!("is unusable: {e}"))?;
+    if let Some(why) = header.key.mismatch(&key) {
+        return Err(format!("is a checkpoint of {why}"));
+    }
+    if exact && header.spp > settings.spp {
+        return Err(format!(
+            "holds {} spp, more than the {} asked for",
+            header.spp, settings.spp
+        ));
+    }
+    let c = checkpoint::read(path).map_err(|e| format!("is unusable: {e}"))?;
+    Ok((c.accumulator, c.header.spent))
+}
+
+/// What the render's samples are samples of (see [`checkpoint::Key`]): this
+/// program's bytes; the scene's files and the scene loaded from them; the
+/// camera, integrator, seed and AOVs. Not the sample count, time, threads or
+/// output: a checkpoint goes on with more samples under any of those.
+fn render_key(
+    args: &RenderArgs,
+    scene: &raylab::Scene,
+    camera: &raylab::camera::Camera,
+    settings: &RenderSettings,
+    aovs: raylab::aov::AovSet,
+) -> Key {
+    let mut build = Fingerprint::new();
+    build.update(env!("CARGO_PKG_VERSION").as_bytes());
+    if let Ok(exe) = std::env::current_exe() {
+        let _ = hash_file(&exe, &mut build);
+    }
+    let mut files = Fingerprint::new();
+    let s = &args.scene;
+    let named = std::iter::once(PathBuf::from(&s.scene))
+        .chain(s.add.iter().cloned())
+        .chain(s.env.iter().cloned());
+    for path in named {
+        files.update(path.as_os_str().as_encoded_bytes());
+        if path.is_file() {
+            let _ = hash_file(&path, &mut files);
+        }
+    }
+    // What was loaded, as the library's Debug shows it (geometry, materials,
+    // lights, environment, ...), streamed into the fingerprint.
+    use std::fmt::Write;
+    let _ = write!(files, "{scene:?}");
+    let mut view = Fingerprint::new();
+    let _ = write!(
+        view,
+        "{camera:?}|{:?}|{}|{aovs}",
+        settings.integrator, settings.seed
+    );
+    Key {
+        build: build.value(),
+        scene: files.value(),
+        settings: view.value(),
+    }
+}
+
+fn hash_file(path: &Path, into: &mut Fingerprint) -> std::io::Result<()> {
+    let mut f = std::fs::File::open(path)?;
+    let mut buf = vec![0u8; 1 << 16];
+    loop {
+        let n = f.read(&mut buf)?;
+        if n == 0 {
+            return Ok(());
+        }
+        into.update(&buf[..n]);
+    }
 }
