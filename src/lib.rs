@@ -39,6 +39,7 @@ pub mod integrators;
 pub mod lights;
 pub mod materials;
 pub mod memory;
+pub mod nan_check;
 pub mod render;
 pub mod sampling;
 pub mod scene;

@@ -875,3 +875,57 @@ pub fn sample_pixel(
     let ray = camera.ray(x as f32 + 0.5, y as f32 + 0.5);
     integrator.radiance(scene, &ray, &mut rays)
 }
+
+/// Sample `s` of pixel `(x, y)` exactly as a render with `seed` computes it (the
+/// same camera ray, random numbers and hit), its path shown to `tracer`
+/// (`path` only; `flat` and `direct` have no path). For `--nan-check` and for
+/// reproducing one sample of an image.
+#[allow(clippy::too_many_arguments)]
+pub fn probe_sample(
+    scene: &Scene,
+    camera: &Camera,
+    integrator: Integrator,
+    seed: u64,
+    x: u32,
+    y: u32,
+    s: u32,
+    tracer: &mut impl path::PathTracer,
+) -> Vec3A {
+    let mut rays = 0;
+    let width = camera.width as usize;
+    match integrator {
+        Integrator::Path(options) => {
+            let pixel = y as u64 * camera.width as u64 + x as u64;
+            let start = PathStart::new(camera, &options, seed, pixel, s);
+            let hit = scene.intersect(&start.ray, f32::INFINITY);
+            let ray = start.ray;
+            let mut observe = |_: &SurfaceHit, _: &Material| {};
+            match start.sampler {
+                AnySampler::Sobol(mut smp) => path::radiance_traced(
+                    scene,
+                    &ray,
+                    hit,
+                    &options,
+                    &mut smp,
+                    &mut rays,
+                    &mut observe,
+                    tracer,
+                ),
+                AnySampler::Independent(mut rng) => path::radiance_traced(
+                    scene,
+                    &ray,
+                    hit,
+                    &options,
+                    &mut rng,
+                    &mut rays,
+                    &mut observe,
+                    tracer,
+                ),
+            }
+        }
+        _ => {
+            let ray = pixel_ray(camera, seed, s, x as usize, y as usize, width);
+            integrator.radiance(scene, &ray, &mut rays)
+        }
+    }
+}

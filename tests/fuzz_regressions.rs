@@ -18,14 +18,25 @@ fn fuzz_findings_stay_fixed() {
         let target = dir.file_name().unwrap().to_str().unwrap().to_string();
         let run = oracle::targets::by_name(&target)
             .unwrap_or_else(|| panic!("{}: no fuzz target of that name", dir.display()));
-        let mut files: Vec<_> = std::fs::read_dir(&dir).unwrap().map(|f| f.unwrap().path()).collect();
+        let mut files: Vec<_> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|f| f.unwrap().path())
+            .collect();
         files.sort();
         for file in files {
             let bytes = std::fs::read(&file).unwrap();
             let outcome = std::panic::catch_unwind(|| run(&bytes));
-            assert!(outcome.is_ok(), "{}: the {target} target fails again", file.display());
+            assert!(
+                outcome.is_ok(),
+                "{}: the {target} target fails again",
+                file.display()
+            );
             replayed += 1;
         }
     }
-    assert!(replayed > 0, "no findings to replay under {}", root.display());
+    assert!(
+        replayed > 0,
+        "no findings to replay under {}",
+        root.display()
+    );
 }

@@ -151,6 +151,67 @@ impl PathSampler for SobolSampler {
     }
 }
 
+/// What a path did at one vertex, shown to a [`PathTracer`] (see
+/// [`radiance_traced`]): enough to find where a NaN or infinity entered.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum PathEvent {
+    /// The surface found at the vertex: hit point, shading normal (after
+    /// normal mapping), geometric normal and texture coordinates.
+    Surface {
+        /// Hit point.
+        point: Vec3A,
+        /// Shading normal.
+        shading_normal: Vec3A,
+        /// Geometric normal.
+        geometric_normal: Vec3A,
+        /// First texture coordinate set.
+        uv: Vec2,
+    },
+    /// Emission seen at the vertex: its radiance and MIS weight.
+    Emission {
+        /// Emitted radiance.
+        le: Vec3A,
+        /// MIS weight.
+        weight: f32,
+    },
+    /// The environment seen when the path escaped: its radiance and MIS weight.
+    Environment {
+        /// Environment radiance.
+        radiance: Vec3A,
+        /// MIS weight.
+        weight: f32,
+    },
+    /// Next-event estimation: the BSDF value, incoming radiance over the
+    /// light's pdf, and MIS weight.
+    Light {
+        /// BSDF value (times nothing: the cosine is inside the BSDF's eval).
+        f: Vec3A,
+        /// Incident radiance divided by the light sample's pdf.
+        li: Vec3A,
+        /// MIS weight.
+        weight: f32,
+    },
+    /// The BSDF sample that continues the path: its weight `f·cos/pdf` and pdf.
+    Bounce {
+        /// Throughput factor of the sample.
+        weight: Vec3A,
+        /// Its pdf (solid angle; 0 for a delta lobe's convention).
+        pdf: f32,
+    },
+}
+
+/// Watches a path vertex by vertex; `()` watches nothing and costs nothing.
+pub trait PathTracer {
+    /// `event` happened at vertex `depth` (0: the camera ray's hit) with path
+    /// throughput `beta` before it.
+    fn event(&mut self, depth: u32, beta: Vec3A, event: PathEvent);
+}
+
+impl PathTracer for () {
+    #[inline(always)]
+    fn event(&mut self, _: u32, _: Vec3A, _: PathEvent) {}
+}
+
 /// Radiance arriving along `ray` (a unit direction), estimated by one path.
 /// Adds the rays cast (closest-hit and shadow) to `rays`. May return a
 /// non-finite value in pathological cases; the caller drops those.
@@ -183,6 +244,7 @@ pub fn radiance_from(
 /// the path shades them, so that the render's AOVs need not look the hit's
 /// textures up again. Not called when the path ends before it shades that hit
 /// (a miss, or `max_depth` 1).
+#[inline]
 pub fn radiance_observed(
     scene: &Scene,
     ray: &Ray,
@@ -191,6 +253,24 @@ pub fn radiance_observed(
     sampler: &mut impl PathSampler,
     rays: &mut u64,
     observe: &mut impl FnMut(&SurfaceHit, &Material),
+) -> Vec3A {
+    radiance_traced(scene, ray, first, options, sampler, rays, observe, &mut ())
+}
+
+/// [`radiance_observed`] that also shows `tracer` every vertex's surface and
+/// contributions ([`PathEvent`]), for `--nan-check`; the same value, bit for
+/// bit (with `()` the tracing compiles away).
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub fn radiance_traced(
+    scene: &Scene,
+    ray: &Ray,
+    first: Option<Hit>,
+    options: &PathOptions,
+    sampler: &mut impl PathSampler,
+    rays: &mut u64,
+    observe: &mut impl FnMut(&SurfaceHit, &Material),
+    tracer: &mut impl PathTracer,
 ) -> Vec3A {
     let mut next_hit = first;
     let mut l = Vec3A::ZERO;
@@ -215,6 +295,14 @@ pub fn radiance_observed(
                 } else {
                     power_heuristic(bsdf_pdf, scene.environment_pdf(ray.dir))
                 };
+                tracer.event(
+                    depth,
+                    beta,
+                    PathEvent::Environment {
+                        radiance: env,
+                        weight,
+                    },
+                );
                 l += beta * env * weight;
             }
             break;
@@ -226,6 +314,16 @@ pub fn radiance_observed(
         let material = &scene.materials()[surface.material as usize];
         let ng = surface.ng;
         let cos_out = -ng.dot(ray.dir);
+        tracer.event(
+            depth,
+            beta,
+            PathEvent::Surface {
+                point: surface.point.p,
+                shading_normal: surface.ns,
+                geometric_normal: ng,
+                uv: surface.attrs.uv[0],
+            },
+        );
 
         // Emission from the front side of an area light (or either side).
         if material.is_emissive() && (cos_out > 0.0 || material.emits_both_sides) {
@@ -236,6 +334,7 @@ pub fn radiance_observed(
                 let light_pdf = scene.light_pdf_area(hit.prim) * hit.t * hit.t / cos_out.abs();
                 power_heuristic(bsdf_pdf, light_pdf)
             };
+            tracer.event(depth, beta, PathEvent::Emission { le, weight });
             l += beta * le * weight;
         }
         // Mitsuba's convention: a path of `max_depth` segments ends here.
@@ -328,6 +427,7 @@ pub fn radiance_observed(
                     if !scene.occluded(&shadow, t_max) {
                         let weight =
                             light_pdf.map_or(1.0, |pdf| power_heuristic(pdf, bsdf.pdf(wo, wi)));
+                        tracer.event(depth, beta, PathEvent::Light { f, li, weight });
                         l += beta * f * li * weight;
                     }
                 }
@@ -342,6 +442,14 @@ pub fn radiance_observed(
         if !same_side(wi_world) {
             break;
         }
+        tracer.event(
+            depth,
+            beta,
+            PathEvent::Bounce {
+                weight: bs.weight,
+                pdf: bs.pdf,
+            },
+        );
         beta *= bs.weight;
         specular = bs.specular;
         bsdf_pdf = bs.pdf;

@@ -219,6 +219,11 @@ pub struct RenderArgs {
     /// than a twentieth of that).
     #[arg(long, value_name = "SECONDS", default_value_t = 10.0, requires = "checkpoint", allow_hyphen_values = true, value_parser = parse_every)]
     pub checkpoint_every: f64,
+    /// After the render, find the first sample that came out NaN or infinite
+    /// and say where it went bad (pixel, sample, path vertex); exit code 3 if
+    /// there is one.
+    #[arg(long)]
+    pub nan_check: bool,
     /// No progress bar and no summary line.
     #[arg(short, long)]
     pub quiet: bool,

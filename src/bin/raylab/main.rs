@@ -61,6 +61,11 @@ fn main() -> ExitCode {
         }
         // A reader that stopped early (`raylab bench ... | head -1`) is not a failure.
         Err(e) if is_broken_pipe(&e) => ExitCode::SUCCESS,
+        // The image is written and the bad sample reported.
+        Err(e) if e.is::<render_cmd::NanFound>() => {
+            signals::exit_if_received();
+            ExitCode::from(3)
+        }
         Err(e) => {
             eprintln!("error: {e:#}");
             ExitCode::from(1)

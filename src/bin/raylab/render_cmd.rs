@@ -10,6 +10,7 @@ use anyhow::Context;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use raylab::checkpoint::{self, Fingerprint, Key};
 use raylab::film::{Format, MetaValue, write_image_meta};
+use raylab::nan_check::first_bad_sample;
 use raylab::render::{Accumulator, Ended, Passes, RenderSettings, render_passes};
 
 use crate::args::{MAX_SPP, RenderArgs};
@@ -364,8 +365,44 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             );
         }
     }
+    if args.nan_check {
+        let dropped = acc.tally().dropped;
+        if dropped == 0 {
+            eprintln!("nan-check: no NaN/Inf samples in {} spp", acc.spp());
+            return Ok(());
+        }
+        let samples = 0..acc.spp();
+        let scan = || first_bad_sample(scene, &camera, integrator, seed, samples.clone());
+        let bad = match args.threads {
+            Some(n) => rayon::ThreadPoolBuilder::new()
+                .num_threads(n)
+                .build()
+                .context("cannot start worker threads")?
+                .install(scan),
+            None => scan(),
+        };
+        match bad {
+            Some(b) => eprintln!("nan-check: {dropped} NaN/Inf samples; {b}"),
+            None => eprintln!(
+                "nan-check: {dropped} NaN/Inf samples, but none when evaluated one by one (the render traces rays in packets, which may break exact ties differently)"
+            ),
+        }
+        return Err(NanFound.into());
+    }
     Ok(())
 }
+
+/// `--nan-check` found a NaN or infinite sample (already reported): exit code 3.
+#[derive(Debug)]
+pub struct NanFound;
+
+impl std::fmt::Display for NanFound {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("NaN/Inf samples found")
+    }
+}
+
+impl std::error::Error for NanFound {}
 
 /// `.NAME.raylab-checkpoint` beside `output`.
 fn default_checkpoint(output: &Path) -> PathBuf {

@@ -25,7 +25,8 @@ impl Input<'_> {
     }
 
     fn face_normal(&self, face: usize) -> Vec3 {
-        let [a, b, c] = self.mesh.indices[self.faces[face]].map(|i| self.mesh.positions[i as usize]);
+        let [a, b, c] =
+            self.mesh.indices[self.faces[face]].map(|i| self.mesh.positions[i as usize]);
         (b - a).cross(c - a).normalize_or_zero()
     }
 }
