@@ -104,7 +104,11 @@ pub fn check_queries(triangles: &[Triangle], rays: &[Ray]) {
         let mut blocked = vec![false; rays.len()];
         bvh.occluded_stream(rays, &[t_max], &mut blocked);
         for i in 0..rays.len() {
-            assert_eq!(t_of(stream[i]), t_of(single[i]), "stream ray {i}, t_max {t_max}");
+            assert_eq!(
+                t_of(stream[i]),
+                t_of(single[i]),
+                "stream ray {i}, t_max {t_max}"
+            );
             assert_eq!(blocked[i], single[i].is_some(), "occluded stream ray {i}");
         }
         for (k, chunk) in rays.chunks_exact(8).enumerate() {
@@ -113,7 +117,11 @@ pub fn check_queries(triangles: &[Triangle], rays: &[Ray]) {
             let occ = bvh.occluded8(r8, [t_max; 8], [true; 8]);
             for j in 0..8 {
                 let i = 8 * k + j;
-                assert_eq!(t_of(hits[j]), t_of(single[i]), "8-packet ray {i}, t_max {t_max}");
+                assert_eq!(
+                    t_of(hits[j]),
+                    t_of(single[i]),
+                    "8-packet ray {i}, t_max {t_max}"
+                );
                 assert_eq!(occ[j], single[i].is_some(), "8-packet occluded ray {i}");
             }
             for h in 0..2 {
@@ -122,7 +130,11 @@ pub fn check_queries(triangles: &[Triangle], rays: &[Ray]) {
                 let occ = bvh.occluded4(r4, [t_max; 4], [true; 4]);
                 for j in 0..4 {
                     let i = 8 * k + 4 * h + j;
-                    assert_eq!(t_of(hits[j]), t_of(single[i]), "4-packet ray {i}, t_max {t_max}");
+                    assert_eq!(
+                        t_of(hits[j]),
+                        t_of(single[i]),
+                        "4-packet ray {i}, t_max {t_max}"
+                    );
                     assert_eq!(occ[j], single[i].is_some(), "4-packet occluded ray {i}");
                 }
             }

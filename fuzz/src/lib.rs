@@ -91,7 +91,11 @@ pub fn fixture_png() -> Vec<u8> {
         for &b in data {
             c ^= b as u32;
             for _ in 0..8 {
-                c = if c & 1 != 0 { 0xedb8_8320 ^ (c >> 1) } else { c >> 1 };
+                c = if c & 1 != 0 {
+                    0xedb8_8320 ^ (c >> 1)
+                } else {
+                    c >> 1
+                };
             }
         }
         !c
@@ -111,11 +115,7 @@ pub fn fixture_png() -> Vec<u8> {
         out.extend_from_slice(&body);
         out.extend_from_slice(&crc32(&body).to_be_bytes());
     }
-    let raw: Vec<u8> = [
-        [0u8, 255, 0, 0, 0, 255, 0],
-        [0u8, 0, 0, 255, 128, 128, 255],
-    ]
-    .concat();
+    let raw: Vec<u8> = [[0u8, 255, 0, 0, 0, 255, 0], [0u8, 0, 0, 255, 128, 128, 255]].concat();
     let mut z = vec![0x78, 0x01, 1];
     z.extend_from_slice(&(raw.len() as u16).to_le_bytes());
     z.extend_from_slice(&(!(raw.len() as u16)).to_le_bytes());
@@ -190,7 +190,11 @@ pub fn load_and_render(path: &Path, options: &LoadOptions) {
         }
         Ok(loaded) => {
             if verbose {
-                eprintln!("loaded: {} triangles, {:?}", loaded.scene.triangles().len(), loaded.warnings);
+                eprintln!(
+                    "loaded: {} triangles, {:?}",
+                    loaded.scene.triangles().len(),
+                    loaded.warnings
+                );
             }
             for w in &loaded.warnings {
                 check_message(w);
@@ -209,7 +213,10 @@ pub fn load_and_render(path: &Path, options: &LoadOptions) {
                     "{integrator}: a pixel is not finite"
                 );
                 if image.dropped > 0 && sane(&loaded.scene) {
-                    panic!("{integrator}: {} NaN/Inf samples in a scene of sane size", image.dropped);
+                    panic!(
+                        "{integrator}: {} NaN/Inf samples in a scene of sane size",
+                        image.dropped
+                    );
                 }
             }
         }
@@ -233,11 +240,17 @@ pub fn load_with_env(env: &Path) {
 /// raylab's fault, not f32 overflow of the file's numbers.
 fn sane(scene: &raylab::Scene) -> bool {
     let limit = Vec3A::splat(1e12);
-    scene.triangles().iter().all(|t| t.v.iter().all(|p| p.abs().cmplt(limit).all()))
+    scene
+        .triangles()
+        .iter()
+        .all(|t| t.v.iter().all(|p| p.abs().cmplt(limit).all()))
 }
 
 /// An error or warning is one non-empty line.
 pub fn check_message(message: &str) {
     assert!(!message.trim().is_empty(), "an empty message");
-    assert!(!message.contains('\n'), "a message of several lines: {message:?}");
+    assert!(
+        !message.contains('\n'),
+        "a message of several lines: {message:?}"
+    );
 }
