@@ -172,6 +172,16 @@ impl Ledger {
         self.needs.set(total);
         Ok(())
     }
+
+    /// Whether `more` would fit on top of what is charged, without charging
+    /// it: for what is held only while loading (a file's bytes before they
+    /// are parsed).
+    pub fn fits(&self, name: &str, more: Needs) -> Result<(), MemoryError> {
+        let before = self.needs.get();
+        self.charge(name, more)?;
+        self.needs.set(before);
+        Ok(())
+    }
 }
 
 /// A render would need more memory than the budget allows.

@@ -666,6 +666,15 @@ fn strange_but_valid_files_render_finite_images() {
     }
 }
 
+/// A model of `../shared/models`.
+fn shared(name: &str) -> String {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../shared/models")
+        .join(name)
+        .display()
+        .to_string()
+}
+
 /// `--max-memory`: over the budget is one line naming the scene and what it
 /// needs, before the big allocation.
 #[test]
@@ -742,6 +751,20 @@ fn the_memory_budget_refuses_what_does_not_fit() {
         (
             args(&[&tri, "--env", "sky.hdr", "--max-memory", "16M"]),
             "sky.hdr: needs about 48 MiB (environment 48 MiB), more than --max-memory 16 MiB",
+        ),
+        // The file's bytes, before they are read and parsed: an OBJ's text,
+        // a glTF's buffer.
+        (
+            args(&[&shared("stanford-bunny.obj"), "--max-memory", "1M"]),
+            "stanford-bunny.obj: needs about 2.3 MiB (geometry 2.3 MiB), more than --max-memory 1 MiB",
+        ),
+        (
+            args(&[
+                &shared("DamagedHelmet/DamagedHelmet.gltf"),
+                "--max-memory",
+                "300K",
+            ]),
+            "DamagedHelmet.bin: needs about 549.8 KiB (geometry 549.8 KiB), more than --max-memory 300 KiB",
         ),
     ];
     // A 2048×1024 map of one run-length scanline each (48 MiB with its tables).

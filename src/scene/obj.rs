@@ -473,6 +473,14 @@ pub fn load_obj_scene_with(
     path: &Path,
     ledger: &crate::memory::Ledger,
 ) -> Result<ObjScene, ObjError> {
+    // The text is held while it is parsed.
+    if let Ok(meta) = std::fs::metadata(path) {
+        let text = crate::memory::Needs {
+            geometry: meta.len(),
+            ..Default::default()
+        };
+        ledger.fits(&path.display().to_string(), text)?;
+    }
     let obj = parse_obj_file(&read_text(path)?, path)?;
     let mut warnings = Vec::new();
     let mut skipped = obj.skipped.clone();

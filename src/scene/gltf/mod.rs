@@ -102,7 +102,10 @@ pub fn load_gltf_with(path: &Path, ledger: &Ledger) -> Result<GltfScene, GltfErr
     })
 }
 
-fn read_file(path: &Path) -> Result<Vec<u8>, GltfError> {
+/// Reads a file (the glTF, a buffer or an image file) after checking that its
+/// bytes fit the budget on top of `held`, the bytes already read and still
+/// held for this load, which it then adds them to.
+fn read_file(path: &Path, ledger: &Ledger, held: &mut u64) -> Result<Vec<u8>, GltfError> {
     let io = |cause| GltfError::Io {
         path: path.to_owned(),
         cause,
@@ -114,6 +117,13 @@ fn read_file(path: &Path) -> Result<Vec<u8>, GltfError> {
             path.display()
         )));
     }
+    // The bytes are held while the scene is built from them.
+    *held = held.saturating_add(len);
+    let bytes = Needs {
+        geometry: *held,
+        ..Needs::default()
+    };
+    ledger.fits(&path.display().to_string(), bytes)?;
     std::fs::read(path).map_err(io)
 }
 
@@ -165,7 +175,8 @@ fn split_glb(bytes: &[u8]) -> Result<(&[u8], Option<&[u8]>), GltfError> {
 }
 
 fn load_gltf_inner(path: &Path, ledger: &Ledger) -> Result<GltfScene, GltfError> {
-    let bytes = read_file(path)?;
+    let mut held = 0;
+    let bytes = read_file(path, ledger, &mut held)?;
     let (json_bytes, glb_bin) = if bytes.starts_with(b"glTF") {
         split_glb(&bytes)?
     } else {
@@ -192,7 +203,7 @@ fn load_gltf_inner(path: &Path, ledger: &Ledger) -> Result<GltfScene, GltfError>
         warnings.push(format!("{}: ignoring the extension {ext}", path.display()));
     }
     let base = path.parent().unwrap_or(Path::new("."));
-    let buffer_data = load_buffers(&root, base, glb_bin)?;
+    let buffer_data = load_buffers(&root, base, glb_bin, ledger, &mut held)?;
     let buffers = Buffers {
         root: &root,
         data: &buffer_data,
@@ -225,6 +236,8 @@ fn load_buffers(
     root: &json::Root,
     base: &Path,
     glb_bin: Option<&[u8]>,
+    ledger: &Ledger,
+    held: &mut u64,
 ) -> Result<Vec<Vec<u8>>, GltfError> {
     let mut out = Vec::with_capacity(root.buffers.len().min(1024));
     for (i, b) in root.buffers.iter().enumerate() {
@@ -236,7 +249,7 @@ fn load_buffers(
                 })?
                 .to_vec(),
             None => return Err(GltfError::invalid(format!("buffer {i} has no URI"))),
-            Some(uri) => read_uri(uri, base, &format!("buffer {i}"))?,
+            Some(uri) => read_uri(uri, base, &format!("buffer {i}"), ledger, held)?,
         };
         if (data.len() as u64) < want {
             return Err(GltfError::invalid(format!(
@@ -252,7 +265,13 @@ fn load_buffers(
 }
 
 /// The bytes behind a URI: a base64 data URI or a relative file path.
-fn read_uri(uri: &str, base: &Path, what: &str) -> Result<Vec<u8>, GltfError> {
+fn read_uri(
+    uri: &str,
+    base: &Path,
+    what: &str,
+    ledger: &Ledger,
+    held: &mut u64,
+) -> Result<Vec<u8>, GltfError> {
     if let Some(rest) = uri.strip_prefix("data:") {
         let (header, payload) = rest
             .split_once(',')
@@ -271,7 +290,7 @@ fn read_uri(uri: &str, base: &Path, what: &str) -> Result<Vec<u8>, GltfError> {
         )));
     }
     let file = base.join(percent_decode(uri));
-    match read_file(&file) {
+    match read_file(&file, ledger, held) {
         Err(GltfError::Io { cause, .. }) => Err(GltfError::invalid(format!(
             "{what}: cannot read {}: {cause}",
             file.display()
@@ -944,7 +963,13 @@ impl Loader<'_> {
         for (name, image) in &self.image_sources {
             let img = &self.root.images[*image];
             let bytes = match (&img.uri, img.buffer_view) {
-                (Some(uri), _) => read_uri(uri, self.base, &format!("image {image}"))?,
+                (Some(uri), _) => read_uri(
+                    uri,
+                    self.base,
+                    &format!("image {image}"),
+                    self.ledger,
+                    &mut 0,
+                )?,
                 (None, Some(view)) => {
                     let v = view.value();
                     let view = self.root.buffer_views.get(v).ok_or_else(|| {
