@@ -99,6 +99,28 @@ impl Fingerprint {
         self.n_pending = rest.len();
     }
 
+    /// Adds the bits of `xs` (little-endian), e.g. a mesh's coordinates.
+    pub fn floats(&mut self, xs: impl IntoIterator<Item = f32>) {
+        self.words32(xs.into_iter().map(f32::to_bits));
+    }
+
+    /// Adds `xs` (little-endian), e.g. a mesh's indices.
+    pub fn words32(&mut self, xs: impl IntoIterator<Item = u32>) {
+        // Through a small buffer: `update` per value would cost more than
+        // the hashing itself.
+        let mut buf = [0u8; 512];
+        let mut n = 0;
+        for x in xs {
+            buf[n..n + 4].copy_from_slice(&x.to_le_bytes());
+            n += 4;
+            if n == buf.len() {
+                self.update(&buf);
+                n = 0;
+            }
+        }
+        self.update(&buf[..n]);
+    }
+
     /// The hash of everything added.
     pub fn value(&self) -> u64 {
         let mut f = self.clone();

@@ -165,3 +165,63 @@ fn the_example_room_loads_its_materials() {
     let scene = Scene::from_parts(obj.parts).unwrap();
     assert_eq!(scene.emitter_count(), 2);
 }
+
+/// `Scene::fingerprint` (what checkpoints key their samples by) sees every
+/// texel and coordinate, and is the same for the same files on any thread
+/// count.
+#[test]
+fn the_scene_fingerprint_sees_every_texel_and_coordinate() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let write_texture = |corner: u8| {
+        let mut texels = vec![200u8; 8 * 8 * 3];
+        texels[0] = corner;
+        image::save_buffer(
+            d.join("t.png"),
+            &texels,
+            8,
+            8,
+            image::ExtendedColorType::Rgb8,
+        )
+        .unwrap();
+    };
+    let write_obj = |x: &str| {
+        std::fs::write(d.join("m.mtl"), "newmtl m\nmap_Kd t.png\n").unwrap();
+        std::fs::write(
+            d.join("m.obj"),
+            format!("mtllib m.mtl\nv 0 0 0\nv {x} 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nusemtl m\nf 1/1 2/2 3/3\n"),
+        )
+        .unwrap();
+    };
+    let fingerprint = |threads: usize| {
+        let path = d.join("m.obj");
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| {
+                raylab::scene::load(path.to_str().unwrap(), &Default::default())
+                    .unwrap()
+                    .scene
+                    .fingerprint()
+            })
+    };
+    write_texture(10);
+    write_obj("1");
+    let base = fingerprint(2);
+    assert_eq!(
+        fingerprint(1),
+        base,
+        "the same files on another thread count"
+    );
+    write_texture(11);
+    assert_ne!(fingerprint(2), base, "one texel changed, same size");
+    write_texture(10);
+    assert_eq!(fingerprint(2), base);
+    write_obj("1.0000001");
+    assert_ne!(fingerprint(2), base, "one coordinate moved by an ulp");
+    assert_ne!(
+        raylab::scene::cornell::scene().fingerprint(),
+        raylab::scene::cornell::area_scene().fingerprint()
+    );
+}

@@ -370,6 +370,22 @@ pub struct Environment {
 }
 
 impl Environment {
+    /// Adds what decides the environment's radiance to `f`: the map's size
+    /// and texels (or the constant), strength and rotation (see
+    /// [`crate::Scene::fingerprint`]).
+    pub fn fingerprint_into(&self, f: &mut crate::checkpoint::Fingerprint) {
+        match &self.source {
+            Source::None => f.update(b"no environment"),
+            Source::Constant(c) => f.floats(c.to_array()),
+            Source::Map(m) => {
+                f.words32([m.width as u32, m.height as u32]);
+                f.floats(m.texels.iter().flatten().copied());
+            }
+        }
+        f.floats([self.strength, self.rotation_degrees]);
+        f.update(format!("{:?}", self.sampling).as_bytes());
+    }
+
     /// No environment: escaping rays see black.
     pub fn none() -> Self {
         Self::from_source(Source::None)

@@ -175,6 +175,14 @@ pub struct TextureStore {
 }
 
 impl TextureStore {
+    /// Adds every image's size, layout and texels to `f` (see
+    /// [`crate::Scene::fingerprint`]).
+    pub fn fingerprint_into(&self, f: &mut crate::checkpoint::Fingerprint) {
+        for image in &self.images {
+            image.fingerprint_into(f);
+        }
+    }
+
     /// An empty store.
     pub fn new() -> Self {
         Self::default()

@@ -48,6 +48,29 @@ impl fmt::Debug for Image {
 const SUBTEXEL: f64 = 65536.0;
 
 impl Image {
+    /// Adds the image's size, layout and texels to `f`.
+    pub(crate) fn fingerprint_into(&self, f: &mut crate::checkpoint::Fingerprint) {
+        f.words32([self.width, self.height, u32::from(self.channels)]);
+        match &self.texels {
+            Texels::U8(t) => {
+                f.update(b"u8");
+                f.update(t);
+            }
+            Texels::U16(t) => {
+                f.update(b"u16");
+                for chunk in t.chunks(256) {
+                    let mut bytes = [0u8; 512];
+                    for (b, v) in bytes.chunks_exact_mut(2).zip(chunk) {
+                        b.copy_from_slice(&v.to_le_bytes());
+                    }
+                    f.update(&bytes[..2 * chunk.len()]);
+                }
+            }
+        }
+    }
+}
+
+impl Image {
     fn checked(width: u32, height: u32, channels: u8, len: usize) {
         assert!(width > 0 && height > 0, "empty {width}×{height} image");
         assert!(

@@ -462,11 +462,11 @@ fn render_key(
             let _ = hash_file(&path, &mut files);
         }
     }
-    // What was loaded, as the library's Debug shows it (geometry, materials,
-    // lights, environment, ...), streamed into the fingerprint.
-    use std::fmt::Write;
-    let _ = write!(files, "{scene:?}");
+    // What was loaded, to the last texel: also what the files above refer to
+    // (buffers, textures), which they do not hold.
+    files.update(&scene.fingerprint().to_le_bytes());
     let mut view = Fingerprint::new();
+    use std::fmt::Write;
     let _ = write!(
         view,
         "{camera:?}|{:?}|{}|{aovs}",
