@@ -259,12 +259,45 @@ pub fn parse_budget(s: &str) -> Result<MemoryBudget, String> {
     })
 }
 
-/// Physical memory in bytes, from `/proc/meminfo` (Linux).
+/// Memory this process may use, in bytes (Linux): physical memory
+/// (`MemTotal` of `/proc/meminfo`), or less where a cgroup caps it (a
+/// container's or a Slurm job's limit, which kills the process beyond it).
 fn physical_memory() -> Option<u64> {
     let text = std::fs::read_to_string("/proc/meminfo").ok()?;
     let line = text.lines().find(|l| l.starts_with("MemTotal:"))?;
     let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    kib.checked_mul(1024)
+    let total = kib.checked_mul(1024)?;
+    Some(cgroup_limit().map_or(total, |limit| limit.min(total)))
+}
+
+/// The tightest `memory.max` of this process's cgroup (v2) and its
+/// ancestors, or the v1 `memory.limit_in_bytes`; `None` without one.
+fn cgroup_limit() -> Option<u64> {
+    let read = |path: &std::path::Path| -> Option<u64> {
+        // "max" (v2) or a huge number (v1) mean no limit: they fail to parse
+        // or exceed any machine's memory, and `min` with `MemTotal` sorts it.
+        std::fs::read_to_string(path).ok()?.trim().parse().ok()
+    };
+    let root = std::path::Path::new("/sys/fs/cgroup");
+    let own = std::fs::read_to_string("/proc/self/cgroup")
+        .ok()
+        .and_then(|t| {
+            t.lines()
+                .find_map(|l| l.strip_prefix("0::"))
+                .map(|p| p.trim_start_matches('/').to_string())
+        });
+    let mut limits = Vec::new();
+    if let Some(own) = own {
+        let mut dir = root.join(own);
+        while dir.starts_with(root) {
+            limits.extend(read(&dir.join("memory.max")));
+            if !dir.pop() {
+                break;
+            }
+        }
+    }
+    limits.extend(read(&root.join("memory/memory.limit_in_bytes")));
+    limits.into_iter().min()
 }
 
 /// The film's bytes for a `width × height` image with `aov_channels` AOV

@@ -175,7 +175,7 @@ pub struct SceneArgs {
     #[arg(long, value_name = "N", allow_hyphen_values = true, value_parser = parse_non_negative)]
     pub ambient: Option<f32>,
     /// Most memory the scene, textures, environment map and film may need
-    /// (e.g. 4G, 512M; 0 or none: no limit) [default: 3/4 of physical memory].
+    /// (e.g. 4G, 512M; 0 or none: no limit) [default: 3/4 of physical memory, or of a lower cgroup limit].
     #[arg(long, value_name = "SIZE", allow_hyphen_values = true, value_parser = raylab::memory::parse_budget)]
     pub max_memory: Option<raylab::memory::MemoryBudget>,
 }
