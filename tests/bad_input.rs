@@ -214,6 +214,18 @@ const CASES: &[(&str, &str)] = &[
     ),
     ("shot-absurd-width.toml", "width = 4000000000"),
     ("shot-negative-spp.toml", "invalid value: integer `-4`"),
+    (
+        "shot-time-1e300.toml",
+        "time = 1e300: expected seconds > 0 and at most 604800",
+    ),
+    (
+        "shot-spp-over-limit.toml",
+        "spp = 4000000000: expected 1 to 1048576",
+    ),
+    (
+        "shot-pixels-over-limit.toml",
+        "16384 × 16384: expected at most 134217728 pixels",
+    ),
     ("shot-nan-fov.toml", "fov = NaN"),
     (
         "shot-environment-missing.toml",

@@ -377,20 +377,32 @@ fn check(path: &Path, what: &str, values: &[f32], non_negative: bool) -> Result<
 
 fn settings(path: &Path, r: &RenderSection) -> Result<ShotSettings, ShotError> {
     let bad = |m: String| invalid(path, format!("[render] {m}"));
+    use crate::render::{MAX_PIXELS, MAX_SIDE, MAX_SPP, MAX_TIME};
     for (key, v) in [("width", r.width), ("height", r.height)] {
         if let Some(v) = v
-            && !(1..=16_384).contains(&v)
+            && !(1..=MAX_SIDE).contains(&v)
         {
-            return Err(bad(format!("{key} = {v}: expected 1 to 16384 pixels")));
+            return Err(bad(format!("{key} = {v}: expected 1 to {MAX_SIDE} pixels")));
         }
     }
-    if r.spp == Some(0) {
-        return Err(bad("spp = 0: expected at least 1".into()));
+    if let (Some(w), Some(h)) = (r.width, r.height)
+        && u64::from(w) * u64::from(h) > MAX_PIXELS
+    {
+        return Err(bad(format!(
+            "width × height = {w} × {h}: expected at most {MAX_PIXELS} pixels"
+        )));
+    }
+    if let Some(spp) = r.spp
+        && !(1..=MAX_SPP).contains(&spp)
+    {
+        return Err(bad(format!("spp = {spp}: expected 1 to {MAX_SPP}")));
     }
     if let Some(t) = r.time
-        && !(t > 0.0 && t.is_finite())
+        && !(t > 0.0 && t <= MAX_TIME)
     {
-        return Err(bad(format!("time = {t}: expected seconds > 0")));
+        return Err(bad(format!(
+            "time = {t:?}: expected seconds > 0 and at most {MAX_TIME}"
+        )));
     }
     if r.max_depth == Some(0) {
         return Err(bad("max_depth = 0: expected at least 1".into()));

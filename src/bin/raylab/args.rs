@@ -8,12 +8,7 @@ use raylab::Integrator;
 use raylab::scene::cornell::{self, MaterialChoice};
 use raylab::scene::load::SceneKind;
 
-/// Largest accepted image side, in pixels.
-pub const MAX_SIDE: u32 = 16_384;
-/// Largest accepted image, in pixels (the film takes 16 bytes a pixel).
-pub const MAX_PIXELS: u64 = 1 << 27;
-/// Largest accepted samples per pixel.
-pub const MAX_SPP: u32 = 1 << 20;
+pub use raylab::render::{MAX_PIXELS, MAX_SIDE, MAX_SPP, MAX_TIME};
 
 #[derive(Debug, Parser)]
 #[command(
@@ -494,9 +489,6 @@ fn parse_max_depth(s: &str) -> Result<u32, String> {
         _ => Err("expected a whole number of path segments >= 1".into()),
     }
 }
-
-/// Longest accepted --time, in seconds (a week).
-pub const MAX_TIME: f64 = 7.0 * 24.0 * 3600.0;
 
 fn parse_time(s: &str) -> Result<f64, String> {
     match s.trim().parse::<f64>() {
