@@ -567,6 +567,21 @@ def ray_seeds(shared):
         tri(x, y, 0, x + 1, y, 0, x, y + 1, 0) for x in range(-4, 4) for y in range(-4, 4)))
 
 
+def checkpoint_seeds():
+    """Checkpoints as `--checkpoint` writes them, without the trailing checksum
+    (the target appends it)."""
+    def ckpt(w, h, spp, aov_nibbles=0, stride=0):
+        out = b"RAYLABCP" + struct.pack("<II", 1, aov_nibbles) + struct.pack("<QQQ", 1, 2, 3)
+        out += struct.pack("<IIII", w, h, spp, 0) + struct.pack("<QQQ", 10**9, 1234, 0)
+        for i in range(w * h):
+            out += struct.pack("<3d", 0.5 * spp, 0.25 * spp, i)
+        out += struct.pack("<%dd" % (w * h * stride), *([0.5] * (w * h * stride)))
+        return out
+    put("checkpoint", "plain-4x3", ckpt(4, 3, 7))
+    put("checkpoint", "one-pixel", ckpt(1, 1, 1))
+    put("checkpoint", "albedo-2x2", ckpt(2, 2, 3, aov_nibbles=1, stride=4))
+
+
 def cli_seeds():
     lines = [
         ["render"],
@@ -599,6 +614,7 @@ def main():
     env_seeds(a.shared)
     image_seeds(a.shared)
     ray_seeds(a.shared)
+    checkpoint_seeds()
     cli_seeds()
     for t in sorted(os.listdir(os.path.join(HERE, "corpus"))):
         files = os.listdir(os.path.join(HERE, "corpus", t))

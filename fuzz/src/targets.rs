@@ -108,6 +108,27 @@ pub fn bvh(data: &[u8]) {
     super::bvh::check_queries(&triangles, &rays);
 }
 
+/// A render checkpoint (`--checkpoint FILE`), its checksum appended so that
+/// inputs get past it to the header and the sums: read as a resume reads it.
+pub fn checkpoint(data: &[u8]) {
+    let mut f = raylab::checkpoint::Fingerprint::new();
+    f.update(data);
+    let mut bytes = data.to_vec();
+    bytes.extend_from_slice(&f.value().to_le_bytes());
+    let path = put("in.ckpt", &bytes);
+    if let Err(e) = raylab::checkpoint::read_header(&path) {
+        super::check_message(&e.to_string());
+    }
+    match raylab::checkpoint::read(&path) {
+        Err(e) => super::check_message(&e.to_string()),
+        Ok(c) => {
+            let h = c.header;
+            assert_eq!(c.accumulator.spp(), h.spp);
+            let _ = (h.width, h.height, h.aovs);
+        }
+    }
+}
+
 /// The target of this name (all but `cli`, which needs the binary's argument
 /// parser), for replaying inputs.
 pub fn by_name(name: &str) -> Option<fn(&[u8])> {
@@ -124,6 +145,7 @@ pub fn by_name(name: &str) -> Option<fn(&[u8])> {
         "jpeg" => jpeg,
         "rays" => rays,
         "bvh" => bvh,
+        "checkpoint" => checkpoint,
         _ => return None,
     })
 }
