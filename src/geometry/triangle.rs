@@ -228,7 +228,10 @@ pub fn intersect(s: &RayShear, v: &[Vec3A; 3], t_max: f32) -> Option<TriangleHit
         [u, w_v, w],
         abs_det,
     );
-    if t <= delta_t {
+    // Written so that NaN fails, and a t that overflowed to infinity (a
+    // denormal determinant in a triangle with coordinates near f32::MAX,
+    // found by fuzzing) is no hit either; the packet tests do the same.
+    if !(t > delta_t && t <= f32::MAX) {
         return None;
     }
     let inv = 1.0 / det;
@@ -253,6 +256,25 @@ mod tests {
             Vec3A::new(1.0, 0.0, 1.0),
             Vec3A::new(0.0, 1.0, 1.0),
         )
+    }
+
+    /// Found by fuzzing: a triangle spanning -1.7e38 with denormal coordinates
+    /// and a ray with a denormal direction component gave a "hit" at t = NaN
+    /// (∞/∞); the 4- and 8-wide tests already said no.
+    #[test]
+    fn overflowing_triangles_give_no_hit_rather_than_a_nan_one() {
+        let f = |bits: [u32; 3]| Vec3A::from_array(bits.map(f32::from_bits));
+        let tri = Triangle::new(
+            f([0x0, 0xff00_008b, 0xff]),
+            f([0x0, 0x4000, 0xc000_0000]),
+            f([0x4000_0000, 0x0, 0x4000]),
+        );
+        let ray = Ray::new(f([0, 0, 0x4080_0000]), f([0x1, 0x0, 0xbf80_0000]));
+        for t_max in [f32::INFINITY, 10.0] {
+            if let Some(h) = intersect(&RayShear::new(&ray), &tri.v, t_max) {
+                assert!(h.t.is_finite() && h.t > 0.0, "{h:?}");
+            }
+        }
     }
 
     #[test]
