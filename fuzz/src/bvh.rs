@@ -91,7 +91,11 @@ pub fn check_queries(triangles: &[Triangle], rays: &[Ray]) {
     if !comparable {
         let bvh = Bvh::build(triangles);
         for r in rays {
-            let _ = (bvh.intersect(r, f32::INFINITY), bvh.occluded(r, 2.5));
+            let (hit, blocked) = (bvh.intersect(r, f32::INFINITY), bvh.occluded(r, 2.5));
+            if !finite(r) {
+                // A NaN or infinite ray hits nothing, whatever the scene.
+                assert!(hit.is_none() && !blocked, "non-finite ray {r:?} hit");
+            }
         }
         let mut out = vec![None; rays.len()];
         bvh.intersect_stream(rays, &[f32::INFINITY], &mut out);
