@@ -32,6 +32,25 @@ use crate::sampling::distribution::Distribution2D;
 pub const MAX_SIDE: usize = 32768;
 /// The most texels an environment map may have (2^27: 1.5 GiB as RGB floats).
 pub const MAX_TEXELS: usize = 1 << 27;
+/// Largest radiance a texel (or a constant sky) keeps, W·sr⁻¹·m⁻²: 10¹³ times
+/// the sun's disc (about 2·10⁷), so no real map reaches it, while a corrupt one
+/// (RGBE exponents reach 2¹¹⁹) would make estimates overflow f32 (found by
+/// fuzzing). Brighter channels are clamped to it.
+pub const MAX_RADIANCE: f32 = 1e20;
+/// Largest `strength` the environment takes (larger ones are clamped): with
+/// [`MAX_RADIANCE`], radiance over a sample's pdf stays far inside f32.
+pub const MAX_STRENGTH: f32 = 1e6;
+
+/// A radiance channel as the environment keeps it: non-finite or negative
+/// values become zero, values above [`MAX_RADIANCE`] that ceiling.
+#[inline]
+fn kept(x: f32) -> f32 {
+    if x.is_finite() && x > 0.0 {
+        x.min(MAX_RADIANCE)
+    } else {
+        0.0
+    }
+}
 
 /// Why an environment map could not be read.
 #[derive(Debug, Error)]
@@ -92,7 +111,8 @@ fn luminance(c: Vec3A) -> f32 {
 }
 
 impl EnvMap {
-    /// A map from an RGB image (row 0 at the top, `+y`). Non-finite or negative
+    /// A map from an RGB image (row 0 at the top, `+y`). Channels above
+    /// [`MAX_RADIANCE`] are clamped to it; non-finite or negative
     /// values become zero. Builds the sampling tables, rows in parallel.
     pub fn from_image(image: RgbImage) -> Self {
         let RgbImage {
@@ -101,7 +121,7 @@ impl EnvMap {
             mut pixels,
         } = image;
         pixels.par_iter_mut().for_each(|p| {
-            *p = p.map(|x| if x.is_finite() && x > 0.0 { x } else { 0.0 });
+            *p = p.map(kept);
         });
         let mut map = Self {
             width,
@@ -391,14 +411,11 @@ impl Environment {
         Self::from_source(Source::None)
     }
 
-    /// The same radiance `radiance` from every direction (non-finite or
+    /// The same radiance `radiance` from every direction (clamped to
+    /// [`MAX_RADIANCE`]; non-finite or
     /// negative channels become zero).
     pub fn constant(radiance: Vec3A) -> Self {
-        let clean = Vec3A::from(
-            radiance
-                .to_array()
-                .map(|x| if x.is_finite() && x > 0.0 { x } else { 0.0 }),
-        );
+        let clean = Vec3A::from(radiance.to_array().map(kept));
         if clean == Vec3A::ZERO {
             return Self::none();
         }
@@ -431,10 +448,11 @@ impl Environment {
         }
     }
 
-    /// The same environment scaled by `strength` (finite, ≥ 0; else 0).
+    /// The same environment scaled by `strength` (finite, ≥ 0, else 0; at most
+    /// [`MAX_STRENGTH`]).
     pub fn with_strength(mut self, strength: f32) -> Self {
         self.strength = if strength.is_finite() && strength > 0.0 {
-            strength
+            strength.min(MAX_STRENGTH)
         } else {
             0.0
         };

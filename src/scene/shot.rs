@@ -979,6 +979,14 @@ pub fn compose_with(
         }
         if let Some(s) = e.strength {
             check(path, "[environment] strength", &[s], true)?;
+            let most = crate::lights::environment::MAX_STRENGTH;
+            if s > most {
+                return Err(invalid(
+                    path,
+                    format!("[environment] strength = {s:?}: expected at most {most:e}"),
+                )
+                .into());
+            }
         }
         if let Some(r) = e.rotate {
             check(path, "[environment] rotate", &[r], false)?;

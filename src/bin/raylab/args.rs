@@ -149,8 +149,8 @@ pub struct SceneArgs {
     /// A constant sky of radiance R,G,B (W/sr/m²) instead of a map.
     #[arg(long, value_name = "R,G,B", allow_hyphen_values = true, value_parser = parse_color)]
     pub env_color: Option<Vec3A>,
-    /// Multiply the environment's radiance by S [default: 1].
-    #[arg(long, value_name = "S", allow_hyphen_values = true, value_parser = parse_non_negative)]
+    /// Multiply the environment's radiance by S, at most 1e6 [default: 1].
+    #[arg(long, value_name = "S", allow_hyphen_values = true, value_parser = parse_strength)]
     pub env_strength: Option<f32>,
     /// Turn the environment about +y by DEG degrees (positive: counter-clockwise
     /// seen from above).
@@ -556,6 +556,14 @@ fn parse_pitch(s: &str) -> Result<f32, String> {
         _ => Err(format!(
             "expected an angle from -{limit} to {limit} degrees"
         )),
+    }
+}
+
+fn parse_strength(s: &str) -> Result<f32, String> {
+    use raylab::lights::environment::MAX_STRENGTH;
+    match parse_finite(s) {
+        Ok(v) if (0.0..=MAX_STRENGTH).contains(&v) => Ok(v),
+        _ => Err(format!("expected a number from 0 to {MAX_STRENGTH:e}")),
     }
 }
 
