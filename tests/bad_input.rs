@@ -287,6 +287,7 @@ const CASES: &[(&str, &str)] = &[
         "says 16384×16384 texels but 68 bytes",
     ),
     ("png-crc-error.png", "CRC error"),
+    ("png-palette-4-bytes.png", "PLTE chunk) is 4 bytes"),
     ("png-zero-by-zero.png", "Invalid image dimensions"),
     ("png-idat-garbage.png", "Corrupt deflate stream"),
     ("png-signature-only.png", "unexpected end of file"),

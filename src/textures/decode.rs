@@ -47,6 +47,25 @@ fn header_size(bytes: &[u8], format: ImageFormat) -> Option<(u32, u32)> {
     }
 }
 
+/// The length of a PNG's PLTE chunk if it is not 3 to 768 bytes in whole RGB
+/// entries; walks the chunk headers only (a chunk cut short ends the walk:
+/// the decoder reports that).
+fn bad_palette(bytes: &[u8]) -> Option<u32> {
+    let mut at = PNG_SIGNATURE.len();
+    while let (Some(len), Some(kind)) = (bytes.get(at..at + 4), bytes.get(at + 4..at + 8)) {
+        let len = u32::from_be_bytes(len.try_into().ok()?);
+        if kind == b"PLTE" {
+            return (len % 3 != 0 || !(3..=768).contains(&len)).then_some(len);
+        }
+        if kind == b"IDAT" || kind == b"IEND" {
+            return None;
+        }
+        // Length, type, data and CRC.
+        at = at.checked_add(12)?.checked_add(len as usize)?;
+    }
+    None
+}
+
 impl Image {
     /// Decodes a PNG or JPEG image, telling them apart by their signatures (not
     /// by a file name); `name` (a file name, a glTF image index…) only labels
@@ -79,6 +98,14 @@ impl Image {
             height,
         };
 
+        if format == ImageFormat::Png
+            && let Some(len) = bad_palette(bytes)
+        {
+            return Err(TextureError::BadPalette {
+                name: name.into(),
+                len,
+            });
+        }
         let mut reader = ImageReader::with_format(Cursor::new(bytes), format);
         reader.limits(limits());
         let decoder = match reader.into_decoder() {

@@ -142,6 +142,18 @@ pub enum TextureError {
     /// Decoding the images would exceed the memory budget.
     #[error(transparent)]
     Memory(#[from] crate::memory::MemoryError),
+    /// A PNG's palette chunk (PLTE) is not whole RGB entries. The `png` crate
+    /// (0.18.1) panics on such a file while expanding the palette (its issue
+    /// #694, found here by fuzzing), so it is refused before decoding.
+    #[error(
+        "{name}: the PNG palette (PLTE chunk) is {len} bytes, not a whole number of RGB entries from 1 to 256"
+    )]
+    BadPalette {
+        /// The image (file name or glTF image).
+        name: String,
+        /// The chunk's length in bytes.
+        len: u32,
+    },
     /// The header announces no texels.
     #[error("{name}: the image is empty (a side of 0 texels)")]
     Empty {
