@@ -35,6 +35,7 @@ pub mod checkpoint;
 pub mod controls;
 pub mod film;
 pub mod geometry;
+pub mod guard;
 pub mod integrators;
 pub mod lights;
 pub mod materials;

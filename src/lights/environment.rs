@@ -269,10 +269,14 @@ fn read_image(path: &Path, ledger: &Ledger) -> Result<RgbImage, EnvError> {
             }
             rgbe::decode(&bytes, MAX_SIDE, MAX_TEXELS).map_err(format)
         }
-        Some("exr") => read_exr(path, &|w, h| charge(path, ledger, w, h)).map_err(|e| match e {
-            ExrError::Env(e) => e,
-            ExrError::Message(m) => format(m),
-        }),
+        Some("exr") => {
+            crate::guard::catch("exr", || read_exr(path, &|w, h| charge(path, ledger, w, h)))
+                .unwrap_or_else(|m| Err(ExrError::Message(m)))
+                .map_err(|e| match e {
+                    ExrError::Env(e) => e,
+                    ExrError::Message(m) => format(m),
+                })
+        }
         _ => Err(EnvError::UnknownFormat {
             path: path.to_owned(),
         }),

@@ -311,7 +311,9 @@ fn line_column(text: &str, offset: usize) -> (usize, usize) {
 
 /// Parses scene-file text; `path` names the file in errors.
 pub fn parse(text: &str, path: &Path) -> Result<ShotFile, ShotError> {
-    toml::from_str(text).map_err(|e| {
+    let parsed = crate::guard::catch("toml", || toml::from_str::<ShotFile>(text))
+        .map_err(|m| invalid(path, m))?;
+    parsed.map_err(|e| {
         let (line, column) = e.span().map_or((1, 1), |s| line_column(text, s.start));
         ShotError::Syntax {
             path: path.to_owned(),

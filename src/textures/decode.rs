@@ -81,6 +81,19 @@ impl Image {
     /// Images wider or taller than [`MAX_SIDE`] or of more than [`MAX_TEXELS`]
     /// texels are refused from their header, before their texels are allocated.
     pub fn decode(bytes: &[u8], name: &str) -> Result<Image, TextureError> {
+        // A panic in the decoders (a bug of theirs a file can trip) is one
+        // more error, not a crash.
+        crate::guard::catch("image", || Self::decode_unguarded(bytes, name)).unwrap_or_else(
+            |message| {
+                Err(TextureError::DecoderPanic {
+                    name: name.into(),
+                    message,
+                })
+            },
+        )
+    }
+
+    fn decode_unguarded(bytes: &[u8], name: &str) -> Result<Image, TextureError> {
         let format = if bytes.starts_with(PNG_SIGNATURE) {
             ImageFormat::Png
         } else if bytes.starts_with(JPEG_SIGNATURE) {

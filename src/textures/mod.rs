@@ -154,6 +154,14 @@ pub enum TextureError {
         /// The chunk's length in bytes.
         len: u32,
     },
+    /// The decoder panicked on the file (a bug in it; see [`crate::guard`]).
+    #[error("{name}: {message}")]
+    DecoderPanic {
+        /// The image.
+        name: String,
+        /// What [`crate::guard::catch`] made of the panic.
+        message: String,
+    },
     /// The header announces no texels.
     #[error("{name}: the image is empty (a side of 0 texels)")]
     Empty {

@@ -17,6 +17,14 @@ use raylab::film::{Display, ToneMap};
 use raylab::scene::load::SceneKind;
 
 fn main() -> ExitCode {
+    // A panic the library catches in a third-party decoder becomes an
+    // ordinary one-line error: no panic report for it.
+    let report = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        if !raylab::guard::quiet() {
+            report(info)
+        }
+    }));
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) => match e.kind() {

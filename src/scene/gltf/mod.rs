@@ -182,7 +182,8 @@ fn load_gltf_inner(path: &Path, ledger: &Ledger) -> Result<GltfScene, GltfError>
     } else {
         (&bytes[..], None)
     };
-    let root = json::Root::from_slice(json_bytes)
+    let root = crate::guard::catch("gltf-json", || json::Root::from_slice(json_bytes))
+        .map_err(GltfError::invalid)?
         .map_err(|e| GltfError::invalid(format!("not valid glTF JSON: {e}")))?;
     let mut warnings = Vec::new();
     if let Some(ext) = root

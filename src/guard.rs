@@ -1,0 +1,65 @@
+//! A last line of defence around the third-party decoders raylab calls on
+//! files from strangers (PNG, JPEG, EXR, glTF's JSON, TOML).
+//!
+//! Those crates are meant never to panic on bad input, but fuzzing found one
+//! that does (`png` 0.18.1 on a short palette chunk, which raylab now checks
+//! for first). [`catch`] turns such a panic into an error message, so a file
+//! that trips a decoder bug still gets one line and a non-zero exit instead
+//! of a crash. [`quiet`] tells a panic hook (the `raylab` binary installs
+//! one) not to print the usual multi-line report for a panic that is caught
+//! here. The fuzz targets treat the marker [`DECODER_PANIC`] in a message as
+//! a finding, so such bugs are still seen and worked around.
+
+use std::cell::Cell;
+use std::panic::{AssertUnwindSafe, catch_unwind};
+
+thread_local! {
+    static GUARDED: Cell<bool> = const { Cell::new(false) };
+}
+
+/// Starts the message of an error made from a caught decoder panic.
+pub const DECODER_PANIC: &str = "the decoder failed on this file (an internal error of the";
+
+/// Runs `f` (a call into the decoder named `decoder`, e.g. `"png"`), turning a
+/// panic inside it into `Err` with a one-line message that names the decoder.
+pub fn catch<T>(decoder: &str, f: impl FnOnce() -> T) -> Result<T, String> {
+    let before = GUARDED.with(|g| g.replace(true));
+    let result = catch_unwind(AssertUnwindSafe(f));
+    GUARDED.with(|g| g.set(before));
+    result.map_err(|payload| {
+        let what = payload
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| payload.downcast_ref::<String>().cloned())
+            .unwrap_or_default();
+        let what = what.lines().next().unwrap_or("").to_string();
+        format!("{DECODER_PANIC} {decoder} crate: {what})")
+    })
+}
+
+/// Whether this thread is inside [`catch`]: a panic hook should then stay
+/// quiet, since the panic becomes an ordinary error.
+pub fn quiet() -> bool {
+    GUARDED.with(|g| g.get())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_panic_becomes_one_line_naming_the_decoder() {
+        let hook = std::panic::take_hook();
+        std::panic::set_hook(Box::new(|_| {}));
+        let r: Result<(), String> = catch("png", || panic!("range end index 3\nmore"));
+        std::panic::set_hook(hook);
+        let e = r.unwrap_err();
+        assert!(
+            e.starts_with(DECODER_PANIC) && e.contains("png crate: range end index 3"),
+            "{e}"
+        );
+        assert!(!e.contains('\n'));
+        assert!(!quiet(), "the flag is reset after the panic");
+        assert_eq!(catch("png", || 7), Ok(7));
+    }
+}
