@@ -36,6 +36,13 @@ impl Triangle {
             .normalize_or_zero()
     }
 
+    /// Whether rays can hit the triangle: its vertices are finite and its area
+    /// (computed in f32) is not zero, so that it has a normal. The BVH leaves
+    /// out the others, and [`crate::geometry::bvh::brute_force`] skips them too.
+    pub fn can_be_hit(&self) -> bool {
+        self.is_finite() && self.area() > 0.0
+    }
+
     /// The triangle's area.
     pub fn area(&self) -> f32 {
         0.5 * (self.v[1] - self.v[0])

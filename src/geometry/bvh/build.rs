@@ -38,7 +38,7 @@ pub(super) fn build(triangles: &[Triangle], isa: Isa) -> Option<Built> {
     );
     // Mapped in parallel into place; the few that cannot be hit (if any) are
     // dropped afterwards (a parallel filter would gather pieces and copy them).
-    let valid = |t: &Triangle| t.is_finite() && t.area() > 0.0;
+    let valid = Triangle::can_be_hit;
     let any_invalid = AtomicBool::new(false);
     let mut prims: Vec<BuildPrim> = Vec::new();
     triangles
@@ -216,10 +216,29 @@ fn take_children(
     n
 }
 
+/// Stored boxes are the exact bounds moved outward by [`pad`]. A ray parallel
+/// to an axis (direction component ±0, made ±`f32::MIN_POSITIVE` for the slab
+/// test) whose origin lies exactly on the far face of an exact box would get
+/// an exit distance of 0 there and skip the box, though the triangles on that
+/// face can be hit on their edges (found by fuzzing against brute force). With
+/// the padding such a ray's origin is strictly inside, and the gap times the
+/// inverse (at most 2^126) is at least 10^7 scene units, beyond any hit.
 fn set_bounds(node: &mut Node, lane: usize, b: &Aabb) {
     for axis in 0..3 {
-        node.bounds[axis][lane] = b.min[axis];
-        node.bounds[axis + 3][lane] = b.max[axis];
+        node.bounds[axis][lane] = b.min[axis] - pad(b.min[axis]);
+        node.bounds[axis + 3][lane] = b.max[axis] + pad(b.max[axis]);
+    }
+}
+
+/// How far a box face at coordinate `x` is moved outward: a few units in the
+/// last place of `x`, at least 10^-30 (so that 0 moves by more than a
+/// denormal), nothing for an infinite face (empty lanes).
+#[inline]
+fn pad(x: f32) -> f32 {
+    if x.is_finite() {
+        (x.abs() * (4.0 * f32::EPSILON)).max(1e-30)
+    } else {
+        0.0
     }
 }
 

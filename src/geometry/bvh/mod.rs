@@ -334,13 +334,17 @@ fn prefetch<T>(p: *const T) {
     let _ = p;
 }
 
-/// The closest hit by testing every triangle: the reference the BVH is tested
-/// against (and a way to check a suspicious hit by hand). Same answers as
-/// [`Bvh::intersect`] except which triangle is reported at an exact tie.
+/// The closest hit by testing every triangle that can be hit
+/// ([`Triangle::can_be_hit`]): the reference the BVH is tested against (and a
+/// way to check a suspicious hit by hand). Same answers as [`Bvh::intersect`]
+/// except which triangle is reported at an exact tie.
 pub fn brute_force(triangles: &[Triangle], ray: &Ray, t_max: f32) -> Option<Hit> {
     let s = crate::geometry::triangle::RayShear::new(ray);
     let mut best: Option<Hit> = None;
     for (i, t) in triangles.iter().enumerate() {
+        if !t.can_be_hit() {
+            continue;
+        }
         let limit = best.map_or(t_max, |b| b.t);
         if let Some(h) = crate::geometry::triangle::intersect(&s, &t.v, limit) {
             best = Some(Hit {
@@ -458,6 +462,55 @@ mod tests {
         ];
         empty.intersect_stream(&rays[..2], &[1.0], &mut hits);
         assert_eq!(hits, vec![None, None]);
+    }
+
+    /// Found by fuzzing: rays parallel to an axis (a ±0 direction component)
+    /// whose origin lies on a face of a triangle's exact box, hitting that
+    /// triangle on its edge; the slab test gave them an exit distance of 0
+    /// there and the BVH missed the hit, until boxes were padded.
+    #[test]
+    fn rays_along_a_box_face_find_the_edges_in_it() {
+        // An octahedron, a degenerate triangle and a sliver (the fuzz target's
+        // fixture), and rays the fuzzer found.
+        let p = [
+            Vec3A::X,
+            Vec3A::NEG_X,
+            Vec3A::Y,
+            Vec3A::NEG_Y,
+            Vec3A::Z,
+            Vec3A::NEG_Z,
+        ];
+        let mut tris = Vec::new();
+        for &(a, b) in &[(0, 2), (2, 1), (1, 3), (3, 0)] {
+            tris.push(Triangle::new(p[a], p[b], p[4]));
+            tris.push(Triangle::new(p[b], p[a], p[5]));
+        }
+        tris.push(Triangle::new(p[0], p[0], p[1]));
+        tris.push(Triangle::new(p[0], p[1], p[1] + Vec3A::splat(1e-7)));
+        let bvh = Bvh::build(&tris);
+        let rays = [
+            // In the plane y = 0 (the sliver's lower face) with dir.y = -0.
+            Ray::new(
+                Vec3A::new(0.0, 0.0, 0.0625),
+                Vec3A::new(0.0, -0.0, -1.3046875),
+            ),
+            Ray::new(
+                Vec3A::new(0.3, 0.0, -1.5258789e-5),
+                Vec3A::new(-0.1, -0.0, 2.7872636),
+            ),
+            // On x = 1 (faces' upper bound in x) with dir.x = +0.
+            Ray::new(Vec3A::new(1.0, 3.0, 0.3), Vec3A::new(0.0, -1.0, -0.1)),
+        ];
+        for r in &rays {
+            let want = brute_force(&tris, r, f32::INFINITY);
+            assert!(want.is_some(), "{r:?} should hit an edge");
+            assert_eq!(
+                bvh.intersect(r, f32::INFINITY).map(|h| h.t),
+                want.map(|h| h.t),
+                "{r:?}"
+            );
+            assert!(bvh.occluded(r, f32::INFINITY), "{r:?}");
+        }
     }
 
     #[test]
