@@ -63,3 +63,32 @@ mod tests {
         assert_eq!(catch("png", || 7), Ok(7));
     }
 }
+
+/// `message` as one printable line: control characters (a newline in a file
+/// name, say) become escapes such as `\n`, so that an error or warning is
+/// always one line however odd the names it quotes.
+pub fn one_line(message: &str) -> std::borrow::Cow<'_, str> {
+    if !message.chars().any(char::is_control) {
+        return message.into();
+    }
+    message
+        .chars()
+        .map(|c| {
+            if c.is_control() {
+                c.escape_default().to_string()
+            } else {
+                c.to_string()
+            }
+        })
+        .collect::<String>()
+        .into()
+}
+
+#[cfg(test)]
+mod one_line_tests {
+    #[test]
+    fn control_characters_are_escaped() {
+        assert_eq!(super::one_line("a\nb\tc\u{c}"), "a\\nb\\tc\\u{c}");
+        assert_eq!(super::one_line("plain é"), "plain é");
+    }
+}

@@ -560,6 +560,9 @@ fn bad_command_lines_are_refused_in_one_line_naming_the_argument() {
     std::fs::write(dir.path().join("sky.txt"), "not a map").unwrap();
     let cases: &[(&[&str], i32, &str)] = &[
         (&["render", "--max-memory", "3X"], 2, "--max-memory"),
+        // A file name with a newline is quoted escaped: still one line (found
+        // by the cli fuzz target).
+        (&["render", "bad\nname.obj"], 1, "bad\\nname.obj"),
         (&["render", "--max-memory", "-1G"], 2, "--max-memory"),
         (&["render", "--width", "0"], 2, "--width"),
         (&["render", "--width", "99999999999999999999"], 2, "--width"),

@@ -23,7 +23,9 @@ fuzz_target!(|data: &[u8]| {
             let scene = match &cli.command {
                 Some(args::Command::Render(r)) => {
                     if let Err(e) = r.with_scene_file() {
-                        raylab_fuzz::check_message(&format!("{e:#}"));
+                        // The file name comes from the arguments, control
+                        // characters and all: one line as the binary prints it.
+                        raylab_fuzz::check_message(&raylab::guard::one_line(&format!("{e:#}")));
                     }
                     &r.scene
                 }

@@ -70,7 +70,7 @@ const BUILD_RUNS: usize = 5;
 pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     let mesh = raylab::scene::obj::load_obj(&args.mesh)?;
     for w in &mesh.warnings {
-        eprintln!("warning: {w}");
+        eprintln!("warning: {}", raylab::guard::one_line(w));
     }
     let mut out = std::io::stdout().lock();
     let tris = &mesh.triangles;

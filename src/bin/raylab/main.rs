@@ -40,7 +40,7 @@ fn main() -> ExitCode {
                     .take_while(|l| !l.trim().is_empty())
                     .map(str::trim)
                     .collect();
-                eprintln!("{}", first.join(" "));
+                eprintln!("{}", raylab::guard::one_line(&first.join(" ")));
                 return ExitCode::from(2);
             }
         },
@@ -51,13 +51,13 @@ fn main() -> ExitCode {
         Some(Command::Bench(_)) | None => None,
     };
     if let Some(Err(message)) = scene_args.map(SceneArgs::validate) {
-        eprintln!("{message}");
+        eprintln!("{}", raylab::guard::one_line(&message));
         return ExitCode::from(2);
     }
     if let Some(Command::Render(a)) = &cli.command
         && let Err(message) = a.validate()
     {
-        eprintln!("{message}");
+        eprintln!("{}", raylab::guard::one_line(&message));
         return ExitCode::from(2);
     }
     match run(cli) {
@@ -75,7 +75,7 @@ fn main() -> ExitCode {
             ExitCode::from(3)
         }
         Err(e) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", raylab::guard::one_line(&format!("{e:#}")));
             ExitCode::from(1)
         }
     }
@@ -186,7 +186,7 @@ pub fn load_for(args: &SceneArgs, quiet: bool, aov_channels: usize) -> anyhow::R
     };
     args.memory_budget().check(&args.scene, &needs)?;
     for w in &loaded.warnings {
-        eprintln!("warning: {w}");
+        eprintln!("warning: {}", raylab::guard::one_line(w));
     }
     let kind = loaded.kind;
     if !quiet && kind != SceneKind::Lab {

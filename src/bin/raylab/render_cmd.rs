@@ -204,7 +204,8 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             }
             Err(e) => {
                 if save_error.is_none() && !args.quiet {
-                    bar.suspend(|| eprintln!("warning: {:#}", anyhow::Error::from(e)));
+                    let text = format!("{:#}", anyhow::Error::from(e));
+                    bar.suspend(|| eprintln!("warning: {}", raylab::guard::one_line(&text)));
                 }
                 save_error = Some(String::new());
             }
