@@ -840,6 +840,18 @@ pub fn compose_with(
             check(path, &format!("{what} color"), &c, true)?;
             Ok(Vec3A::from(c))
         };
+        // Emission beyond the environment's ceiling (1e20, 10^13 suns) only
+        // makes estimates overflow (found by fuzzing: a colour of 0.91e38).
+        let bounded = |key: &str, v: Vec3A| -> Result<Vec3A, ShotError> {
+            let most = crate::lights::environment::MAX_RADIANCE;
+            if v.max_element() > most || !v.is_finite() {
+                return Err(invalid(
+                    path,
+                    format!("{what}: {key} {:e} is more than {most:e}", v.max_element()),
+                ));
+            }
+            Ok(v)
+        };
         match l {
             LightSection::Point {
                 position,
@@ -850,7 +862,7 @@ pub fn compose_with(
                 check(path, &format!("{what} intensity"), &[*intensity], true)?;
                 all.lights.push(Light::Point {
                     position: Vec3A::from(*position),
-                    intensity: *intensity * color(*c)?,
+                    intensity: bounded("intensity × color", *intensity * color(*c)?)?,
                 });
             }
             LightSection::Spot {
@@ -893,7 +905,7 @@ pub fn compose_with(
                 all.lights.push(Light::Spot {
                     position: p,
                     direction: axis,
-                    intensity: *intensity * color(*c)?,
+                    intensity: bounded("intensity × color", *intensity * color(*c)?)?,
                     cos_inner: inner.to_radians().cos(),
                     cos_outer: outer.to_radians().cos(),
                 });
@@ -910,7 +922,7 @@ pub fn compose_with(
                 }
                 all.lights.push(Light::Directional {
                     direction: d,
-                    irradiance: *irradiance * color(*c)?,
+                    irradiance: bounded("irradiance × color", *irradiance * color(*c)?)?,
                 });
             }
             LightSection::Area {
@@ -931,7 +943,7 @@ pub fn compose_with(
                 }
                 let mut m = SurfaceMaterial::diffuse(Vec3A::ZERO);
                 m.name = what.clone();
-                m.emission = Vec3A::from(*radiance);
+                m.emission = bounded("radiance", Vec3A::from(*radiance))?;
                 m.emits_both_sides = two_sided.unwrap_or(false);
                 all.materials.push(m);
                 let material = all.materials.len() as u32 - 1;
