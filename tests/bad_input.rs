@@ -215,6 +215,10 @@ const CASES: &[(&str, &str)] = &[
     ("shot-absurd-width.toml", "width = 4000000000"),
     ("shot-negative-spp.toml", "invalid value: integer `-4`"),
     (
+        "shot-light-overflow.toml",
+        "[[light]] 1: intensity × color inf is more than 1e20",
+    ),
+    (
         "shot-time-1e300.toml",
         "time = 1e300: expected seconds > 0 and at most 604800",
     ),
