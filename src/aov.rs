@@ -261,7 +261,7 @@ impl Layout {
         ray: &Ray,
         hit: Option<Hit>,
         shaded: Option<&FirstHit>,
-        out: &mut [f64],
+        out: &mut [i128],
     ) {
         let Some(hit) = hit else { return };
         let [albedo, normal, depth, position] = self.offset;
@@ -288,7 +288,7 @@ impl Layout {
         let mut add = |at: Option<usize>, v: Vec3A, n: usize| {
             if let Some(at) = at {
                 for (o, c) in out[at..at + n].iter_mut().zip(v.to_array()) {
-                    *o += f64::from(c);
+                    *o += crate::fixed::fixed(c);
                 }
             }
         };
@@ -299,7 +299,7 @@ impl Layout {
         let d = (p - camera.position).dot(camera.forward());
         add(depth, Vec3A::splat(d), 1);
         add(position, p, 3);
-        out[self.stride - 1] += 1.0;
+        out[self.stride - 1] += 1 << crate::fixed::FRACTION_BITS;
     }
 }
 

@@ -138,6 +138,28 @@ impl Camera {
         Ray::new(self.position, (self.rotation * d).normalize())
     }
 
+    /// This camera moved `degrees` around the vertical axis (the world's y
+    /// axis, which is vertical in the lab's and glTF's scenes) through
+    /// `centre`, counter-clockwise seen from above (from the side the image's
+    /// up points to): a turntable's view. 0° gives the camera unchanged.
+    pub fn orbited(&self, centre: Vec3A, degrees: f32) -> Camera {
+        if degrees == 0.0 {
+            return *self;
+        }
+        // Up is −y where image rows run along +y (the lab), +y otherwise.
+        let up = if self.down().y > 0.0 {
+            -Vec3A::Y
+        } else {
+            Vec3A::Y
+        };
+        let turn = Mat3A::from_axis_angle(up.into(), degrees.to_radians());
+        Camera {
+            position: centre + turn * (self.position - centre),
+            rotation: turn * self.rotation,
+            ..*self
+        }
+    }
+
     /// The unit viewing direction (camera +z in world space).
     pub fn forward(&self) -> Vec3A {
         self.rotation.z_axis

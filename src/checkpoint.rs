@@ -1,4 +1,4 @@
-//! Checkpoints: a render's f64 sums saved to a file, so that a render that was
+//! Checkpoints: a render's exact sums saved to a file, so that a render that was
 //! stopped or killed can go on from them and reach the image an uninterrupted
 //! render gives, bit for bit (see [`crate::render::Accumulator`]).
 //!
@@ -10,15 +10,15 @@
 //! | bytes | what |
 //! | --- | --- |
 //! | 8 | magic `RAYLABCP` |
-//! | 4 | format version (1) |
+//! | 4 | format version (2; 1 held f64 sums) |
 //! | 4 | AOVs gathered, in order: nibble `k` is the `k`-th one's index in [`Aov::ALL`] + 1 |
 //! | 24 | the key: build, scene, settings (three u64) |
 //! | 4 + 4 | width, height |
 //! | 4 | samples per pixel taken |
 //! | 4 | reserved (0) |
 //! | 8 + 8 + 8 | time spent (ns), rays cast, samples dropped |
-//! | 24 per pixel | the image's sums (three f64) |
-//! | 8 × stride per pixel | the AOVs' records ([`Accumulator::aov_stride`]) |
+//! | 48 per pixel | the image's sums (three i128, [`crate::fixed`]) |
+//! | 16 × stride per pixel | the AOVs' records ([`Accumulator::aov_stride`]) |
 //! | 8 | [`Fingerprint`] of every byte before it |
 //!
 //! Everything read is checked: the header's sizes against the file's length
@@ -29,7 +29,6 @@ use std::io::{BufReader, BufWriter, Read, Write};
 use std::path::Path;
 use std::time::Duration;
 
-use glam::DVec3;
 use thiserror::Error;
 
 use crate::aov::{Aov, AovSet};
@@ -37,7 +36,7 @@ use crate::film::{OutputError, write_atomic_with};
 use crate::render::{Accumulator, Tally};
 
 const MAGIC: &[u8; 8] = b"RAYLABCP";
-const VERSION: u32 = 1;
+const VERSION: u32 = 2;
 const HEADER: usize = 80;
 
 /// A stable 64-bit hash (FxHash's word step with a final mix), the same on
@@ -254,7 +253,7 @@ fn aovs_from_bits(bits: u32) -> Option<AovSet> {
 /// Bytes of a checkpoint of a `width × height` image with `aovs`, or `None`
 /// if that does not fit in a `u64`.
 fn file_len(width: u32, height: u32, aovs: AovSet) -> Option<u64> {
-    let per_pixel = 24 + 8 * Accumulator::aov_stride(aovs) as u64;
+    let per_pixel = 48 + 16 * Accumulator::aov_stride(aovs) as u64;
     (width as u64 * height as u64)
         .checked_mul(per_pixel)?
         .checked_add(HEADER as u64 + 8)
@@ -294,7 +293,7 @@ pub fn write(
         for chunk in acc.image_sums().chunks(1 << 11) {
             buf.clear();
             for p in chunk {
-                for c in p.to_array() {
+                for c in p {
                     buf.extend_from_slice(&c.to_le_bytes());
                 }
             }
@@ -403,14 +402,14 @@ pub fn read(path: &Path) -> Result<Checkpoint, CheckpointError> {
     let pixels = header.width as usize * header.height as usize;
     // The length was checked against the header: these sizes are the file's.
     let mut image = Vec::with_capacity(pixels);
-    let mut buf = vec![0u8; 24 << 11];
+    let mut buf = vec![0u8; 48 << 11];
     let mut left = pixels;
     while left > 0 {
         let n = left.min(1 << 11);
-        r.read_exact(&mut buf[..24 * n])?;
-        image.extend(buf[..24 * n].chunks_exact(24).map(|p| {
-            let f = |i: usize| f64::from_le_bytes(p[i..i + 8].try_into().expect("8 bytes"));
-            DVec3::new(f(0), f(8), f(16))
+        r.read_exact(&mut buf[..48 * n])?;
+        image.extend(buf[..48 * n].chunks_exact(48).map(|p| {
+            let f = |i: usize| i128::from_le_bytes(p[i..i + 16].try_into().expect("16 bytes"));
+            [f(0), f(16), f(32)]
         }));
         left -= n;
     }
@@ -419,11 +418,11 @@ pub fn read(path: &Path) -> Result<Checkpoint, CheckpointError> {
     let mut left = n_aov;
     while left > 0 {
         let n = left.min(3 << 11);
-        r.read_exact(&mut buf[..8 * n])?;
+        r.read_exact(&mut buf[..16 * n])?;
         aov_sums.extend(
-            buf[..8 * n]
-                .chunks_exact(8)
-                .map(|c| f64::from_le_bytes(c.try_into().expect("8 bytes"))),
+            buf[..16 * n]
+                .chunks_exact(16)
+                .map(|c| i128::from_le_bytes(c.try_into().expect("16 bytes"))),
         );
         left -= n;
     }
@@ -498,8 +497,8 @@ mod tests {
         // Not in `Aov::ALL`'s order: the records follow the set's.
         let set: AovSet = "depth,normal".parse().unwrap();
         let stride = Accumulator::aov_stride(set);
-        let image: Vec<DVec3> = (0..6).map(|i| DVec3::splat(i as f64 * 0.1)).collect();
-        let aovs: Vec<f64> = (0..6 * stride).map(|i| i as f64).collect();
+        let image: Vec<[i128; 3]> = (0..6).map(|i| [i << 60, -i, i128::MAX - i]).collect();
+        let aovs: Vec<i128> = (0..6 * stride).map(|i| i as i128 * 12_345).collect();
         let tally = Tally {
             rays: 99,
             dropped: 2,

@@ -23,11 +23,12 @@ pub const GEOMETRY_BYTES_PER_TRIANGLE: u64 = 160;
 pub const ENVIRONMENT_BYTES_PER_TEXEL: u64 = 24;
 
 /// Film bytes per pixel without AOVs: the image (`Vec3A`, 16) and the
-/// render's `f64` sum buffer (24).
-pub const FILM_BYTES_PER_PIXEL: u64 = 40;
+/// render's exact sums (three `i128`, 48; see [`crate::fixed`]).
+pub const FILM_BYTES_PER_PIXEL: u64 = 64;
 
-/// Bytes per pixel and per AOV channel: its `f32` sums and its averaged image.
-pub const AOV_BYTES_PER_CHANNEL: u64 = 8;
+/// Bytes per pixel and per AOV channel: its exact sums (16) and its averaged
+/// image (4).
+pub const AOV_BYTES_PER_CHANNEL: u64 = 20;
 
 /// The default budget's share of physical memory: the rest is left to the
 /// system, other programs and what the estimates leave out.

@@ -12,6 +12,7 @@ use thiserror::Error;
 use crate::aov::{AovImage, AovSet, AovSums, FirstHit, Layout};
 use crate::camera::Camera;
 use crate::film::Film;
+use crate::fixed::{self, Fixed3};
 use crate::geometry::ray::{Hit, Ray};
 use crate::integrators::Integrator;
 use crate::integrators::path::{self, PathOptions, PathSampler, SamplerKind};
@@ -200,18 +201,78 @@ pub fn render_for_with_aovs(
     }
 }
 
-/// The per-pixel sums of a render in progress: samples `0..spp` of every
-/// pixel, summed in f64 in ascending sample order, so that any split of the
-/// samples into calls of [`Accumulator::add`] (passes, or a render stopped,
-/// saved and resumed) gives the same sums bit for bit. 24 bytes a pixel, and
-/// 8 per AOV channel.
+/// Which rows of the image a render takes: the `index`-th of `count` parts,
+/// made of the image's row tiles ([`TILE_ROWS`] rows each, from the top)
+/// `index`, `index + count`, `index + 2·count`, ...: interleaved, so that every
+/// part has rows from all over the image and costs about the same. The whole
+/// image is part 0 of 1.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Split {
+    /// Which part (from 0).
+    pub index: u32,
+    /// Parts in all (at least 1).
+    pub count: u32,
+}
+
+impl Split {
+    /// The whole image.
+    pub const WHOLE: Split = Split { index: 0, count: 1 };
+
+    /// Row tiles of an image `height` pixels high.
+    pub fn row_tiles(height: u32) -> u32 {
+        height.div_ceil(TILE_ROWS as u32)
+    }
+
+    /// Part `index` of `count` of an image `height` rows high, if every part
+    /// gets at least one row tile.
+    pub fn new(index: u32, count: u32, height: u32) -> Result<Split, String> {
+        if count == 0 || index >= count {
+            return Err(format!(
+                "tile {index}/{count}: the tile number must be below the number of tiles"
+            ));
+        }
+        let tiles = Self::row_tiles(height);
+        if count > tiles {
+            return Err(format!(
+                "tile {index}/{count}: an image {height} pixels high has at most {tiles} tiles (one per {TILE_ROWS} rows)"
+            ));
+        }
+        Ok(Split { index, count })
+    }
+
+    /// Whether row tile `tile` is in this part.
+    pub fn has_tile(&self, tile: u32) -> bool {
+        tile % self.count == self.index
+    }
+
+    /// Whether this is the whole image.
+    pub fn is_whole(&self) -> bool {
+        self.count == 1
+    }
+}
+
+impl std::fmt::Display for Split {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}/{}", self.index, self.count)
+    }
+}
+
+/// The per-pixel sums of a render in progress: samples `first..first + spp` of
+/// every pixel in its [`Split`] (the whole image unless made by
+/// [`Accumulator::part`]), summed exactly in fixed point ([`crate::fixed`]),
+/// so that any split of the samples into calls of [`Accumulator::add`]
+/// (passes, a render stopped, saved and resumed) or into parts rendered apart
+/// and merged gives the same sums bit for bit. 48 bytes a pixel, and 16 per
+/// AOV channel.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Accumulator {
     width: u32,
     height: u32,
+    split: Split,
+    first: u32,
     spp: u32,
-    image: Vec<DVec3>,
-    aovs: Option<(AovSet, Vec<f64>)>,
+    image: Vec<Fixed3>,
+    aovs: Option<(AovSet, Vec<i128>)>,
     tally: Tally,
 }
 
@@ -223,32 +284,45 @@ pub struct PartsError(String);
 impl Accumulator {
     /// No samples yet of a `width × height` image, with the AOVs `aovs`.
     pub fn new(width: u32, height: u32, aovs: AovSet) -> Self {
+        Self::part(width, height, aovs, Split::WHOLE, 0)
+    }
+
+    /// No samples yet of the rows of `split`, whose samples start at `first`
+    /// (a part of a render, to be merged with the others: see
+    /// [`crate::farm`]). The sums of rows outside `split` stay zero.
+    pub fn part(width: u32, height: u32, aovs: AovSet, split: Split, first: u32) -> Self {
         let pixels = width as usize * height as usize;
         let aovs = (!aovs.is_empty()).then(|| (aovs, zeroed(pixels * Self::aov_stride(aovs))));
         Self {
             width,
             height,
+            split,
+            first,
             spp: 0,
-            image: vec![DVec3::ZERO; pixels],
+            image: vec![[0; 3]; pixels],
             aovs,
             tally: Tally::default(),
         }
     }
 
-    /// Sums read back (e.g. from a checkpoint): `image` holds `width × height`
-    /// RGB sums, `aov_sums` the AOV records (see [`Accumulator::aov_sums`]).
+    /// Sums read back (e.g. from a checkpoint) of samples `0..spp` of the
+    /// whole image: `image` holds `width × height` RGB sums, `aov_sums` the AOV
+    /// records (see [`Accumulator::aov_sums`]). [`Accumulator::into_part`]
+    /// makes them a part's.
     pub fn from_parts(
         width: u32,
         height: u32,
         aovs: AovSet,
         spp: u32,
         tally: Tally,
-        image: Vec<DVec3>,
-        aov_sums: Vec<f64>,
+        image: Vec<Fixed3>,
+        aov_sums: Vec<i128>,
     ) -> Result<Self, PartsError> {
         let mut acc = Self {
             width,
             height,
+            split: Split::WHOLE,
+            first: 0,
             spp,
             image,
             aovs: None,
@@ -292,9 +366,28 @@ impl Accumulator {
         self.height
     }
 
-    /// Samples per pixel summed: samples `0..spp` of every pixel.
+    /// Samples per pixel summed: samples `first..first + spp` of every pixel
+    /// (see [`Accumulator::first_sample`]).
     pub fn spp(&self) -> u32 {
         self.spp
+    }
+
+    /// The first sample summed (0 but for a part of a render).
+    pub fn first_sample(&self) -> u32 {
+        self.first
+    }
+
+    /// The rows summed.
+    pub fn split(&self) -> Split {
+        self.split
+    }
+
+    /// These sums as those of samples `first..first + spp` of the rows of
+    /// `split` (which they must be: the rows outside it zero).
+    pub fn into_part(mut self, split: Split, first: u32) -> Self {
+        self.split = split;
+        self.first = first;
+        self
     }
 
     /// Rays cast and samples dropped so far.
@@ -307,15 +400,43 @@ impl Accumulator {
         self.aovs.as_ref().map_or(AovSet::NONE, |(set, _)| *set)
     }
 
-    /// The image's per-pixel sums, row-major from the top-left.
-    pub fn image_sums(&self) -> &[DVec3] {
+    /// The image's per-pixel sums ([`crate::fixed`]), row-major from the
+    /// top-left.
+    pub fn image_sums(&self) -> &[Fixed3] {
         &self.image
     }
 
-    /// The AOVs' per-pixel records ([`Accumulator::aov_stride`] values each),
-    /// row-major; empty without AOVs.
-    pub fn aov_sums(&self) -> &[f64] {
+    /// The AOVs' per-pixel records ([`Accumulator::aov_stride`] fixed-point
+    /// values each), row-major; empty without AOVs.
+    pub fn aov_sums(&self) -> &[i128] {
         self.aovs.as_ref().map_or(&[], |(_, s)| s)
+    }
+
+    /// Adds `other`'s sums, rays and dropped samples to these (parts of one
+    /// render; [`crate::farm::merge`] checks that they are). Exact: the result
+    /// does not depend on the order of the parts.
+    pub(crate) fn add_sums(&mut self, other: &Accumulator) -> Result<(), String> {
+        let overflow = || "its sums overflow those of the other parts".to_string();
+        for (a, b) in self.image.iter_mut().zip(&other.image) {
+            for c in 0..3 {
+                a[c] = a[c].checked_add(b[c]).ok_or_else(overflow)?;
+            }
+        }
+        if let (Some((_, a)), Some((_, b))) = (&mut self.aovs, &other.aovs) {
+            for (a, b) in a.iter_mut().zip(b) {
+                *a = a.checked_add(*b).ok_or_else(overflow)?;
+            }
+        }
+        self.tally = Tally {
+            rays: self.tally.rays.saturating_add(other.tally.rays),
+            dropped: self.tally.dropped.saturating_add(other.tally.dropped),
+        };
+        Ok(())
+    }
+
+    /// Sets the samples these sums hold (after [`Accumulator::add_sums`]).
+    pub(crate) fn set_samples(&mut self, split: Split, first: u32, spp: u32) {
+        (self.split, self.first, self.spp) = (split, first, spp);
     }
 
     /// Adds samples `spp..spp + n` of every pixel (see [`accumulate`] for what a
@@ -330,7 +451,8 @@ impl Accumulator {
         progress: &(dyn Fn(u64) + Sync),
     ) -> Tally {
         assert_eq!((self.width, self.height), (camera.width, camera.height));
-        let samples = self.spp..self.spp.saturating_add(n);
+        let start = self.first + self.spp;
+        let samples = start..start.saturating_add(n);
         let k = samples.len() as u64;
         let aovs = self
             .aovs
@@ -345,10 +467,11 @@ impl Accumulator {
             Target::Wide {
                 image: &mut self.image,
                 aovs,
+                split: self.split,
             },
             &|rows| progress(rows * k),
         );
-        self.spp = samples.end;
+        self.spp = samples.end - self.first;
         self.tally = self.tally + tally;
         tally
     }
@@ -362,14 +485,16 @@ impl Accumulator {
             .par_iter_mut()
             .zip(self.image.par_iter())
             // `0 + x`, not `x`: what adding the sum to a zeroed f32 film gave.
-            .for_each(|(p, w)| *p = Vec3A::ZERO + w.as_vec3a());
+            .for_each(|(p, w)| {
+                *p = Vec3A::ZERO + Vec3A::from_array(w.map(|c| fixed::to_f64(c) as f32))
+            });
         film.average(self.spp);
         let aovs = self.aovs.as_ref().map(|(set, wide)| {
             let mut sums = AovSums::new(*set, self.width, self.height);
             sums.sums
                 .par_iter_mut()
                 .zip(wide.par_iter())
-                .for_each(|(s, w)| *s = 0.0 + *w as f32);
+                .for_each(|(s, w)| *s = 0.0 + fixed::to_f64(*w) as f32);
             sums.average(self.spp)
         });
         Rendered {
@@ -382,9 +507,10 @@ impl Accumulator {
 }
 
 /// `len` zeros, written rather than lazily zeroed (see [`AovSums::new`]).
-fn zeroed(len: usize) -> Vec<f64> {
+#[allow(clippy::slow_vector_initialization)]
+fn zeroed(len: usize) -> Vec<i128> {
     let mut v = Vec::with_capacity(len);
-    v.resize(len, 0.0);
+    v.resize(len, 0);
     v
 }
 
@@ -503,17 +629,19 @@ enum Target<'a> {
     /// An f32 film (the viewer's refinement): one sample is added to it
     /// straight, several are summed in f64 per tile first.
     Narrow(&'a mut Film),
-    /// f64 sums kept across calls ([`Accumulator`]), with the AOVs' if any.
+    /// Exact sums kept across calls ([`Accumulator`]), with the AOVs' if
+    /// any, of the row tiles of `split`.
     Wide {
-        image: &'a mut [DVec3],
-        aovs: Option<(Layout, &'a mut [f64])>,
+        image: &'a mut [Fixed3],
+        aovs: Option<(Layout, &'a mut [i128])>,
+        split: Split,
     },
 }
 
 /// One tile's part of a [`Target`].
 enum TileSums<'a> {
     Narrow(&'a mut [Vec3A]),
-    Wide(&'a mut [DVec3]),
+    Wide(&'a mut [Fixed3]),
 }
 
 /// [`accumulate`] into `target`, gathering the AOVs (if any) from the same
@@ -532,7 +660,8 @@ fn accumulate_into(
     let tile_pixels = width * TILE_ROWS;
     // Each tile's slice of the sums and of the AOV sums (empty ones without
     // AOVs, so that the tiles still zip with them).
-    let (tiles, layout, aov_tiles): (Vec<TileSums>, _, Vec<&mut [f64]>) = match target {
+    let mut split = Split::WHOLE;
+    let (tiles, layout, aov_tiles): (Vec<TileSums>, _, Vec<&mut [i128]>) = match target {
         Target::Narrow(film) => {
             assert_eq!((film.width, film.height), (camera.width, camera.height));
             let tiles: Vec<_> = film
@@ -543,7 +672,12 @@ fn accumulate_into(
             let empty = (0..tiles.len()).map(|_| &mut [][..]).collect();
             (tiles, None, empty)
         }
-        Target::Wide { image, aovs } => {
+        Target::Wide {
+            image,
+            aovs,
+            split: s,
+        } => {
+            split = s;
             assert_eq!(image.len(), width * camera.height as usize);
             let tiles: Vec<_> = image.chunks_mut(tile_pixels).map(TileSums::Wide).collect();
             match aovs {
@@ -562,35 +696,40 @@ fn accumulate_into(
         .into_par_iter()
         .zip(aov_tiles)
         .enumerate()
+        .filter(|(tile, _)| split.has_tile(*tile as u32))
         .map(|(tile, (sums, aov_rows))| {
             let y0 = tile * TILE_ROWS;
             let mut dropped = 0u64;
-            // Many samples are summed in f64, so that even 2^20 of them lose
-            // nothing to f32 rounding: into the accumulator's sums, or for an
-            // f32 film into one buffer per tile. One sample goes straight into
-            // an f32 film, which keeps progressive refinement exact.
+            // Into the accumulator's exact sums; for an f32 film, many samples
+            // are summed in f64 in one buffer per tile first, so that even 2^20
+            // of them lose nothing to f32 rounding, while one sample goes
+            // straight into the film, which keeps progressive refinement exact.
             let mut local = Vec::new();
-            let (rows, wide): (&mut [Vec3A], &mut [DVec3]) = match sums {
-                TileSums::Wide(w) => (&mut [], w),
+            let (rows, narrow_wide, exact): (&mut [Vec3A], &mut [DVec3], &mut [Fixed3]) = match sums
+            {
+                TileSums::Wide(w) => (&mut [], &mut [], w),
                 TileSums::Narrow(rows) => {
                     if samples.len() > 1 {
                         local = vec![DVec3::ZERO; rows.len()];
                     }
-                    (rows, &mut local[..])
+                    (rows, &mut local[..], &mut [])
                 }
             };
-            let n_rows = rows.len().max(wide.len()) / width;
+            let n_rows = rows.len().max(exact.len()) / width;
             let mut add = |i: usize, v: Vec3A| {
                 if !v.is_finite() {
                     dropped += 1;
                     return;
                 }
-                match wide.get_mut(i) {
-                    Some(w) => *w += v.as_dvec3(),
-                    None => rows[i] += v,
+                if let Some(e) = exact.get_mut(i) {
+                    fixed::add3(e, v);
+                } else if let Some(w) = narrow_wide.get_mut(i) {
+                    *w += v.as_dvec3();
+                } else {
+                    rows[i] += v;
                 }
             };
-            // The AOVs are summed in f64 too, into the accumulator's sums.
+            // The AOVs are summed exactly too, into the accumulator's sums.
             let mut gather = |i: usize, ray: &Ray, hit: Option<Hit>, shaded: Option<&FirstHit>| {
                 if let Some(layout) = &layout {
                     let record = &mut aov_rows[i * layout.stride..(i + 1) * layout.stride];
@@ -613,7 +752,7 @@ fn accumulate_into(
             };
             // Only an f32 film's tile has both (`rows` is empty otherwise).
             if !rows.is_empty() {
-                for (sum, w) in rows.iter_mut().zip(wide.iter()) {
+                for (sum, w) in rows.iter_mut().zip(narrow_wide.iter()) {
                     *sum += w.as_vec3a();
                 }
             }

@@ -758,11 +758,11 @@ fn the_memory_budget_refuses_what_does_not_fit() {
     let cases: Vec<(Vec<String>, &str)> = vec![
         (
             args(&[&tri, "--max-memory", "1K"]),
-            "one-triangle.obj: needs about 10.2 KiB (film 10 KiB, geometry 160 B), more than --max-memory 1 KiB",
+            "one-triangle.obj: needs about 16.2 KiB (film 16 KiB, geometry 160 B), more than --max-memory 1 KiB",
         ),
         (
             huge_film,
-            "cornell: needs about 5.0 GiB (film 5 GiB, geometry 4.7 KiB), more than --max-memory 1 GiB",
+            "cornell: needs about 8.0 GiB (film 8 GiB, geometry 4.7 KiB), more than --max-memory 1 GiB",
         ),
         (
             args(&["big.obj", "--max-memory", "16M"]),

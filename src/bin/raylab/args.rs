@@ -32,6 +32,8 @@ pub enum Command {
     View(ViewArgs),
     /// Measure ray-casting throughput on a mesh (standard workloads or a ray file).
     Bench(BenchArgs),
+    /// Merge the parts of a render split with --tile/--samples into its image.
+    Merge(MergeArgs),
 }
 
 #[derive(Debug, Args)]
@@ -219,7 +221,41 @@ pub struct RenderArgs {
     /// there is one.
     #[arg(long)]
     pub nan_check: bool,
+    /// Render only tile K (from 0) of N: the image's blocks of 4 rows K, K+N,
+    /// K+2N, ... (interleaved, so that tiles cost about the same). Writes a
+    /// part (-o must be .exr) that `raylab merge` combines with the other
+    /// tiles into the image one render gives, bit for bit.
+    #[arg(long, value_name = "K/N", value_parser = parse_tile)]
+    pub tile: Option<(u32, u32)>,
+    /// Render only samples A to B-1 of every pixel, of the --spp the whole
+    /// render takes. Writes a part (-o must be .exr) that `raylab merge`
+    /// combines with the other sample ranges, bit for bit.
+    #[arg(long, value_name = "A..B", value_parser = parse_range)]
+    pub samples: Option<(u32, u32)>,
+    /// Render frames A to B-1 of an animation (or `F` for frame F alone), one
+    /// file each: -o needs a frame-number field, e.g. `out-%04d.png`. Frames
+    /// are independent, so a job array can give each task one.
+    #[arg(long, value_name = "A..B", value_parser = parse_frames)]
+    pub frames: Option<(u32, u32)>,
+    /// Turntable: frame F is seen from the scene's camera turned F × DEG
+    /// degrees around the vertical axis through the centre of the scene's
+    /// bounds (counter-clockwise seen from above).
+    #[arg(long, value_name = "DEG", requires = "frames", allow_hyphen_values = true, value_parser = parse_finite)]
+    pub orbit: Option<f32>,
     /// No progress bar and no summary line.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+#[derive(Debug, Args)]
+pub struct MergeArgs {
+    /// The parts (`raylab render --tile/--samples` outputs) of one render.
+    #[arg(required = true, value_name = "PART")]
+    pub parts: Vec<PathBuf>,
+    /// The merged image: `.png` or `.exr`.
+    #[arg(short, long, value_name = "FILE")]
+    pub output: PathBuf,
+    /// No summary line.
     #[arg(short, long)]
     pub quiet: bool,
 }
@@ -231,8 +267,66 @@ pub struct ViewArgs {
 }
 
 impl RenderArgs {
-    /// Checks what clap cannot: AOVs need an EXR output.
+    /// Whether this renders a part of an image (--tile or --samples).
+    pub fn is_part(&self) -> bool {
+        self.tile.is_some() || self.samples.is_some()
+    }
+
+    /// Checks what clap cannot: AOVs and parts need an EXR output, frames a
+    /// frame-number pattern.
     pub fn validate(&self) -> Result<(), String> {
+        if self.is_part() {
+            let what = if self.tile.is_some() {
+                "--tile"
+            } else {
+                "--samples"
+            };
+            match &self.output {
+                Some(o)
+                    if raylab::film::Format::from_path(o).ok()
+                        == Some(raylab::film::Format::Exr) => {}
+                Some(o) => {
+                    return Err(format!(
+                        "error: {what} writes a part of the image for `raylab merge`: the output must be .exr, not {}",
+                        o.display()
+                    ));
+                }
+                None => {
+                    return Err(format!(
+                        "error: {what} writes a part of the image for `raylab merge`: name it with -o PART.exr"
+                    ));
+                }
+            }
+            if self.time.is_some() {
+                return Err(format!(
+                    "error: {what} cannot be combined with --time: every part must take the same samples"
+                ));
+            }
+        }
+        if let Some((a, b)) = self.samples {
+            let Some(spp) = self.spp else {
+                return Err(format!(
+                    "error: --samples {a}..{b} needs --spp, the samples per pixel of the whole render"
+                ));
+            };
+            if b > spp {
+                return Err(format!(
+                    "error: --samples {a}..{b} goes past --spp {spp} (the whole render's samples)"
+                ));
+            }
+        }
+        if let Some((a, _)) = self.frames {
+            let pattern = self
+                .output
+                .as_ref()
+                .and_then(|o| raylab::farm::frame_path(o, a));
+            if pattern.is_none() {
+                return Err(
+                    "error: --frames writes a file per frame: -o needs a frame-number field, e.g. -o out-%04d.png"
+                        .to_string(),
+                );
+            }
+        }
         if let (Some(aovs), Some(output)) = (&self.aov, &self.output)
             && raylab::film::Format::from_path(output).ok() != Some(raylab::film::Format::Exr)
         {
@@ -428,6 +522,53 @@ impl RenderArgs {
 
 fn parse_aovs(s: &str) -> Result<raylab::aov::AovSet, String> {
     s.parse()
+}
+
+/// Two whole numbers around `sep` (`3/8`, `0..64`), or `expected` as the error.
+fn parse_two(s: &str, sep: &str, expected: &str) -> Result<(u32, u32), String> {
+    let bad = || format!("expected {expected}; got '{s}'");
+    let (a, b) = s.split_once(sep).ok_or_else(bad)?;
+    let number = |x: &str| x.trim().parse::<u32>().map_err(|_| bad());
+    Ok((number(a)?, number(b)?))
+}
+
+/// `K/N` with K < N.
+fn parse_tile(s: &str) -> Result<(u32, u32), String> {
+    let (k, n) = parse_two(s, "/", "K/N, tile K (from 0) of N, e.g. 0/4")?;
+    if n == 0 || k >= n {
+        return Err(format!("tile {k}/{n}: K counts from 0 and must be below N"));
+    }
+    Ok((k, n))
+}
+
+/// `A..B` with A < B ≤ the sample limit.
+fn parse_range(s: &str) -> Result<(u32, u32), String> {
+    let (a, b) = parse_two(s, "..", "A..B, from A up to B-1, e.g. 0..64")?;
+    if a >= b {
+        return Err(format!("{a}..{b} is empty: B must be above A"));
+    }
+    if b > MAX_SPP {
+        return Err(format!("{a}..{b} goes past the limit of {MAX_SPP} samples"));
+    }
+    Ok((a, b))
+}
+
+/// `A..B` or `F` (for `F..F+1`).
+fn parse_frames(s: &str) -> Result<(u32, u32), String> {
+    if let Ok(f) = s.trim().parse::<u32>() {
+        return f
+            .checked_add(1)
+            .map(|g| (f, g))
+            .ok_or_else(|| format!("frame {f} is too large"));
+    }
+    let (a, b) = parse_two(s, "..", "A..B (frames A to B-1) or F")?;
+    if a >= b {
+        return Err(format!("frames {a}..{b} is empty: B must be above A"));
+    }
+    if b - a > 1_000_000 {
+        return Err(format!("frames {a}..{b}: at most 1000000 frames"));
+    }
+    Ok((a, b))
 }
 
 fn parse_camera(s: &str) -> Result<usize, String> {

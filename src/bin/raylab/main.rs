@@ -48,7 +48,7 @@ fn main() -> ExitCode {
     let scene_args = match &cli.command {
         Some(Command::Render(a)) => Some(&a.scene),
         Some(Command::View(a)) => Some(&a.scene),
-        Some(Command::Bench(_)) | None => None,
+        Some(Command::Bench(_)) | Some(Command::Merge(_)) | None => None,
     };
     if let Some(Err(message)) = scene_args.map(SceneArgs::validate) {
         eprintln!("{}", raylab::guard::one_line(&message));
@@ -92,8 +92,40 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Some(Command::Render(args)) => render_cmd::run(&args),
         Some(Command::View(args)) => view_command(&args.scene),
         Some(Command::Bench(args)) => bench::run(&args),
+        Some(Command::Merge(args)) => merge_command(&args),
         None => run_default(),
     }
+}
+
+/// `raylab merge`: the parts of a render into its image, written as
+/// `raylab render` writes it.
+fn merge_command(args: &args::MergeArgs) -> anyhow::Result<()> {
+    let start = std::time::Instant::now();
+    raylab::film::Format::from_path(&args.output)?;
+    let merged = raylab::farm::merge(&args.parts)?;
+    let r = &merged.render;
+    let mut rendered = merged.acc.rendered();
+    let channels = rendered
+        .aovs
+        .take()
+        .map(|a| a.into_channels())
+        .unwrap_or_default();
+    let metadata = raylab::farm::image_metadata(r.spp, Some(r.spp), r.seed, &r.integrator, false);
+    raylab::film::write_image_meta(&rendered.film, channels, &args.output, r.display, &metadata)?;
+    if !args.quiet {
+        eprintln!(
+            "merged {} parts into {}: {}x{}, {} spp, {} rays, {} NaN/Inf samples dropped, {:.1} ms",
+            args.parts.len(),
+            args.output.display(),
+            merged.acc.width(),
+            merged.acc.height(),
+            r.spp,
+            merged.acc.tally().rays,
+            merged.acc.tally().dropped,
+            start.elapsed().as_secs_f64() * 1e3
+        );
+    }
+    Ok(())
 }
 
 /// `raylab view`: the viewer, with a scene file's settings where the

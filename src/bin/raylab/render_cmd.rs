@@ -9,9 +9,10 @@ use std::time::{Duration, Instant};
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use raylab::checkpoint::{self, Fingerprint, Key};
-use raylab::film::{Format, MetaValue, write_image_meta};
+use raylab::farm;
+use raylab::film::{Format, write_image_meta};
 use raylab::nan_check::first_bad_sample;
-use raylab::render::{Accumulator, Ended, Passes, RenderSettings, render_passes};
+use raylab::render::{Accumulator, Ended, Passes, RenderSettings, Split, render_passes};
 
 use crate::args::{MAX_SPP, RenderArgs};
 use crate::signals;
@@ -32,14 +33,21 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     });
     let aovs = args.aov.unwrap_or_default();
     // Refuse an unsupported format or a missing folder before spending time on
-    // the render.
-    Format::from_path(&output)?;
-    if let Some(dir) = output.parent().filter(|d| !d.as_os_str().is_empty())
+    // the render (of the first frame's file: the pattern is checked by
+    // `RenderArgs::validate`).
+    let first_output = match args.frames {
+        Some((first, _)) => {
+            farm::frame_path(&output, first).context("-o has no frame number field")?
+        }
+        None => output.clone(),
+    };
+    Format::from_path(&first_output)?;
+    if let Some(dir) = first_output.parent().filter(|d| !d.as_os_str().is_empty())
         && !dir.is_dir()
     {
         anyhow::bail!(
             "cannot write {}: the folder {} does not exist",
-            output.display(),
+            first_output.display(),
             dir.display()
         );
     }
@@ -77,6 +85,83 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         seed,
     };
 
+    let bar = ProgressBar::hidden();
+    // Ctrl-C and SIGTERM from here on: the first stops the render between
+    // passes, the second aborts (removing the temporary files of writes in
+    // progress).
+    let said = bar.clone();
+    signals::install(move |sig| {
+        let again = match sig {
+            libc::SIGINT => "press Ctrl-C again to abort",
+            _ => "a second signal aborts",
+        };
+        said.suspend(|| {
+            eprintln!(
+                "{}: stopping after the samples in flight; {again}",
+                signals::name(sig)
+            )
+        });
+    })
+    .context("cannot handle SIGINT and SIGTERM")?;
+    let Some((first, end)) = args.frames else {
+        render_image(args, &session, &camera, &settings, &output, None, &bar)?;
+        return Ok(());
+    };
+    // An animation: each frame a render of its own, of the scene loaded once.
+    let (low, high) = scene.bounds();
+    let centre = 0.5 * (low + high);
+    for frame in first..end {
+        let path = farm::frame_path(&output, frame).context("-o has no frame number field")?;
+        let degrees = args
+            .orbit
+            .map_or(0.0, |d| (f64::from(d) * f64::from(frame)) % 360.0);
+        let camera = camera.orbited(centre, degrees as f32);
+        let ended = render_image(args, &session, &camera, &settings, &path, Some(frame), &bar)?;
+        if ended == Ended::Stopped {
+            if !args.quiet && frame + 1 < end {
+                eprintln!(
+                    "stopped at frame {frame}: frames {}..{end} not rendered",
+                    frame + 1
+                );
+            }
+            break;
+        }
+    }
+    Ok(())
+}
+
+/// Renders one image (the whole render, a part of it, or a frame) of
+/// `session` seen by `camera` to `output`, resuming from and saving to its
+/// checkpoint, and says what it did; returns how the render ended.
+fn render_image(
+    args: &RenderArgs,
+    session: &crate::Session,
+    camera: &raylab::camera::Camera,
+    settings: &RenderSettings,
+    output: &Path,
+    frame: Option<u32>,
+    bar: &ProgressBar,
+) -> anyhow::Result<Ended> {
+    let output = output.to_path_buf();
+    let scene = &session.scene;
+    let camera = *camera;
+    let integrator = settings.integrator;
+    let seed = settings.seed;
+    let budget = args.time.map(Duration::from_secs_f64);
+    let aovs = args.aov.unwrap_or_default();
+    // A part (--tile, --samples): its rows and samples, and the samples it
+    // takes; else the whole image and all of --spp.
+    let split = match args.tile {
+        Some((k, n)) => Split::new(k, n, camera.height).map_err(|e| anyhow::anyhow!("--{e}"))?,
+        None => Split::WHOLE,
+    };
+    let first_sample = args.samples.map_or(0, |(a, _)| a);
+    let whole = *settings;
+    let settings = &RenderSettings {
+        spp: args.samples.map_or(settings.spp, |(a, b)| b - a),
+        ..*settings
+    };
+
     // The checkpoint: the one named, else the one a stopped render leaves
     // beside its output.
     let explicit = args.checkpoint.is_some();
@@ -85,16 +170,29 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         .clone()
         .unwrap_or_else(|| default_checkpoint(&output));
     let key_cell = OnceLock::new();
-    let key =
-        || *key_cell.get_or_init(|| render_key(args, &session.scene, &camera, &settings, aovs));
-    let mut acc = Accumulator::new(camera.width, camera.height, aovs);
+    let render_key =
+        || *key_cell.get_or_init(|| render_key(args, &session.scene, &camera, &whole, aovs));
+    // A part's checkpoint is of its rows and samples only.
+    let key = || {
+        let mut k = render_key();
+        if args.is_part() {
+            let mut h = Fingerprint::new();
+            h.update(&k.settings.to_le_bytes());
+            use std::fmt::Write;
+            let _ = write!(h, "|part {split} from {first_sample}");
+            k.settings = h.value();
+        }
+        k
+    };
+    let mut acc = Accumulator::part(camera.width, camera.height, aovs, split, first_sample);
     let mut spent = Duration::ZERO;
     // The spp of the checkpoint on disk that is this render's (resumed from or
     // saved by this run), if any.
     let mut on_disk: Option<u32> = None;
     if ckpt_path.exists() {
-        match resume(&ckpt_path, key(), &settings, budget.is_none()) {
+        match resume(&ckpt_path, key(), settings, budget.is_none()) {
             Ok((a, s)) => {
+                let a = a.into_part(split, first_sample);
                 if !args.quiet {
                     let of = match budget {
                         None => format!(" of {}", settings.spp),
@@ -122,7 +220,8 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let resumed_spp = acc.spp();
     let tally_before = acc.tally();
 
-    let bar = ProgressBar::hidden();
+    bar.reset();
+    bar.set_draw_target(ProgressDrawTarget::hidden());
     let template = match args.time {
         // Time-limited: the bar fills with the time spent.
         Some(_) => "{elapsed_precise} [{wide_bar}] {pos}/{len} ms",
@@ -143,8 +242,11 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             bar.set_position(spent.as_millis() as u64);
         }
         None => {
-            bar.set_length(camera.height as u64 * settings.spp as u64);
-            bar.set_position(camera.height as u64 * acc.spp() as u64);
+            let rows = (0..camera.height)
+                .filter(|y| split.has_tile(y / raylab::render::TILE_ROWS as u32))
+                .count() as u64;
+            bar.set_length(rows * settings.spp as u64);
+            bar.set_position(rows * acc.spp() as u64);
         }
     }
     let progress = |row_samples: u64| {
@@ -155,27 +257,10 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         reveal();
     };
 
-    // Ctrl-C and SIGTERM from here on: the first stops the render between
-    // passes, the second aborts (removing the temporary files of writes in
-    // progress).
     signals::remove_on_abort(&[
         &raylab::film::temp_path(&output),
         &raylab::film::temp_path(&ckpt_path),
     ]);
-    let said = bar.clone();
-    signals::install(move |sig| {
-        let again = match sig {
-            libc::SIGINT => "press Ctrl-C again to abort",
-            _ => "a second signal aborts",
-        };
-        said.suspend(|| {
-            eprintln!(
-                "{}: stopping after the samples in flight; {again}",
-                signals::name(sig)
-            )
-        });
-    })
-    .context("cannot handle SIGINT and SIGTERM")?;
 
     let every = Duration::from_secs_f64(args.checkpoint_every);
     let mut last_save = Instant::now();
@@ -217,7 +302,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         render_passes(
             scene,
             &camera,
-            &settings,
+            settings,
             &mut acc,
             &passes,
             &mut after_pass,
@@ -245,7 +330,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
                 output.display()
             );
         }
-        return Ok(());
+        return Ok(ended);
     }
     // A stopped render keeps its samples (unless the checkpoint on disk
     // already holds them all).
@@ -269,32 +354,31 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         args.scene.exposure.unwrap_or(0.0),
         session.tonemap,
     );
-    let mut rendered = acc.rendered();
-    // The AOVs as EXR planes; they and the image are written, then freed.
-    let channels = rendered
-        .aovs
-        .take()
-        .map(|a| a.into_channels())
-        .unwrap_or_default();
-    // The samples taken as a number any EXR tool shows, and the rest as
-    // text (see `write_image_meta` for why two attributes).
-    let requested = match (budget, args.spp) {
-        (Some(_), None) => String::new(),
-        _ => format!(" spp_requested={}", settings.spp),
-    };
-    let metadata = [
-        ("raylab.spp".to_string(), MetaValue::Int(acc.spp() as i32)),
-        (
-            "raylab.render".to_string(),
-            MetaValue::Text(format!(
-                "spp={}{requested} seed={seed} integrator={integrator} interrupted={}",
-                acc.spp(),
-                u8::from(stopped)
-            )),
-        ),
-    ];
     let existed = output.exists();
-    if let Err(e) = write_image_meta(&rendered.film, channels, &output, display, &metadata) {
+    let written = if args.is_part() {
+        let part = farm::Part {
+            render: farm::Render {
+                key: render_key(),
+                spp: whole.spp,
+                seed,
+                integrator: integrator.to_string(),
+                display,
+                frame,
+            },
+            acc: acc.clone(),
+        };
+        farm::write_part(&output, &part)
+    } else {
+        write_whole(
+            &acc,
+            &output,
+            display,
+            budget.is_some() && args.spp.is_none(),
+            settings,
+            stopped,
+        )
+    };
+    if let Err(e) = written {
         // Keep the samples for a later try: a checkpoint of them all (which
         // may fail too, on a full disk), else the one already on disk.
         if on_disk != Some(acc.spp()) && checkpoint::write(&ckpt_path, &key(), &acc, spent).is_ok()
@@ -370,9 +454,9 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         let dropped = acc.tally().dropped;
         if dropped == 0 {
             eprintln!("nan-check: no NaN/Inf samples in {} spp", acc.spp());
-            return Ok(());
+            return Ok(ended);
         }
-        let samples = 0..acc.spp();
+        let samples = acc.first_sample()..acc.first_sample() + acc.spp();
         let scan = || first_bad_sample(scene, &camera, integrator, seed, samples.clone());
         let bad = match args.threads {
             Some(n) => rayon::ThreadPoolBuilder::new()
@@ -390,7 +474,38 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         }
         return Err(NanFound.into());
     }
-    Ok(())
+    Ok(ended)
+}
+
+/// Writes the image of `acc` (a whole render) to `output`, with the metadata
+/// of what it is (`unbounded`: a time-limited render without --spp, whose
+/// sample count was not asked for).
+fn write_whole(
+    acc: &Accumulator,
+    output: &Path,
+    display: raylab::film::Display,
+    unbounded: bool,
+    settings: &RenderSettings,
+    stopped: bool,
+) -> Result<(), raylab::film::OutputError> {
+    let mut rendered = acc.rendered();
+    // The AOVs as EXR planes; they and the image are written, then freed.
+    let channels = rendered
+        .aovs
+        .take()
+        .map(|a| a.into_channels())
+        .unwrap_or_default();
+    // The samples taken as a number any EXR tool shows, and the rest as
+    // text (see `write_image_meta` for why two attributes).
+    let requested = (!unbounded).then_some(settings.spp);
+    let metadata = farm::image_metadata(
+        acc.spp(),
+        requested,
+        settings.seed,
+        &settings.integrator.to_string(),
+        stopped,
+    );
+    write_image_meta(&rendered.film, channels, output, display, &metadata)
 }
 
 /// `--nan-check` found a NaN or infinite sample (already reported): exit code 3.
