@@ -30,6 +30,7 @@
 #![warn(missing_docs)]
 
 pub mod aov;
+pub mod cache;
 pub mod camera;
 pub mod checkpoint;
 pub mod controls;

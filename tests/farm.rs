@@ -358,3 +358,53 @@ fn library_parts_with_aovs_add_up_to_the_whole_render() {
     let (a, b) = (got.aovs.unwrap(), whole.aovs.unwrap());
     assert_eq!(a.into_channels(), b.into_channels());
 }
+
+/// `--cache DIR`: the second load reads the decoded textures and the BVH
+/// back, and the image is the same byte for byte as without a cache; a
+/// damaged entry is a miss, never a wrong image.
+#[test]
+fn the_cache_gives_the_same_image_and_survives_damage() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let model = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../shared/models/TextureCoordinateTest/TextureCoordinateTest.gltf");
+    let model = model.to_str().unwrap();
+    let run = |out: &str, cache: bool| {
+        let mut args = vec![
+            "render", model, "--spp", "2", "--width", "64", "--height", "48", "-o", out,
+        ];
+        if cache {
+            args.extend_from_slice(&["--cache", "c"]);
+        }
+        let (code, err) = raylab(&args, d);
+        assert_eq!(code, 0, "{err}");
+        err
+    };
+    run("plain.png", false);
+    let first = run("first.png", true);
+    assert!(first.contains("cache c: 0 of 2 entries found"), "{first}");
+    let second = run("second.png", true);
+    assert!(second.contains("cache c: 2 of 2 entries found"), "{second}");
+    same_bytes(&d.join("plain.png"), &d.join("first.png"));
+    same_bytes(&d.join("plain.png"), &d.join("second.png"));
+    let mut entries: Vec<String> = std::fs::read_dir(d.join("c"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .collect();
+    entries.sort();
+    assert_eq!(entries.len(), 2, "{entries:?}");
+    assert!(entries[0].starts_with("bvh-") && entries[1].starts_with("texture-"));
+    // Damage both entries: misses, rebuilt, the same image.
+    for e in &entries {
+        let path = d.join("c").join(e);
+        let mut bytes = std::fs::read(&path).unwrap();
+        let mid = bytes.len() / 2;
+        bytes[mid] ^= 1;
+        std::fs::write(&path, bytes).unwrap();
+    }
+    let third = run("third.png", true);
+    assert!(third.contains("cache c: 0 of 2 entries found"), "{third}");
+    same_bytes(&d.join("plain.png"), &d.join("third.png"));
+    let fourth = run("fourth.png", true);
+    assert!(fourth.contains("cache c: 2 of 2 entries found"), "{fourth}");
+}

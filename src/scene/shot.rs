@@ -355,10 +355,12 @@ pub fn load_shot_with(
     compose_with(file, path, ledger)
 }
 
+/// A scene-file error; names quoted from the file (which may hold a newline)
+/// are escaped, so that the message stays one line.
 fn invalid(path: &Path, message: String) -> ShotError {
     ShotError::Invalid {
         path: path.to_owned(),
-        message,
+        message: crate::guard::one_line(&message).into_owned(),
     }
 }
 

@@ -81,6 +81,25 @@ impl Image {
     /// Images wider or taller than [`MAX_SIDE`] or of more than [`MAX_TEXELS`]
     /// texels are refused from their header, before their texels are allocated.
     pub fn decode(bytes: &[u8], name: &str) -> Result<Image, TextureError> {
+        // From the cache (see [`crate::cache`]) when there is one: decoding
+        // is most of the time a glTF scene takes to load.
+        if crate::cache::dir().is_none() {
+            return Self::decode_guarded(bytes, name);
+        }
+        use crate::cache::{self, Kind};
+        let key = cache::key(Kind::Texture, |f| f.update(bytes));
+        if let Some(image) = cache::get(Kind::Texture, key, 16 + MAX_TEXELS * 8)
+            .and_then(|p| Self::from_cache_bytes(&p))
+        {
+            return Ok(image);
+        }
+        let image = Self::decode_guarded(bytes, name)?;
+        cache::put(Kind::Texture, key, &image.to_cache_bytes());
+        Ok(image)
+    }
+
+    /// [`Image::decode`] without the cache.
+    fn decode_guarded(bytes: &[u8], name: &str) -> Result<Image, TextureError> {
         // A panic in the decoders (a bug of theirs a file can trip) is one
         // more error, not a crash.
         crate::guard::catch("image", || Self::decode_unguarded(bytes, name)).unwrap_or_else(

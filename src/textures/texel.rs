@@ -116,6 +116,46 @@ impl Image {
         }
     }
 
+    /// The image as [`Image::from_cache_bytes`] reads it (little-endian).
+    pub(crate) fn to_cache_bytes(&self) -> Vec<u8> {
+        let mut out = Vec::new();
+        let bits = u32::from(self.bits_per_channel());
+        for v in [self.width, self.height, u32::from(self.channels), bits] {
+            out.extend_from_slice(&v.to_le_bytes());
+        }
+        match &self.texels {
+            Texels::U8(t) => out.extend_from_slice(t),
+            Texels::U16(t) => out.extend(t.iter().flat_map(|v| v.to_le_bytes())),
+        }
+        out
+    }
+
+    /// An image [`Image::to_cache_bytes`] wrote, if the bytes make one within
+    /// the limits of decoded images.
+    pub(crate) fn from_cache_bytes(bytes: &[u8]) -> Option<Image> {
+        let mut r = crate::cache::Reader(bytes);
+        let (width, height, channels, bits) = (r.u32()?, r.u32()?, r.u32()?, r.u32()?);
+        let texels = u64::from(width) * u64::from(height);
+        let sound = (1..=super::MAX_SIDE).contains(&width)
+            && (1..=super::MAX_SIDE).contains(&height)
+            && texels <= super::MAX_TEXELS
+            && (1..=4).contains(&channels)
+            && (bits == 8 || bits == 16)
+            && r.0.len() as u64 == texels * u64::from(channels) * u64::from(bits / 8);
+        if !sound {
+            return None;
+        }
+        let channels = channels as u8;
+        Some(if bits == 8 {
+            Self::from_u8(width, height, channels, r.0.to_vec())
+        } else {
+            let values =
+                r.0.chunks_exact(2)
+                    .map(|b| u16::from_le_bytes([b[0], b[1]]));
+            Self::from_u16(width, height, channels, values.collect())
+        })
+    }
+
     /// Width in texels.
     pub fn width(&self) -> u32 {
         self.width

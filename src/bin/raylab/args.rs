@@ -175,6 +175,12 @@ pub struct SceneArgs {
     /// (e.g. 4G, 512M; 0 or none: no limit) [default: 3/4 of physical memory, or of a lower cgroup limit].
     #[arg(long, value_name = "SIZE", allow_hyphen_values = true, value_parser = raylab::memory::parse_budget)]
     pub max_memory: Option<raylab::memory::MemoryBudget>,
+    /// Keep decoded textures and built BVHs in DIR (created if missing) and
+    /// reuse them: the tasks of a render farm then decode and build once.
+    /// Entries are keyed by content and by this raylab build, so they never
+    /// go stale.
+    #[arg(long, value_name = "DIR")]
+    pub cache: Option<PathBuf>,
 }
 
 #[derive(Debug, Clone, Args)]

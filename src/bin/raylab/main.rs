@@ -206,7 +206,21 @@ fn load(args: &SceneArgs, quiet: bool) -> anyhow::Result<Session> {
 /// [`load`] for a film with `aov_channels` AOV channels: the scene's memory
 /// estimate and the film's must fit `--max-memory` together.
 pub fn load_for(args: &SceneArgs, quiet: bool, aov_channels: usize) -> anyhow::Result<Session> {
+    if let Some(dir) = &args.cache {
+        raylab::cache::set_dir(Some(dir.clone()))
+            .map_err(|e| anyhow::anyhow!("--cache {}: {e}", dir.display()))?;
+    }
     let loaded = raylab::scene::load(&args.scene, &args.load_options())?;
+    if let Some(dir) = &args.cache
+        && !quiet
+    {
+        let (hits, misses) = raylab::cache::stats();
+        eprintln!(
+            "cache {}: {hits} of {} entries found (textures and BVHs)",
+            dir.display(),
+            hits + misses
+        );
+    }
     let size = args
         .size(loaded.kind, loaded.view.aspect_ratio)
         .map_err(|e| anyhow::anyhow!(e.trim_start_matches("error: ").to_string()))?;

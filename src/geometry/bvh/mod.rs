@@ -19,7 +19,7 @@ use std::mem::MaybeUninit;
 
 use crate::geometry::ray::{Hit, Ray};
 use crate::geometry::triangle::Triangle;
-use node::{BoxQuery, ChildRef, Isa, LEAF, NodeBoxes, WIDTH, leaf_parts};
+use node::{BoxQuery, ChildRef, EMPTY, Isa, LEAF, NodeBoxes, WIDTH, leaf_parts};
 use packet::{Packet, PacketRay};
 pub use stream::IN_FLIGHT;
 
@@ -44,6 +44,143 @@ impl Bvh {
     /// Builds the tree. Triangles with zero area or non-finite vertices can never be
     /// hit and are left out; hits report indices into `triangles`.
     pub fn build(triangles: &[Triangle]) -> Self {
+        // From the cache (see [`crate::cache`]) when there is one: the tree
+        // depends only on the triangles.
+        if crate::cache::dir().is_none() {
+            return Self::build_here(triangles);
+        }
+        use crate::cache::{self, Kind};
+        let key = cache::key(Kind::Bvh, |f| {
+            f.floats(
+                triangles
+                    .iter()
+                    .flat_map(|t| t.v)
+                    .flat_map(|v| v.to_array()),
+            )
+        });
+        // At most 8 nodes, 8 packets and their children per triangle.
+        let max_len = 64 + triangles.len() as u64 * 8 * (192 + 32 + 160);
+        if let Some(bvh) = cache::get(Kind::Bvh, key, max_len)
+            .and_then(|p| Self::from_cache_bytes(&p, triangles.len()))
+        {
+            return bvh;
+        }
+        let bvh = Self::build_here(triangles);
+        cache::put(Kind::Bvh, key, &bvh.to_cache_bytes());
+        bvh
+    }
+
+    /// The tree as [`Bvh::from_cache_bytes`] reads it back (little-endian).
+    fn to_cache_bytes(&self) -> Vec<u8> {
+        let mut out =
+            Vec::with_capacity(40 + self.nodes.len() * (192 + 32) + self.packets.len() * 160);
+        for n in [
+            self.nodes.len(),
+            self.children.len(),
+            self.packets.len(),
+            self.triangles,
+        ] {
+            out.extend_from_slice(&(n as u64).to_le_bytes());
+        }
+        out.extend_from_slice(&self.root.unwrap_or(EMPTY).to_le_bytes());
+        out.extend_from_slice(&u32::from(self.root.is_some()).to_le_bytes());
+        for n in &self.nodes {
+            for x in n.bounds.as_flattened() {
+                out.extend_from_slice(&x.to_le_bytes());
+            }
+        }
+        for c in self.children.as_flattened() {
+            out.extend_from_slice(&c.to_le_bytes());
+        }
+        for p in &self.packets {
+            for v in p.v.as_flattened() {
+                for x in v.to_array() {
+                    out.extend_from_slice(&x.to_le_bytes());
+                }
+            }
+            for i in p.prim {
+                out.extend_from_slice(&i.to_le_bytes());
+            }
+        }
+        out
+    }
+
+    /// A tree that [`Bvh::to_cache_bytes`] wrote for `input` triangles, if the
+    /// bytes make a sound one: sizes that match, and every reference (child,
+    /// leaf, triangle index) in range, so that no query can go astray.
+    fn from_cache_bytes(bytes: &[u8], input: usize) -> Option<Self> {
+        let mut r = crate::cache::Reader(bytes);
+        let mut count = || usize::try_from(r.u64()?).ok();
+        let (n_nodes, n_children, n_packets, triangles) = (count()?, count()?, count()?, count()?);
+        let root = r.u32()?;
+        let has_root = r.u32()? == 1;
+        let want = n_nodes
+            .checked_mul(192)?
+            .checked_add(n_children.checked_mul(32)?)?
+            .checked_add(n_packets.checked_mul(160)?)?;
+        if r.0.len() != want || n_children != n_nodes || triangles > input {
+            return None;
+        }
+        let mut nodes = Vec::with_capacity(n_nodes);
+        for _ in 0..n_nodes {
+            let mut bounds = [[0f32; WIDTH]; 6];
+            for x in bounds.as_flattened_mut() {
+                *x = r.f32()?;
+            }
+            nodes.push(NodeBoxes { bounds });
+        }
+        let mut children = Vec::with_capacity(n_children);
+        for _ in 0..n_children {
+            let mut c = [EMPTY; WIDTH];
+            for x in &mut c {
+                *x = r.u32()?;
+            }
+            children.push(c);
+        }
+        let mut packets = Vec::with_capacity(n_packets);
+        for _ in 0..n_packets {
+            let mut v = [[glam::Vec4::ZERO; 3]; 3];
+            for x in v.as_flattened_mut() {
+                *x = glam::Vec4::new(r.f32()?, r.f32()?, r.f32()?, r.f32()?);
+            }
+            let mut prim = [0u32; 4];
+            for i in &mut prim {
+                *i = r.u32()?;
+                if *i as usize >= input {
+                    return None;
+                }
+            }
+            packets.push(Packet { v, prim });
+        }
+        // A reference below node `parent` (the root's: below none). Nodes come
+        // after their parents, so a sound tree has no cycle.
+        let sound = |c: ChildRef, parent: Option<usize>| {
+            if c & LEAF != 0 {
+                let (start, n) = leaf_parts(c);
+                n > 0 && start + n <= n_packets
+            } else {
+                (c as usize) < n_nodes && parent.is_none_or(|p| c as usize > p)
+            }
+        };
+        let children_sound = children
+            .iter()
+            .enumerate()
+            .all(|(parent, slots)| slots.iter().all(|&c| c == EMPTY || sound(c, Some(parent))));
+        if (has_root && !sound(root, None)) || !children_sound {
+            return None;
+        }
+        Some(Bvh {
+            nodes,
+            children,
+            packets,
+            root: has_root.then_some(root),
+            triangles,
+            isa: Isa::detect(),
+        })
+    }
+
+    /// [`Bvh::build`] without the cache.
+    fn build_here(triangles: &[Triangle]) -> Self {
         let isa = Isa::detect();
         match build::build(triangles, isa) {
             Some(built) => Bvh {
@@ -561,6 +698,33 @@ mod tests {
 
     /// The same tree, bit for bit, on any number of threads and with either
     /// instruction set for the binning.
+    #[test]
+    fn cache_bytes_round_trip_and_refuse_damage() {
+        let mut rng = Rng::new(3, 7);
+        let tris = random_triangles(&mut rng, 3000);
+        let bvh = Bvh::build_here(&tris);
+        let bytes = bvh.to_cache_bytes();
+        let back = Bvh::from_cache_bytes(&bytes, tris.len()).expect("sound");
+        assert_eq!(back.to_cache_bytes(), bytes);
+        // The same answers as the built tree.
+        for _ in 0..2000 {
+            let o = Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 4.0 - 2.0;
+            let d = (Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) - 0.5).normalize();
+            let ray = Ray::new(o, d);
+            assert_eq!(back.intersect(&ray, 1e9), bvh.intersect(&ray, 1e9));
+        }
+        // Cut, or for fewer triangles than its indices name: refused.
+        assert!(Bvh::from_cache_bytes(&bytes[..bytes.len() - 4], tris.len()).is_none());
+        assert!(Bvh::from_cache_bytes(&bytes, 10).is_none());
+        // A child made to point back at the root: refused (no cycles).
+        let mut cyclic = bvh.clone();
+        cyclic.children[1][0] = 0;
+        assert!(Bvh::from_cache_bytes(&cyclic.to_cache_bytes(), tris.len()).is_none());
+        // The empty tree.
+        let empty = Bvh::build_here(&[]);
+        assert!(Bvh::from_cache_bytes(&empty.to_cache_bytes(), 0).is_some());
+    }
+
     #[test]
     fn build_is_the_same_on_any_thread_count_and_isa() {
         let mut rng = Rng::new(7, 3);

@@ -11,8 +11,8 @@ use crate::geometry::triangle::{self, RayShear, Triangle, TriangleHit, axis_orde
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(16))]
 pub struct Packet {
-    v: [[Vec4; 3]; 3],
-    prim: [u32; 4],
+    pub(super) v: [[Vec4; 3]; 3],
+    pub(super) prim: [u32; 4],
 }
 
 impl Packet {
