@@ -20,22 +20,20 @@ pub const MAX_SAMPLE: f32 = (1u64 << 42) as f32;
 /// ±[`MAX_SAMPLE`]; NaN counts as 0 (callers drop NaN samples before).
 #[inline]
 pub fn fixed(v: f32) -> i128 {
-    // Branch-free (this runs three times per sample). The magnitude's whole
-    // part (below 2⁴²) and the two 32-bit halves of its fraction are each
-    // exact in f64 (an f32 has 24 significant bits) and convert to i64 with
-    // one instruction each. `min` also sends NaN to the clamp; `keep` then
+    // Branch-free (this runs three times per sample), and without `trunc`,
+    // which is a library call on x86-64 without SSE4.1: the magnitude's
+    // whole part (below 2⁴²) and the two 32-bit halves of its fraction are
+    // each exact in f64 (an f32 has 24 significant bits) and are cut off by
+    // conversions to i64. `min` also sends NaN to the clamp; `keep` then
     // zeroes it.
+    const TWO_32: f64 = 4_294_967_296.0;
     let a = f64::from(v.abs()).min(f64::from(MAX_SAMPLE));
-    let whole = a.trunc();
-    let high = (a - whole) * 4_294_967_296.0; // 2³²
-    let high_whole = high.trunc();
-    let low = (high - high_whole) * 4_294_967_296.0;
-    let words = (
-        whole as i64 as u64,
-        high_whole as i64 as u64,
-        low as i64 as u64,
-    );
-    let magnitude = (u128::from(words.0) << 64 | u128::from(words.1 << 32 | words.2)) as i128;
+    let whole = a as i64;
+    let high = (a - whole as f64) * TWO_32;
+    let high_word = high as i64;
+    let low_word = ((high - high_word as f64) * TWO_32) as i64;
+    let fraction = (high_word as u64) << 32 | low_word as u64;
+    let magnitude = ((whole as u128) << 64 | u128::from(fraction)) as i128;
     let keep = -i128::from(!v.is_nan());
     let sign = -i128::from(v.is_sign_negative());
     ((magnitude ^ sign) - sign) & keep
@@ -76,12 +74,17 @@ fn fixed_by_bits(v: f32) -> i128 {
     }
 }
 
-/// The fixed-point sum `s` as the nearest f64.
+/// The fixed-point sum `s` as an f64: its whole part plus its fraction,
+/// each converted exactly or to nearest and added with one more rounding.
+/// Deterministic, and cheaper than a correctly rounded `i128` conversion,
+/// which is a library call.
 #[inline]
 pub fn to_f64(s: i128) -> f64 {
-    // The integer conversion rounds to nearest; the scaling by a power of two
-    // is exact (2⁻⁶⁴ is far from f64's subnormals).
-    s as f64 * (-(FRACTION_BITS as f64)).exp2()
+    const TWO_MINUS_64: f64 = 1.0 / 18_446_744_073_709_551_616.0;
+    // The arithmetic shift floors, so the fraction is the non-negative rest.
+    let whole = (s >> 64) as i64 as f64;
+    let fraction = (s as u64) as f64 * TWO_MINUS_64;
+    whole + fraction
 }
 
 /// Fixed-point RGB sums of one pixel.

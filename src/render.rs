@@ -700,42 +700,17 @@ fn accumulate_into(
         .map(|(tile, (sums, aov_rows))| {
             let y0 = tile * TILE_ROWS;
             let mut dropped = 0u64;
-            // Into the accumulator's exact sums; for an f32 film, many samples
-            // are summed in f64 in one buffer per tile first, so that even 2^20
-            // of them lose nothing to f32 rounding, while one sample goes
-            // straight into the film, which keeps progressive refinement exact.
-            let mut local = Vec::new();
-            let (rows, narrow_wide, exact): (&mut [Vec3A], &mut [DVec3], &mut [Fixed3]) = match sums
-            {
-                TileSums::Wide(w) => (&mut [], &mut [], w),
-                TileSums::Narrow(rows) => {
-                    if samples.len() > 1 {
-                        local = vec![DVec3::ZERO; rows.len()];
-                    }
-                    (rows, &mut local[..], &mut [])
-                }
-            };
-            let n_rows = rows.len().max(exact.len()) / width;
-            let mut add = |i: usize, v: Vec3A| {
-                if !v.is_finite() {
-                    dropped += 1;
-                    return;
-                }
-                if let Some(e) = exact.get_mut(i) {
-                    fixed::add3(e, v);
-                } else if let Some(w) = narrow_wide.get_mut(i) {
-                    *w += v.as_dvec3();
-                } else {
-                    rows[i] += v;
-                }
-            };
-            // The AOVs are summed exactly too, into the accumulator's sums.
+            // The AOVs are summed exactly, into the accumulator's sums.
             let mut gather = |i: usize, ray: &Ray, hit: Option<Hit>, shaded: Option<&FirstHit>| {
                 if let Some(layout) = &layout {
                     let record = &mut aov_rows[i * layout.stride..(i + 1) * layout.stride];
                     layout.gather(scene, camera, ray, hit, shaded, record);
                 }
             };
+            let n_rows = match &sums {
+                TileSums::Wide(w) => w.len(),
+                TileSums::Narrow(r) => r.len(),
+            } / width;
             let tile = Tile {
                 scene,
                 camera,
@@ -746,16 +721,49 @@ fn accumulate_into(
                 y0,
                 n_rows,
             };
-            let rays = match &layout {
-                Some(layout) => tile.trace::<true>(Some(layout), &mut add, &mut gather),
-                None => tile.trace::<false>(None, &mut add, &mut gather),
-            };
-            // Only an f32 film's tile has both (`rows` is empty otherwise).
-            if !rows.is_empty() {
-                for (sum, w) in rows.iter_mut().zip(narrow_wide.iter()) {
-                    *sum += w.as_vec3a();
+            // Each target with its own copy of the loop (no per-sample test of
+            // which target it is).
+            let rays = match sums {
+                // Into the accumulator's exact sums.
+                TileSums::Wide(exact) => {
+                    let mut add = |i: usize, v: Vec3A| {
+                        if v.is_finite() {
+                            fixed::add3(&mut exact[i], v);
+                        } else {
+                            dropped += 1;
+                        }
+                    };
+                    match &layout {
+                        Some(layout) => tile.trace::<true>(Some(layout), &mut add, &mut gather),
+                        None => tile.trace::<false>(None, &mut add, &mut gather),
+                    }
                 }
-            }
+                // Into an f32 film: many samples are summed in f64 in one
+                // buffer per tile first, so that even 2^20 of them lose nothing
+                // to f32 rounding, while one sample goes straight into the
+                // film, which keeps progressive refinement exact.
+                TileSums::Narrow(rows) => {
+                    let mut local = if samples.len() > 1 {
+                        vec![DVec3::ZERO; rows.len()]
+                    } else {
+                        Vec::new()
+                    };
+                    let mut add = |i: usize, v: Vec3A| {
+                        if !v.is_finite() {
+                            dropped += 1;
+                        } else if let Some(w) = local.get_mut(i) {
+                            *w += v.as_dvec3();
+                        } else {
+                            rows[i] += v;
+                        }
+                    };
+                    let rays = tile.trace::<false>(None, &mut add, &mut gather);
+                    for (sum, w) in rows.iter_mut().zip(local.iter()) {
+                        *sum += w.as_vec3a();
+                    }
+                    rays
+                }
+            };
             progress(n_rows as u64);
             Tally { rays, dropped }
         })
