@@ -570,12 +570,15 @@ def ray_seeds(shared):
 def checkpoint_seeds():
     """Checkpoints as `--checkpoint` writes them, without the trailing checksum
     (the target appends it)."""
+    # Format 2: exact sums, i128 fixed point with 64 fraction bits (raylab::fixed).
+    fixed = lambda x: (int(x * 2**64) & (2**128 - 1)).to_bytes(16, "little")
+
     def ckpt(w, h, spp, aov_nibbles=0, stride=0):
-        out = b"RAYLABCP" + struct.pack("<II", 1, aov_nibbles) + struct.pack("<QQQ", 1, 2, 3)
+        out = b"RAYLABCP" + struct.pack("<II", 2, aov_nibbles) + struct.pack("<QQQ", 1, 2, 3)
         out += struct.pack("<IIII", w, h, spp, 0) + struct.pack("<QQQ", 10**9, 1234, 0)
         for i in range(w * h):
-            out += struct.pack("<3d", 0.5 * spp, 0.25 * spp, i)
-        out += struct.pack("<%dd" % (w * h * stride), *([0.5] * (w * h * stride)))
+            out += fixed(0.5 * spp) + fixed(0.25 * spp) + fixed(i)
+        out += fixed(0.5) * (w * h * stride)
         return out
     put("checkpoint", "plain-4x3", ckpt(4, 3, 7))
     put("checkpoint", "one-pixel", ckpt(1, 1, 1))
@@ -596,6 +599,9 @@ def cli_seeds():
         ["render", "mesh.obj", "--add", "a.obj", "--transform", "scale=0.5,rotate-y=30,translate=0,0.2,0"],
         ["render", "scene.toml", "--camera", "1", "--default-light", "off", "--env-color", "0.1,0.2,0.3"],
         ["render", "--max-depth", "8", "--sampler", "independent", "--ambient", "0.2", "--light-power", "20", "--quiet"],
+        ["render", "--tile", "1/4", "--samples", "16..64", "--spp", "64", "-o", "part.exr", "--cache", "c"],
+        ["render", "mesh.obj", "--frames", "0..8", "--orbit", "45", "-o", "out-%04d.png"],
+        ["merge", "a.part.exr", "b.part.exr", "-o", "out.png", "--quiet"],
         ["view", "--width", "300"],
         ["bench", "mesh.obj", "--rays", "r.bin", "--hits", "h.bin", "--tfar", "10", "--threads", "1,2", "--api", "all"],
     ]

@@ -38,7 +38,7 @@ tmp=$(mktemp -d /tmp/raylab-farm-scaling.XXXXXX)
 trap 'rm -rf "$tmp"' EXIT
 
 now() { date +%s.%N; }
-calc() { awk "BEGIN { printf \"%.${2:-2}f\", $1 }"; }
+calc() { awk "BEGIN { printf \"%.${2:-2}f\", ($1) }"; }
 min() { printf '%s\n' "$@" | sort -g | head -n 1; }
 max() { printf '%s\n' "$@" | sort -g | tail -n 1; }
 
