@@ -228,6 +228,26 @@ impl<'a> Fields<'a> {
 /// Reads a part that [`write_part`] wrote, checking that it is whole and
 /// consistent: its sums outside its rows zero, its samples within the render's.
 pub fn read_part(path: &Path) -> Result<Part, FarmError> {
+    read_part_within(path, &crate::memory::MemoryBudget::UNLIMITED)
+}
+
+/// The memory reading a part of `width × height` pixels with AOV records of
+/// `stride` values takes while it is added up: the merged sums, the part's
+/// sums, and its channels as the EXR reader holds them.
+pub fn merge_bytes(width: u32, height: u32, stride: usize) -> u64 {
+    let pixels = u64::from(width) * u64::from(height);
+    let sums = 48 + 16 * stride as u64;
+    // R, G, B as f32, then four u32 words per sum value.
+    let channels = 12 + 16 * (3 + stride as u64);
+    pixels * (2 * sums + channels)
+}
+
+/// [`read_part`], first checking that reading and merging it fits `budget`
+/// (from the header, before any pixel is read).
+pub fn read_part_within(
+    path: &Path,
+    budget: &crate::memory::MemoryBudget,
+) -> Result<Part, FarmError> {
     use exr::prelude::*;
     let meta = crate::guard::catch("exr", || exr::meta::MetaData::read_from_file(path, false))
         .map_err(|m| part_err(path, m))?
@@ -294,6 +314,7 @@ pub fn read_part(path: &Path) -> Result<Part, FarmError> {
             || height == 0
             || width > crate::render::MAX_SIDE
             || height > crate::render::MAX_SIDE
+            || u64::from(width) * u64::from(height) > crate::render::MAX_PIXELS
         {
             return Err(format!("an image of {width}×{height} pixels"));
         }
@@ -305,6 +326,13 @@ pub fn read_part(path: &Path) -> Result<Part, FarmError> {
     })();
     let (width, height, split, samples, aovs, render, tally) =
         parsed.map_err(|m| part_err(path, m))?;
+    let needs = crate::memory::Needs {
+        film: merge_bytes(width, height, Accumulator::aov_stride(aovs)),
+        ..Default::default()
+    };
+    budget
+        .check(&path.display().to_string(), &needs)
+        .map_err(|e| FarmError::Set(e.to_string()))?;
     let size = header.layer_size;
     if (size.width(), size.height()) != (width as usize, height as usize) {
         return Err(part_err(
@@ -407,6 +435,14 @@ pub struct Merged {
 /// whatever the split. Errors name the file, or the rows and samples missing
 /// or held twice.
 pub fn merge(paths: &[PathBuf]) -> Result<Merged, FarmError> {
+    merge_within(paths, &crate::memory::MemoryBudget::UNLIMITED)
+}
+
+/// [`merge`] within `budget` (see [`read_part_within`]).
+pub fn merge_within(
+    paths: &[PathBuf],
+    budget: &crate::memory::MemoryBudget,
+) -> Result<Merged, FarmError> {
     let Some(first_path) = paths.first() else {
         return Err(FarmError::Set("no parts to merge".into()));
     };
@@ -417,7 +453,7 @@ pub fn merge(paths: &[PathBuf]) -> Result<Merged, FarmError> {
         if paths[..k].contains(path) {
             return Err(FarmError::Set(format!("{} is named twice", path.display())));
         }
-        let part = read_part(path)?;
+        let part = read_part_within(path, budget)?;
         let acc = &part.acc;
         held.push((
             acc.split(),

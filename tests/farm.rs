@@ -174,6 +174,16 @@ fn tiles_and_sample_ranges_merge_into_the_single_render_byte_for_byte() {
         "s0.part.exr is named twice",
     );
     refused(&["missing.part.exr"], d, "missing.part.exr: cannot read it");
+    // Over the memory budget: refused from the first part's header.
+    let (code, err) = raylab(
+        &["merge", "s0.part.exr", "-o", "x.png", "--max-memory", "64K"],
+        d,
+    );
+    assert_eq!((code, err.lines().count()), (1, 1), "{err}");
+    assert!(
+        err.contains("s0.part.exr: needs about") && err.contains("more than --max-memory 64 KiB"),
+        "{err}"
+    );
     // A damaged part: its sums outside its tile.
     std::fs::write(d.join("junk.part.exr"), b"not an exr").unwrap();
     refused(&["junk.part.exr"], d, "junk.part.exr: not an OpenEXR file");

@@ -261,6 +261,9 @@ pub struct MergeArgs {
     /// The merged image: `.png` or `.exr`.
     #[arg(short, long, value_name = "FILE")]
     pub output: PathBuf,
+    /// Most memory the merge may take (e.g. 4G; 0 or none: no limit) [default: 3/4 of physical memory, or of a lower cgroup limit].
+    #[arg(long, value_name = "SIZE", allow_hyphen_values = true, value_parser = raylab::memory::parse_budget)]
+    pub max_memory: Option<raylab::memory::MemoryBudget>,
     /// No summary line.
     #[arg(short, long)]
     pub quiet: bool,

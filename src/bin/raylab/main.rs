@@ -102,7 +102,10 @@ fn run(cli: Cli) -> anyhow::Result<()> {
 fn merge_command(args: &args::MergeArgs) -> anyhow::Result<()> {
     let start = std::time::Instant::now();
     raylab::film::Format::from_path(&args.output)?;
-    let merged = raylab::farm::merge(&args.parts)?;
+    let budget = args
+        .max_memory
+        .unwrap_or_else(raylab::memory::MemoryBudget::machine_default);
+    let merged = raylab::farm::merge_within(&args.parts, &budget)?;
     let r = &merged.render;
     let mut rendered = merged.acc.rendered();
     let channels = rendered
