@@ -432,8 +432,19 @@ fn render_image(
         } else {
             String::new()
         };
+        // A part says which one, for `raylab merge`.
+        let part = if args.is_part() {
+            let first = acc.first_sample();
+            format!(
+                " (part: tile {split}, samples {first}..{} of {})",
+                first + acc.spp(),
+                whole.spp
+            )
+        } else {
+            String::new()
+        };
         eprintln!(
-            "wrote {}{with_aovs}: {}x{}, {}, {spp}{resumed}, {:.1} ms, {} rays, {:.1} Mrays/s{dropped}",
+            "wrote {}{part}{with_aovs}: {}x{}, {}, {spp}{resumed}, {:.1} ms, {} rays, {:.1} Mrays/s{dropped}",
             output.display(),
             camera.width,
             camera.height,
