@@ -238,7 +238,11 @@ pub fn intersect(s: &RayShear, v: &[Vec3A; 3], t_max: f32) -> Option<TriangleHit
     // Written so that NaN fails, and a t that overflowed to infinity (a
     // denormal determinant in a triangle with coordinates near f32::MAX,
     // found by fuzzing) is no hit either; the packet tests do the same.
-    if !(t > delta_t && t <= f32::MAX) {
+    // `t <= t_max` again after the division: the test above, made without
+    // dividing, can pass a `t` that rounds to one ulp beyond `t_max`, and a
+    // closest-hit search would then take a triangle one ulp behind the one
+    // it has (found by fuzzing: brute force and the BVH disagreed).
+    if !(t > delta_t && t <= f32::MAX && t <= t_max) {
         return None;
     }
     let inv = 1.0 / det;

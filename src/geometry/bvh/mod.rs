@@ -698,6 +698,36 @@ mod tests {
 
     /// The same tree, bit for bit, on any number of threads and with either
     /// instruction set for the binning.
+    /// Two triangles hit one ulp apart (found by the `bvh` fuzz target): the
+    /// test without division let the farther one pass a `t_max` of the nearer
+    /// one's `t`, so brute force and packets took the farther triangle and
+    /// single rays the nearer one. Every query kind must take the nearer.
+    #[test]
+    fn a_hit_one_ulp_behind_the_closest_is_not_taken() {
+        let v = |x: f32, y: f32, z: f32| Vec3A::new(x, y, z);
+        let a = 0.011_488_97;
+        let tris = [
+            Triangle::new(v(a, a, 0.011_488_972), v(a, 0.011_489_447, a), v(a, a, a)),
+            Triangle::new(
+                v(a, 0.011_488_972, 47.058_84),
+                v(a, a, a),
+                v(a, 0.011_521_045, a),
+            ),
+        ];
+        let ray = Ray::new(v(0.011_488_969, 0.011_488_972, a), v(a, a, a));
+        let bvh = Bvh::build_here(&tris);
+        let want = brute_force(&tris, &ray, f32::INFINITY).expect("a hit");
+        assert_eq!(want.prim, 0, "the nearer triangle");
+        for got in [
+            bvh.intersect(&ray, f32::INFINITY),
+            bvh.intersect4(&[ray; 4], f32::INFINITY)[0],
+            bvh.intersect8(&[ray; 8], f32::INFINITY)[0],
+        ] {
+            let got = got.expect("a hit");
+            assert_eq!((got.prim, got.t.to_bits()), (want.prim, want.t.to_bits()));
+        }
+    }
+
     #[test]
     fn cache_bytes_round_trip_and_refuse_damage() {
         let mut rng = Rng::new(3, 7);

@@ -159,7 +159,8 @@ pub(super) fn candidates(
     let t = t_scaled / abs_det;
     // The conservative positive-t test of the scalar version, lane by lane.
     let delta_t = t_error_bound([ax, ay, az], [bx, by, bz], [cx, cy, cz], [u, v, w], abs_det);
-    valid &= t.cmpgt(delta_t) & t.cmple(Vec4::splat(f32::MAX));
+    // And within `t_max` after the division, as the scalar test.
+    valid &= t.cmpgt(delta_t) & t.cmple(Vec4::splat(f32::MAX)) & t.cmple(t_max);
     Ok(Candidates {
         valid,
         t,

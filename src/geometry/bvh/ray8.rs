@@ -326,7 +326,8 @@ fn test_triangle(q: &Query8<'_>, p: &Packet, i: usize, t_max: F8) -> Hits8 {
     }
     let t = t_scaled / abs_det;
     let delta_t = t_error_bound([ax, ay, az], [bx, by, bz], [cx, cy, cz], [u, v, w], abs_det);
-    valid = valid & t.cmpgt(delta_t) & t.cmple(F8::splat(f32::MAX));
+    // And within `t_max` after the division, as the scalar test.
+    valid = valid & t.cmpgt(delta_t) & t.cmple(F8::splat(f32::MAX)) & t.cmple(t_max);
     let inv = F8::splat(1.0) / det;
     Hits8 {
         valid,
