@@ -344,17 +344,9 @@ pub fn read_part_within(
             ),
         ));
     }
-    let image = crate::guard::catch("exr", || {
-        read()
-            .no_deep_data()
-            .largest_resolution_level()
-            .all_channels()
-            .first_valid_layer()
-            .all_attributes()
-            .from_file(path)
-    })
-    .map_err(|m| part_err(path, m))?
-    .map_err(|e| part_err(path, format!("cannot read its pixels: {e}")))?;
+    let image = crate::guard::catch("exr", || crate::film::read_exr_layer(path))
+        .map_err(|m| part_err(path, m))?
+        .map_err(|e| part_err(path, format!("cannot read its pixels: {e}")))?;
     let channels = &image.layer_data.channel_data.list;
     let pixels = width as usize * height as usize;
     let plane = |name: &str| -> std::result::Result<&[u32], FarmError> {

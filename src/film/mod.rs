@@ -541,21 +541,30 @@ pub fn read_exr_metadata(path: &Path) -> Result<Vec<(String, MetaValue)>, Output
     Ok(out)
 }
 
-/// Reads every channel of an OpenEXR file's first part (the image and the AOVs
-/// that [`write_image_layers`] writes, or any other file's), converted to `f32`.
-pub fn read_exr_channels(path: &Path) -> Result<ExrChannels, OutputError> {
+/// Every channel of an OpenEXR file's first valid layer, as stored (the
+/// largest resolution level, no deep data, with the attributes).
+pub(crate) fn read_exr_layer(
+    path: &Path,
+) -> exr::error::Result<
+    exr::image::Image<exr::image::Layer<exr::image::AnyChannels<exr::image::FlatSamples>>>,
+> {
     use exr::prelude::*;
-    let image = read()
+    read()
         .no_deep_data()
         .largest_resolution_level()
         .all_channels()
         .first_valid_layer()
         .all_attributes()
         .from_file(path)
-        .map_err(|e| OutputError::Encode {
-            path: path.to_owned(),
-            message: e.to_string(),
-        })?;
+}
+
+/// Reads every channel of an OpenEXR file's first part (the image and the AOVs
+/// that [`write_image_layers`] writes, or any other file's), converted to `f32`.
+pub fn read_exr_channels(path: &Path) -> Result<ExrChannels, OutputError> {
+    let image = read_exr_layer(path).map_err(|e| OutputError::Encode {
+        path: path.to_owned(),
+        message: e.to_string(),
+    })?;
     let size = image.layer_data.size;
     let channels = image
         .layer_data
