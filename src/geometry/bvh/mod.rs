@@ -18,7 +18,7 @@ mod stream;
 use std::mem::MaybeUninit;
 
 use crate::geometry::ray::{Hit, Ray};
-use crate::geometry::triangle::Triangle;
+use crate::geometry::triangle::{Triangle, TriangleHit};
 use node::{BoxQuery, ChildRef, EMPTY, Isa, LEAF, NodeBoxes, WIDTH, leaf_parts};
 use packet::{Packet, PacketRay};
 pub use stream::IN_FLIGHT;
@@ -253,16 +253,9 @@ impl Bvh {
         loop {
             if cur & LEAF != 0 {
                 let tri_ray = tri_ray.get_or_insert_with(|| PacketRay::new(ray.origin, ray.dir));
-                for p in self.leaf(cur) {
-                    if let Some((lane, h)) = packet::intersect(tri_ray, p, t_max) {
-                        t_max = h.t;
-                        best = Some(Hit {
-                            t: h.t,
-                            prim: p.prim(lane),
-                            b1: h.b1,
-                            b2: h.b2,
-                        });
-                    }
+                if let Some(h) = self.leaf_closest(isa, tri_ray, cur, t_max) {
+                    t_max = h.t;
+                    best = Some(h);
                 }
             } else {
                 let node = &self.nodes[cur as usize];
@@ -338,11 +331,7 @@ impl Bvh {
         loop {
             if cur & LEAF != 0 {
                 let tri_ray = tri_ray.get_or_insert_with(|| PacketRay::new(ray.origin, ray.dir));
-                if self
-                    .leaf(cur)
-                    .iter()
-                    .any(|p| packet::occluded(tri_ray, p, t_max))
-                {
+                if self.leaf_occluded(isa, tri_ray, cur, t_max) {
                     return true;
                 }
             } else {
@@ -379,6 +368,69 @@ impl Bvh {
             }
             prefetch(self.children.as_ptr().wrapping_add(r as usize));
         }
+    }
+
+    /// The closest hit within `(0, t_max]` among the triangles of `leaf`. Two
+    /// packets (eight triangles) at a time are one AVX2 pass where the CPU has
+    /// it, with the answers of the packets tested in turn (see
+    /// [`ray8::pair_closest`]).
+    #[inline(always)]
+    fn leaf_closest(&self, isa: Isa, r: &PacketRay, leaf: ChildRef, t_max: f32) -> Option<Hit> {
+        let mut t_max = t_max;
+        let mut best: Option<(&Packet, usize, TriangleHit)> = None;
+        for pair in self.leaf(leaf).chunks(2) {
+            #[cfg(target_arch = "x86_64")]
+            if isa == Isa::Avx2
+                && pair.len() == 2
+                && let Ok(found) = ray8::pair_closest(r, pair, t_max)
+            {
+                if let Some((p, lane, h)) = found {
+                    t_max = h.t;
+                    best = Some((&pair[p], lane, h));
+                }
+                continue;
+            }
+            for p in pair {
+                if let Some((lane, h)) = packet::intersect(r, p, t_max) {
+                    t_max = h.t;
+                    best = Some((p, lane, h));
+                }
+            }
+        }
+        let _ = isa;
+        best.map(|(p, lane, h)| Hit {
+            t: h.t,
+            prim: p.prim(lane),
+            b1: h.b1,
+            b2: h.b2,
+        })
+    }
+
+    /// Whether any triangle of `leaf` is hit within `(0, t_max]` (two packets
+    /// at a time in one AVX2 pass, as [`Bvh::leaf_closest`]).
+    #[inline(always)]
+    fn leaf_occluded(&self, isa: Isa, r: &PacketRay, leaf: ChildRef, t_max: f32) -> bool {
+        // Plain loops: a closure here (`Iterator::any`) was left as a call outside
+        // the AVX2 code, its intrinsics as calls too (15× slower).
+        for pair in self.leaf(leaf).chunks(2) {
+            #[cfg(target_arch = "x86_64")]
+            if isa == Isa::Avx2
+                && pair.len() == 2
+                && let Ok(any) = ray8::pair_occluded(r, pair, t_max)
+            {
+                if any {
+                    return true;
+                }
+                continue;
+            }
+            for p in pair {
+                if packet::occluded(r, p, t_max) {
+                    return true;
+                }
+            }
+        }
+        let _ = isa;
+        false
     }
 
     #[inline]

@@ -70,9 +70,9 @@ impl Packet {
 /// Per-ray constants of the four-wide test.
 #[derive(Clone, Copy, Debug)]
 pub struct PacketRay {
-    k: [usize; 3],
-    origin: [Vec4; 3],
-    shear: [Vec4; 3],
+    pub(super) k: [usize; 3],
+    pub(super) origin: [Vec4; 3],
+    pub(super) shear: [Vec4; 3],
     ray: Ray,
 }
 

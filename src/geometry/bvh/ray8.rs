@@ -18,10 +18,10 @@ use std::arch::x86_64::*;
 use std::ops::{Add, BitAnd, BitOr, Div, Mul, Not, Sub};
 
 use super::node::{ChildRef, EMPTY, Isa, LEAF, WIDTH, safe_inverse};
-use super::packet::Packet;
+use super::packet::{Packet, PacketRay};
 use super::{Bvh, Stack};
 use crate::geometry::ray::{Hit, Ray, gamma};
-use crate::geometry::triangle::{self, Lanes, RayShear, axis_order, t_error_bound};
+use crate::geometry::triangle::{self, Lanes, RayShear, TriangleHit, axis_order, t_error_bound};
 
 /// Eight f32 lanes (also used as a mask: all bits set = true).
 #[derive(Clone, Copy, Debug)]
@@ -40,6 +40,11 @@ impl F8 {
     #[inline(always)]
     fn zero() -> F8 {
         F8(unsafe { _mm256_setzero_ps() })
+    }
+    /// `lo` in lanes 0–3 and `hi` in lanes 4–7.
+    #[inline(always)]
+    fn halves(lo: glam::Vec4, hi: glam::Vec4) -> F8 {
+        F8(unsafe { _mm256_set_m128(hi.into(), lo.into()) })
     }
     #[inline(always)]
     fn from_array(a: [f32; 8]) -> F8 {
@@ -112,6 +117,16 @@ impl F8 {
                 _mm256_castps256_ps128(self.0),
                 _mm256_extractf128_ps::<1>(self.0),
             );
+            let m = _mm_min_ps(m, _mm_movehl_ps(m, m));
+            let m = _mm_min_ss(m, _mm_shuffle_ps::<1>(m, m));
+            _mm_cvtss_f32(m)
+        }
+    }
+    /// The smallest of lanes 0–3.
+    #[inline(always)]
+    fn min_lower(self) -> f32 {
+        unsafe {
+            let m = _mm256_castps256_ps128(self.0);
             let m = _mm_min_ps(m, _mm_movehl_ps(m, m));
             let m = _mm_min_ss(m, _mm_shuffle_ps::<1>(m, m));
             _mm_cvtss_f32(m)
@@ -284,12 +299,16 @@ impl<'a> Query8<'a> {
     }
 }
 
-/// Hits of the eight rays on one triangle: lanes, `t` and barycentrics.
+/// Hits of the eight rays on one triangle (or of one ray on eight): lanes, `t`
+/// and barycentrics, and the undivided `t` and `|det|` that the test compared
+/// against `t_max`.
 struct Hits8 {
     valid: F8,
     t: F8,
     b1: F8,
     b2: F8,
+    t_scaled: F8,
+    abs_det: F8,
 }
 
 /// The watertight test of the eight rays against triangle `i` of `p`, as
@@ -297,15 +316,33 @@ struct Hits8 {
 #[inline(always)]
 fn test_triangle(q: &Query8<'_>, p: &Packet, i: usize, t_max: F8) -> Hits8 {
     let tri = p.triangle(i);
-    let (ax, ay, az) = sheared(q, tri[0]);
-    let (bx, by, bz) = sheared(q, tri[1]);
-    let (cx, cy, cz) = sheared(q, tri[2]);
+    let a = sheared(q, tri[0]);
+    let b = sheared(q, tri[1]);
+    let c = sheared(q, tri[2]);
+    match watertight8(a, b, c, t_max) {
+        Ok(hits) => hits,
+        Err(()) => scalar_lanes(q, p, i, t_max),
+    }
+}
+
+/// The watertight test's arithmetic (that of `packet::candidates`, operation for
+/// operation) on eight lanes, from each lane's triangle already in its ray's
+/// sheared frame: eight rays against one triangle or one ray against eight.
+/// `Err` when an edge function is exactly zero in some lane: that lane needs
+/// the scalar test's f64 fallback.
+#[inline(always)]
+fn watertight8(
+    (ax, ay, az): (F8, F8, F8),
+    (bx, by, bz): (F8, F8, F8),
+    (cx, cy, cz): (F8, F8, F8),
+    t_max: F8,
+) -> Result<Hits8, ()> {
     let u = cx * by - cy * bx;
     let v = ax * cy - ay * cx;
     let w = bx * ay - by * ax;
     let zero = F8::zero();
     if (u.cmpeq(zero) | v.cmpeq(zero) | w.cmpeq(zero)).any() {
-        return scalar_lanes(q, p, i, t_max);
+        return Err(());
     }
     let any_neg = u.cmplt(zero) | v.cmplt(zero) | w.cmplt(zero);
     let any_pos = u.cmpgt(zero) | v.cmpgt(zero) | w.cmpgt(zero);
@@ -317,24 +354,102 @@ fn test_triangle(q: &Query8<'_>, p: &Packet, i: usize, t_max: F8) -> Hits8 {
         & t_scaled.cmpgt(zero)
         & t_scaled.cmple(t_max * abs_det);
     if !valid.any() {
-        return Hits8 {
+        return Ok(Hits8 {
             valid,
             t: zero,
             b1: zero,
             b2: zero,
-        };
+            t_scaled,
+            abs_det,
+        });
     }
     let t = t_scaled / abs_det;
     let delta_t = t_error_bound([ax, ay, az], [bx, by, bz], [cx, cy, cz], [u, v, w], abs_det);
     // And within `t_max` after the division, as the scalar test.
     valid = valid & t.cmpgt(delta_t) & t.cmple(F8::splat(f32::MAX)) & t.cmple(t_max);
     let inv = F8::splat(1.0) / det;
-    Hits8 {
+    Ok(Hits8 {
         valid,
         t,
         b1: v * inv,
         b2: w * inv,
+        t_scaled,
+        abs_det,
+    })
+}
+
+/// Vertex `vertex` of the eight triangles of two packets (lanes 0–3 the first
+/// packet's, 4–7 the second's) in the single ray's sheared frame, as
+/// `packet::candidates` computes it per packet.
+#[inline(always)]
+fn pair_sheared(r: &PacketRay, pair: &[Packet], vertex: usize) -> (F8, F8, F8) {
+    let [kx, ky, kz] = r.k;
+    let row = |axis: usize| F8::halves(pair[0].v[vertex][axis], pair[1].v[vertex][axis]);
+    let [sx, sy, sz] = r.shear.map(|s| F8::splat(s.x));
+    let [ox, oy, oz] = r.origin.map(|o| F8::splat(o.x));
+    let dx = row(kx) - ox;
+    let dy = row(ky) - oy;
+    let dz = row(kz) - oz;
+    (dx - sx * dz, dy - sy * dz, sz * dz)
+}
+
+/// [`watertight8`] of one ray against the eight triangles of two packets.
+#[inline(always)]
+fn pair_hits(r: &PacketRay, pair: &[Packet], t_max: f32) -> Result<Hits8, ()> {
+    watertight8(
+        pair_sheared(r, pair, 0),
+        pair_sheared(r, pair, 1),
+        pair_sheared(r, pair, 2),
+        F8::splat(t_max),
+    )
+}
+
+/// One ray against the eight triangles of two packets in one AVX2 pass (only
+/// inside AVX2 code), with the answer of the four-wide test run on the first
+/// packet and then on the second with `t_max` cut to the first one's hit, bit
+/// for bit (the same triangle at an exact tie too). Each lane computes what the
+/// four-wide test computes for it; the cut is applied afterwards, to the second
+/// packet's lanes. The closest hit within `(0, t_max]` as `(packet, lane,
+/// hit)`. `Err` when an edge function is exactly zero somewhere: the caller
+/// then tests the packets in turn, which have the f64 fallback.
+#[inline(always)]
+pub(super) fn pair_closest(
+    r: &PacketRay,
+    pair: &[Packet],
+    t_max: f32,
+) -> Result<Option<(usize, usize, TriangleHit)>, ()> {
+    let hits = pair_hits(r, pair, t_max)?;
+    let valid = hits.valid.bitmask();
+    if valid == 0 {
+        return Ok(None);
     }
+    let t = F8::select(hits.valid, hits.t, F8::splat(f32::INFINITY));
+    let first = valid & 0x0f;
+    // The second packet's lanes that pass the four-wide test's two comparisons
+    // with `t_max` cut to the first packet's closest hit.
+    let cut = F8::splat(if first != 0 { t.min_lower() } else { t_max });
+    let second =
+        (hits.t_scaled.cmple(cut * hits.abs_det) & hits.t.cmple(cut)).bitmask() & valid & 0xf0;
+    let lanes = if second != 0 { second } else { first };
+    let t = F8::select(F8::mask_from_bits(lanes), t, F8::splat(f32::INFINITY));
+    let lane = (t.cmpeq(F8::splat(t.min_element())).bitmask() & lanes).trailing_zeros() as usize;
+    Ok(Some((
+        lane / 4,
+        lane % 4,
+        TriangleHit {
+            t: hits.t.lane(lane),
+            b1: hits.b1.lane(lane),
+            b2: hits.b2.lane(lane),
+        },
+    )))
+}
+
+/// Whether one ray hits any of the eight triangles of a two-packet leaf within
+/// `(0, t_max]` (only inside AVX2 code); `Err` as for [`pair_closest`].
+#[inline(always)]
+pub(super) fn pair_occluded(r: &PacketRay, pair: &[Packet], t_max: f32) -> Result<bool, ()> {
+    let hits = pair_hits(r, pair, t_max)?;
+    Ok(hits.valid.any())
 }
 
 /// A vertex in each ray's sheared frame (a function, not a closure: closures
@@ -370,6 +485,9 @@ fn scalar_lanes(q: &Query8<'_>, p: &Packet, i: usize, t_max: F8) -> Hits8 {
         t: get(|h| h.t),
         b1: get(|h| h.b1),
         b2: get(|h| h.b2),
+        // Unused by the ray packets that take this path.
+        t_scaled: F8::zero(),
+        abs_det: F8::zero(),
     }
 }
 
@@ -533,6 +651,109 @@ mod tests {
     use crate::geometry::triangle::Triangle;
     use crate::sampling::sampler::Rng;
     use glam::Vec3A;
+
+    /// Two packets tested in one eight-wide pass give what testing them in turn
+    /// gives, bit for bit: the same hit or miss, `t`, barycentrics and triangle,
+    /// the second packet's at an exact tie (duplicated triangles), and the
+    /// exact-zero edge case left to the caller.
+    #[test]
+    fn two_packets_together_agree_with_the_packets_in_turn() {
+        if Isa::detect() != Isa::Avx2 {
+            return;
+        }
+        let mut rng = Rng::new(31, 0);
+        let mut r = move || rng.next_f32();
+        let (mut hits, mut ties, mut zeros) = (0, 0, 0);
+        for round in 0..20_000 {
+            let n = 5 + round % 4;
+            let mut tris: Vec<(Triangle, u32)> = (0..n)
+                .map(|i| {
+                    let c = Vec3A::new(r(), r(), r()) * 2.0 - 1.0;
+                    let e = |r: &mut dyn FnMut() -> f32| Vec3A::new(r(), r(), r()) - 0.5;
+                    (Triangle::new(c, c + e(&mut r), c + e(&mut r)), i as u32)
+                })
+                .collect();
+            if round % 5 == 0 {
+                // The same triangle in both packets: an exact tie.
+                tris[4 + round % (n - 4)].0 = tris[round % 4].0;
+            }
+            if round % 7 == 0 {
+                // Integer coordinates: rays along the axes meet edges exactly.
+                for (t, _) in &mut tris {
+                    t.v = t.v.map(|v| (v * 4.0).round());
+                }
+            }
+            let tris: Vec<_> = tris.into_iter().filter(|(t, _)| t.can_be_hit()).collect();
+            if tris.len() < 5 {
+                continue;
+            }
+            let pair = [Packet::new(&tris[..4]), Packet::new(&tris[4..])];
+            let origin = Vec3A::new(r(), r(), r()) * 6.0 - 3.0;
+            let (tri, _) = tris[round % tris.len()];
+            let (s1, s2) = (r() * 0.6, r() * 0.6);
+            let target = tri.v[0] + s1 * (tri.v[1] - tri.v[0]) + s2 * (tri.v[2] - tri.v[0]);
+            let (origin, dir) = if round % 7 == 0 {
+                (
+                    origin.round(),
+                    Vec3A::AXES[round % 3] * if round % 2 == 0 { 1.0 } else { -1.0 },
+                )
+            } else {
+                (origin, (target - origin).normalize())
+            };
+            let pr = PacketRay::new(origin, dir);
+            let t_max = if round % 3 == 0 { 2.0 } else { f32::INFINITY };
+            let mut limit = t_max;
+            let mut want = None;
+            for (k, p) in pair.iter().enumerate() {
+                if let Some((lane, h)) = super::super::packet::intersect(&pr, p, limit) {
+                    limit = h.t;
+                    want = Some((k, lane, h));
+                }
+            }
+            let want_any = pair
+                .iter()
+                .any(|p| super::super::packet::occluded(&pr, p, t_max));
+            // SAFETY: AVX2 was detected above; the test calls the pair tests
+            // from a function compiled for AVX2.
+            let (got, got_any) = unsafe { both(&pr, &pair, t_max) };
+            let (Ok(got), Ok(got_any)) = (got, got_any) else {
+                zeros += 1;
+                continue;
+            };
+            assert_eq!(got_any, want_any, "round {round}");
+            match (got, want) {
+                (None, None) => {}
+                (Some((k, lane, h)), Some((wk, wlane, w))) => {
+                    hits += 1;
+                    ties += (round % 5 == 0 && k == 1) as u32;
+                    assert_eq!((k, lane), (wk, wlane), "round {round}");
+                    assert_eq!(
+                        [h.t, h.b1, h.b2].map(f32::to_bits),
+                        [w.t, w.b1, w.b2].map(f32::to_bits),
+                        "round {round}"
+                    );
+                }
+                (g, w) => panic!("round {round}: {g:?} against {w:?}"),
+            }
+        }
+        assert!(
+            hits > 10_000 && ties > 500 && zeros > 100,
+            "{hits} {ties} {zeros}"
+        );
+
+        #[target_feature(enable = "avx2")]
+        #[allow(clippy::type_complexity)]
+        fn both(
+            r: &PacketRay,
+            pair: &[Packet],
+            t_max: f32,
+        ) -> (
+            Result<Option<(usize, usize, TriangleHit)>, ()>,
+            Result<bool, ()>,
+        ) {
+            (pair_closest(r, pair, t_max), pair_occluded(r, pair, t_max))
+        }
+    }
 
     #[test]
     fn eight_rays_together_agree_with_one_at_a_time() {

@@ -15,7 +15,7 @@
 use std::mem::MaybeUninit;
 
 use super::node::{BoxQuery, ChildRef, Isa, LEAF, WIDTH};
-use super::packet::{self, PacketRay};
+use super::packet::PacketRay;
 use super::{Bvh, Stack, is_finite_ray};
 use crate::geometry::ray::{Hit, Ray};
 
@@ -189,16 +189,9 @@ impl Bvh {
     fn closest_step(&self, isa: Isa, ray: &mut Closest, t_near: &mut [f32; WIDTH]) -> bool {
         let cur = ray.cur;
         if cur & LEAF != 0 {
-            for p in self.leaf(cur) {
-                if let Some((lane, h)) = packet::intersect(&ray.tri_ray, p, ray.t_max) {
-                    ray.t_max = h.t;
-                    ray.best = Some(Hit {
-                        t: h.t,
-                        prim: p.prim(lane),
-                        b1: h.b1,
-                        b2: h.b2,
-                    });
-                }
+            if let Some(h) = self.leaf_closest(isa, &ray.tri_ray, cur, ray.t_max) {
+                ray.t_max = h.t;
+                ray.best = Some(h);
             }
         } else {
             let node = &self.nodes[cur as usize];
@@ -313,11 +306,7 @@ impl Bvh {
     fn any_step(&self, isa: Isa, ray: &mut Any, t_near: &mut [f32; WIDTH]) -> Option<bool> {
         let cur = ray.cur;
         if cur & LEAF != 0 {
-            if self
-                .leaf(cur)
-                .iter()
-                .any(|p| packet::occluded(&ray.tri_ray, p, ray.t_max))
-            {
+            if self.leaf_occluded(isa, &ray.tri_ray, cur, ray.t_max) {
                 return Some(true);
             }
         } else {
