@@ -3,7 +3,8 @@
 //! Built top down with binned SAH (modules `sah` and `build`): every node holds
 //! up to eight children whose boxes are tested together (`node`: AVX2 where the
 //! CPU has it), with leaves of one or two packets of four triangles in
-//! structure-of-arrays layout (`packet`). Closest-hit traversal visits children
+//! structure-of-arrays layout (`packet`; a leaf of two is tested in one AVX2
+//! pass, `ray8::pair_closest`). Closest-hit traversal visits children
 //! nearest first and skips any whose box starts beyond the closest hit so far;
 //! any-hit traversal stops at the first hit.
 
