@@ -125,6 +125,8 @@ pub(super) struct Cluster {
     split: Split,
     /// The instructions the binning may use.
     isa: Isa,
+    /// How leaves are priced: see [`leaf_cost`].
+    pairs: bool,
 }
 
 #[derive(Clone, Copy)]
@@ -156,16 +158,17 @@ impl Cluster {
         cbounds: Aabb,
         depth: usize,
         isa: Isa,
+        pairs: bool,
     ) -> Self {
         let len = prims.len();
         // A few triangles are not worth binning: every split is tried exactly
         // (even one packet's worth: large triangles, as the lab box's walls, still
         // gain from being split apart).
         let split = if len <= EXACT_MAX && (len <= PACKET || depth < MAX_SAH_DEPTH) {
-            exact_split(prims, &bounds).map_or(Split::Leaf, Split::Sorted)
+            exact_split(prims, &bounds, pairs).map_or(Split::Leaf, Split::Sorted)
         } else {
             let binned = if depth < MAX_SAH_DEPTH {
-                best_split(prims, &cbounds, &bounds, isa)
+                best_split(prims, &cbounds, &bounds, isa, pairs)
             } else {
                 None
             };
@@ -187,13 +190,17 @@ impl Cluster {
             depth,
             split,
             isa,
+            pairs,
         }
     }
 
     /// The cluster of all the triangles.
     pub(super) fn root(prims: &mut [BuildPrim], isa: Isa) -> Self {
         let (bounds, cbounds) = bounds_of(prims);
-        Cluster::new(prims, 0, bounds, cbounds, 0, isa)
+        // Leaves of two packets are priced as one pass only in trees of many
+        // triangles (see [`PAIR_MIN`]).
+        let pairs = prims.len() >= PAIR_MIN;
+        Cluster::new(prims, 0, bounds, cbounds, 0, isa, pairs)
     }
 
     /// The same cluster, with `start` relative to its own run.
@@ -238,8 +245,8 @@ impl Cluster {
         let (l, r) = mine.split_at_mut(mid);
         let depth = self.depth + 1;
         [
-            Cluster::new(l, self.start, lb, lc, depth, self.isa),
-            Cluster::new(r, self.start + mid, rb, rc, depth, self.isa),
+            Cluster::new(l, self.start, lb, lc, depth, self.isa, self.pairs),
+            Cluster::new(r, self.start + mid, rb, rc, depth, self.isa, self.pairs),
         ]
     }
 }
@@ -270,12 +277,12 @@ fn bounds_of(prims: &[BuildPrim]) -> (Aabb, Aabb) {
 /// For at most [`EXACT_MAX`] triangles: the exact SAH-best split between their
 /// centroids sorted along some axis (ordering them so, and returning the left
 /// count), or `None` when one leaf is cheaper.
-fn exact_split(prims: &mut [BuildPrim], bounds: &Aabb) -> Option<usize> {
+fn exact_split(prims: &mut [BuildPrim], bounds: &Aabb, pairs: bool) -> Option<usize> {
     let n = prims.len();
     assert!(n <= EXACT_MAX);
     let area = bounds.half_area();
     let split_cost = TRAVERSAL_COST * area;
-    let mut best_cost = leaf_cost(n as u32) * area;
+    let mut best_cost = leaf_cost(n as u32, pairs) * area;
     // One triangle is a leaf; two have one split (in centroid order along x).
     if n == 1 {
         return None;
@@ -312,12 +319,12 @@ fn exact_split(prims: &mut [BuildPrim], bounds: &Aabb) -> Option<usize> {
         let mut acc = Aabb::EMPTY;
         for k in (1..n).rev() {
             acc.grow(&prims[order[k] as usize].bounds);
-            right_cost[k] = acc.half_area() * leaf_cost((n - k) as u32);
+            right_cost[k] = acc.half_area() * leaf_cost((n - k) as u32, pairs);
         }
         let mut acc = Aabb::EMPTY;
         for k in 1..n {
             acc.grow(&prims[order[k - 1] as usize].bounds);
-            let cost = split_cost + acc.half_area() * leaf_cost(k as u32) + right_cost[k];
+            let cost = split_cost + acc.half_area() * leaf_cost(k as u32, pairs) + right_cost[k];
             if cost < best_cost {
                 best_cost = cost;
                 best = Some((order, k));
@@ -332,16 +339,24 @@ fn exact_split(prims: &mut [BuildPrim], bounds: &Aabb) -> Option<usize> {
     Some(mid)
 }
 
-/// SAH cost of a leaf of `n` triangles, in tests of one packet of four: two
-/// packets are tested together in one eight-wide pass, which costs about
-/// [`PAIR_COST`] packet tests.
-fn leaf_cost(n: u32) -> f32 {
+/// SAH cost of a leaf of `n` triangles, in tests of one packet of four. With
+/// `pairs`, two packets are tested together in one eight-wide pass, which costs
+/// about [`PAIR_COST`] packet tests.
+fn leaf_cost(n: u32, pairs: bool) -> f32 {
     let packets = n.div_ceil(4);
+    if !pairs {
+        return packets as f32;
+    }
     (packets / 2) as f32 * PAIR_COST + (packets % 2) as f32
 }
 
 /// Cost of testing two packets together, relative to one.
 const PAIR_COST: f32 = 1.25;
+/// Trees of fewer triangles price leaves by packets, as if tested one at a time.
+/// The lab box (30 triangles, every ray starting inside it) priced by pairs got
+/// larger leaves that most rays enter: its `direct` frame took 10–15 % longer and
+/// its `path` 3 % more instructions, while meshes gain 10–30 % (docs/performance.md).
+const PAIR_MIN: usize = 256;
 
 /// The mapping of (doubled) centroids to `bins` bins on all three axes at once.
 #[derive(Clone, Copy)]
@@ -564,13 +579,18 @@ impl Sweep {
     /// Half area times leaf cost of the boxes so far, one lane per axis (the same
     /// operations as [`Aabb::half_area`] and [`leaf_cost`], lane by lane).
     #[inline(always)]
-    fn cost(&self) -> Vec4 {
+    fn cost(&self, pairs: bool) -> Vec4 {
         let d = self.boxes.map(|b| (b.max - b.min).max(Vec4::ZERO));
         let x = Vec4::new(d[0].x, d[1].x, d[2].x, 0.0);
         let y = Vec4::new(d[0].y, d[1].y, d[2].y, 0.0);
         let z = Vec4::new(d[0].z, d[1].z, d[2].z, 0.0);
         let c = self.counts;
-        let leaf = Vec4::new(leaf_cost(c[0]), leaf_cost(c[1]), leaf_cost(c[2]), 0.0);
+        let leaf = Vec4::new(
+            leaf_cost(c[0], pairs),
+            leaf_cost(c[1], pairs),
+            leaf_cost(c[2], pairs),
+            0.0,
+        );
         (x * y + y * z + z * x) * leaf
     }
 }
@@ -579,11 +599,21 @@ impl Sweep {
 /// the sides' boxes, the grid)`, with [`FEW_BINS`] bins for runs under
 /// [`MANY_BINS_MIN`] triangles and [`MANY_BINS`] otherwise; or `None` when the
 /// centroids fall in one bin on every axis. The run is too big for a leaf.
-fn best_split(prims: &[BuildPrim], cbounds: &Aabb, bounds: &Aabb, isa: Isa) -> Option<BinSplit> {
+fn best_split(
+    prims: &[BuildPrim],
+    cbounds: &Aabb,
+    bounds: &Aabb,
+    isa: Isa,
+    pairs: bool,
+) -> Option<BinSplit> {
     if prims.len() < MANY_BINS_MIN {
-        best_split_in::<FEW_BINS, { FEW_BINS.next_power_of_two() }>(prims, cbounds, bounds, isa)
+        best_split_in::<FEW_BINS, { FEW_BINS.next_power_of_two() }>(
+            prims, cbounds, bounds, isa, pairs,
+        )
     } else {
-        best_split_in::<MANY_BINS, { MANY_BINS.next_power_of_two() }>(prims, cbounds, bounds, isa)
+        best_split_in::<MANY_BINS, { MANY_BINS.next_power_of_two() }>(
+            prims, cbounds, bounds, isa, pairs,
+        )
     }
 }
 
@@ -596,6 +626,7 @@ fn best_split_in<const BINS: usize, const SLOTS: usize>(
     cbounds: &Aabb,
     bounds: &Aabb,
     isa: Isa,
+    pairs: bool,
 ) -> Option<BinSplit> {
     const { assert!(BINS <= SLOTS && SLOTS.is_power_of_two()) };
     let grid = BinGrid::new(cbounds, BINS);
@@ -623,7 +654,7 @@ fn best_split_in<const BINS: usize, const SLOTS: usize>(
     let mut sweep = Sweep::new();
     for i in (1..BINS).rev() {
         sweep.add(&bins, i);
-        right_cost[i] = sweep.cost();
+        right_cost[i] = sweep.cost(pairs);
     }
     let mut best_cost = Vec4::INFINITY;
     let mut best_bin = [usize::MAX; 3];
@@ -631,7 +662,7 @@ fn best_split_in<const BINS: usize, const SLOTS: usize>(
     let n = prims.len() as u32;
     for i in 0..BINS - 1 {
         sweep.add(&bins, i);
-        let cost = split_cost + sweep.cost() + right_cost[i + 1];
+        let cost = split_cost + sweep.cost(pairs) + right_cost[i + 1];
         let better = cost.cmplt(best_cost).bitmask();
         if better == 0 {
             continue;
