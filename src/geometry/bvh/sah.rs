@@ -606,14 +606,17 @@ fn best_split(
     isa: Isa,
     pairs: bool,
 ) -> Option<BinSplit> {
+    let run = BinRun {
+        prims,
+        cbounds,
+        bounds,
+        isa,
+        pairs,
+    };
     if prims.len() < MANY_BINS_MIN {
-        best_split_in::<FEW_BINS, { FEW_BINS.next_power_of_two() }>(
-            prims, cbounds, bounds, isa, pairs,
-        )
+        best_split_in::<FEW_BINS, { FEW_BINS.next_power_of_two() }>(run)
     } else {
-        best_split_in::<MANY_BINS, { MANY_BINS.next_power_of_two() }>(
-            prims, cbounds, bounds, isa, pairs,
-        )
+        best_split_in::<MANY_BINS, { MANY_BINS.next_power_of_two() }>(run)
     }
 }
 
@@ -621,13 +624,24 @@ fn best_split(
 /// both sides and the grid.
 type BinSplit = (usize, usize, [Aabb; 2], BinGrid);
 
-fn best_split_in<const BINS: usize, const SLOTS: usize>(
-    prims: &[BuildPrim],
-    cbounds: &Aabb,
-    bounds: &Aabb,
+/// What [`best_split_in`] splits: the triangles, the boxes of their centroids and
+/// of themselves, the instructions the binning may use and how leaves are priced.
+struct BinRun<'a> {
+    prims: &'a [BuildPrim],
+    cbounds: &'a Aabb,
+    bounds: &'a Aabb,
     isa: Isa,
     pairs: bool,
-) -> Option<BinSplit> {
+}
+
+fn best_split_in<const BINS: usize, const SLOTS: usize>(run: BinRun<'_>) -> Option<BinSplit> {
+    let BinRun {
+        prims,
+        cbounds,
+        bounds,
+        isa,
+        pairs,
+    } = run;
     const { assert!(BINS <= SLOTS && SLOTS.is_power_of_two()) };
     let grid = BinGrid::new(cbounds, BINS);
     // Filled in place (the serial case is the common one: no copy of 1.8 KB).
