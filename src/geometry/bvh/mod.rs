@@ -749,8 +749,6 @@ mod tests {
         h.finish()
     }
 
-    /// The same tree, bit for bit, on any number of threads and with either
-    /// instruction set for the binning.
     /// Two triangles hit one ulp apart (found by the `bvh` fuzz target): the
     /// test without division let the farther one pass a `t_max` of the nearer
     /// one's `t`, so brute force and packets took the farther triangle and
@@ -781,6 +779,8 @@ mod tests {
         }
     }
 
+    /// A tree written for the cache reads back whole, answers as the built one,
+    /// and is refused when cut, cyclic or naming triangles it was not given.
     #[test]
     fn cache_bytes_round_trip_and_refuse_damage() {
         let mut rng = Rng::new(3, 7);
@@ -808,6 +808,8 @@ mod tests {
         assert!(Bvh::from_cache_bytes(&empty.to_cache_bytes(), 0).is_some());
     }
 
+    /// The same tree, bit for bit, on any number of threads and with either
+    /// instruction set for the binning.
     #[test]
     fn build_is_the_same_on_any_thread_count_and_isa() {
         let mut rng = Rng::new(7, 3);

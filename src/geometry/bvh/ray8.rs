@@ -654,8 +654,8 @@ mod tests {
 
     /// Two packets tested in one eight-wide pass give what testing them in turn
     /// gives, bit for bit: the same hit or miss, `t`, barycentrics and triangle,
-    /// the second packet's at an exact tie (duplicated triangles), and the
-    /// exact-zero edge case left to the caller.
+    /// the same one at an exact tie (a triangle duplicated across the packets),
+    /// and the exact-zero edge case left to the caller.
     #[test]
     fn two_packets_together_agree_with_the_packets_in_turn() {
         if Isa::detect() != Isa::Avx2 {
