@@ -79,13 +79,48 @@ fn sobol_u32(index: u32, component: u32) -> u32 {
 /// `FastOwenScrambler`). A bijection on `u32`.
 #[inline]
 pub fn owen_scramble(x: u32, seed: u32) -> u32 {
-    let mut v = x.reverse_bits();
+    laine_karras(x.reverse_bits(), seed).reverse_bits()
+}
+
+/// The hash of [`owen_scramble`] on the bit-reversed fraction: every bit
+/// flipped as a function of the seed and the bits *below* it.
+#[inline(always)]
+fn laine_karras(mut v: u32, seed: u32) -> u32 {
     v ^= v.wrapping_mul(0x3d20_adea);
     v = v.wrapping_add(seed);
     v = v.wrapping_mul((seed >> 16) | 1);
     v ^= v.wrapping_mul(0x0552_6c56);
     v ^= v.wrapping_mul(0x53a2_2864);
-    v.reverse_bits()
+    v
+}
+
+/// `SOBOL_DIM1_REVERSED[b][v]`: Sobol' dimension 1 with its index and its value
+/// bit-reversed, byte `b` of the reversed index at a time, so that
+/// `sobol1_reversed(i) = sobol_u32(i.reverse_bits(), 1).reverse_bits()` needs
+/// no bit reversal (x86 has no instruction for one: it costs about a dozen).
+const SOBOL_DIM1_REVERSED: [[u32; 256]; 4] = {
+    let mut t = [[0u32; 256]; 4];
+    let mut b = 0;
+    while b < 4 {
+        let mut v = 0;
+        while v < 256 {
+            // Byte b of the reversed index is byte 3 - b of the index, reversed.
+            t[b][v] = SOBOL_DIM1_BYTES[3 - b][(v as u8).reverse_bits() as usize].reverse_bits();
+            v += 1;
+        }
+        b += 1;
+    }
+    t
+};
+
+/// `sobol_u32(r.reverse_bits(), 1).reverse_bits()`, by [`SOBOL_DIM1_REVERSED`].
+#[inline(always)]
+fn sobol1_reversed(r: u32) -> u32 {
+    let t = &SOBOL_DIM1_REVERSED;
+    t[0][(r & 0xff) as usize]
+        ^ t[1][(r >> 8 & 0xff) as usize]
+        ^ t[2][(r >> 16 & 0xff) as usize]
+        ^ t[3][(r >> 24) as usize]
 }
 
 /// A 32-bit integer hash with good avalanche (Wellons' "lowbias32").
@@ -150,11 +185,15 @@ pub fn sample(index: u32, dimension: u32, seed: u32) -> f32 {
 #[inline]
 pub fn sample_2d(index: u32, pair: u32, seed: u32) -> Vec2 {
     let (shuffle, s0, s1) = pair_seeds(pair, seed);
-    let i = owen_scramble(index, shuffle);
-    Vec2::new(
-        to_unit(owen_scramble(sobol_u32(i, 0), s0)),
-        to_unit(owen_scramble(sobol_u32(i, 1), s1)),
-    )
+    // [`sample`]'s arithmetic with the bit reversals that cancel left out (7
+    // become 3): the shuffled index is `i = r.reverse_bits()`, dimension 0 of
+    // it is `r` itself, and dimension 1 comes reversed from its own tables.
+    let r = laine_karras(index.reverse_bits(), shuffle);
+    let x0 = laine_karras(r.reverse_bits(), s0);
+    let x1 = laine_karras(sobol1_reversed(r), s1);
+    // Both final reversals in one.
+    let both = ((x1 as u64) << 32 | x0 as u64).reverse_bits();
+    Vec2::new(to_unit((both >> 32) as u32), to_unit(both as u32))
 }
 
 /// The numbers of one sample of one pixel, handed out dimension by dimension:

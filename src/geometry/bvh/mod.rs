@@ -891,4 +891,72 @@ mod tests {
             assert!(bvh.occluded(&Ray::new(origin, dir), f32::INFINITY));
         }
     }
+
+    /// In a small room (the lab box), rays that start on a surface and end on
+    /// the next enter few leaves: each wall has leaves of its own, apart from
+    /// the blocks' (the SAH's volume term for small trees). Priced by area
+    /// alone, a side wall and the floor shared leaves with faces of the blocks,
+    /// boxes that many of these rays entered: 2.09 leaves a ray before the hit
+    /// against 1.84 (and 7 % more instructions for `path`, 11 % for `direct`).
+    #[test]
+    fn rays_in_a_small_room_enter_few_leaves() {
+        let (tris, _) = crate::scene::cornell::triangles();
+        let bvh = Bvh::build(&tris);
+        let room = crate::scene::cornell::parts::ROOM;
+        let mut leaf_boxes = Vec::new();
+        for (n, kids) in bvh.children.iter().enumerate() {
+            for (c, &kid) in kids.iter().enumerate() {
+                if kid == EMPTY || kid & LEAF == 0 {
+                    continue;
+                }
+                let prims: Vec<u32> = bvh
+                    .leaf(kid)
+                    .iter()
+                    .flat_map(|p| (0..p.len()).map(|i| p.prim(i)))
+                    .collect();
+                let walls = prims
+                    .iter()
+                    .filter(|&&p| room.contains(&(p as usize)))
+                    .count();
+                assert!(
+                    walls == 0 || walls == prims.len(),
+                    "a leaf of walls and blocks: {prims:?}"
+                );
+                let b = &bvh.nodes[n].bounds;
+                let lo = Vec3A::new(b[0][c], b[1][c], b[2][c]);
+                let hi = Vec3A::new(b[3][c], b[4][c], b[5][c]);
+                leaf_boxes.push((lo, hi));
+            }
+        }
+        let mut rng = Rng::new(5, 5);
+        let (mut entered, mut rays) = (0usize, 0usize);
+        for _ in 0..20_000 {
+            let tri = &tris[(rng.next_f32() * tris.len() as f32) as usize % tris.len()];
+            let (u, v) = (rng.next_f32(), rng.next_f32());
+            let (u, v) = if u + v > 1.0 {
+                (1.0 - u, 1.0 - v)
+            } else {
+                (u, v)
+            };
+            let p = tri.v[0] + u * (tri.v[1] - tri.v[0]) + v * (tri.v[2] - tri.v[0]);
+            let d = (Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) - 0.5).normalize();
+            let ray = Ray::new(p + 1e-4 * d, d);
+            let Some(hit) = bvh.intersect(&ray, f32::INFINITY) else {
+                continue;
+            };
+            rays += 1;
+            for &(lo, hi) in &leaf_boxes {
+                let inv = d.recip();
+                let (t0, t1) = ((lo - ray.origin) * inv, (hi - ray.origin) * inv);
+                let near = t0.min(t1).max_element().max(0.0);
+                let far = t0.max(t1).min_element().min(hit.t);
+                entered += (near <= far) as usize;
+            }
+        }
+        let per_ray = entered as f64 / rays as f64;
+        assert!(
+            rays > 10_000 && per_ray < 1.95,
+            "{per_ray} leaves a ray over {rays} rays"
+        );
+    }
 }

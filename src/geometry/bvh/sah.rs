@@ -125,8 +125,28 @@ pub(super) struct Cluster {
     split: Split,
     /// The instructions the binning may use.
     isa: Isa,
-    /// How leaves are priced: see [`leaf_cost`].
+    /// How leaves and boxes are priced.
+    pricing: Pricing,
+}
+
+/// How the SAH prices a tree's leaves ([`leaf_cost`]) and boxes ([`Pricing::area`]).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Pricing {
+    /// Two packets of a leaf tested in one pass (see [`PAIR_MIN`]).
     pairs: bool,
+    /// Weight of a box's volume beside its half area (see [`ROOM_MAX`]).
+    volume: f32,
+}
+
+impl Pricing {
+    /// The price of visiting a box: its half area (the chance that a random
+    /// line crosses it), plus, in small trees, its volume over a length (the
+    /// chance that a ray starts or ends inside it).
+    #[inline(always)]
+    fn area(&self, b: &Aabb) -> f32 {
+        let d = (b.max - b.min).max(Vec4::ZERO);
+        d.x * d.y + d.y * d.z + d.z * d.x + self.volume * (d.x * d.y * d.z)
+    }
 }
 
 #[derive(Clone, Copy)]
@@ -158,17 +178,17 @@ impl Cluster {
         cbounds: Aabb,
         depth: usize,
         isa: Isa,
-        pairs: bool,
+        pricing: Pricing,
     ) -> Self {
         let len = prims.len();
         // A few triangles are not worth binning: every split is tried exactly
         // (even one packet's worth: large triangles, as the lab box's walls, still
         // gain from being split apart).
         let split = if len <= EXACT_MAX && (len <= PACKET || depth < MAX_SAH_DEPTH) {
-            exact_split(prims, &bounds, pairs).map_or(Split::Leaf, Split::Sorted)
+            exact_split(prims, &bounds, pricing).map_or(Split::Leaf, Split::Sorted)
         } else {
             let binned = if depth < MAX_SAH_DEPTH {
-                best_split(prims, &cbounds, &bounds, isa, pairs)
+                best_split(prims, &cbounds, &bounds, isa, pricing)
             } else {
                 None
             };
@@ -190,7 +210,7 @@ impl Cluster {
             depth,
             split,
             isa,
-            pairs,
+            pricing,
         }
     }
 
@@ -200,7 +220,13 @@ impl Cluster {
         // Leaves of two packets are priced as one pass only in trees of many
         // triangles (see [`PAIR_MIN`]).
         let pairs = prims.len() >= PAIR_MIN;
-        Cluster::new(prims, 0, bounds, cbounds, 0, isa, pairs)
+        let extent = (bounds.max - bounds.min).truncate().max_element();
+        let volume = if prims.len() <= ROOM_MAX && extent > 0.0 {
+            ROOM_VOLUME / extent
+        } else {
+            0.0
+        };
+        Cluster::new(prims, 0, bounds, cbounds, 0, isa, Pricing { pairs, volume })
     }
 
     /// The same cluster, with `start` relative to its own run.
@@ -245,8 +271,8 @@ impl Cluster {
         let (l, r) = mine.split_at_mut(mid);
         let depth = self.depth + 1;
         [
-            Cluster::new(l, self.start, lb, lc, depth, self.isa, self.pairs),
-            Cluster::new(r, self.start + mid, rb, rc, depth, self.isa, self.pairs),
+            Cluster::new(l, self.start, lb, lc, depth, self.isa, self.pricing),
+            Cluster::new(r, self.start + mid, rb, rc, depth, self.isa, self.pricing),
         ]
     }
 }
@@ -277,10 +303,11 @@ fn bounds_of(prims: &[BuildPrim]) -> (Aabb, Aabb) {
 /// For at most [`EXACT_MAX`] triangles: the exact SAH-best split between their
 /// centroids sorted along some axis (ordering them so, and returning the left
 /// count), or `None` when one leaf is cheaper.
-fn exact_split(prims: &mut [BuildPrim], bounds: &Aabb, pairs: bool) -> Option<usize> {
+fn exact_split(prims: &mut [BuildPrim], bounds: &Aabb, pricing: Pricing) -> Option<usize> {
     let n = prims.len();
     assert!(n <= EXACT_MAX);
-    let area = bounds.half_area();
+    let pairs = pricing.pairs;
+    let area = pricing.area(bounds);
     let split_cost = TRAVERSAL_COST * area;
     let mut best_cost = leaf_cost(n as u32, pairs) * area;
     // One triangle is a leaf; two have one split (in centroid order along x).
@@ -288,7 +315,7 @@ fn exact_split(prims: &mut [BuildPrim], bounds: &Aabb, pairs: bool) -> Option<us
         return None;
     }
     if n == 2 {
-        let [a, b] = [&prims[0], &prims[1]].map(|p| p.bounds.half_area());
+        let [a, b] = [&prims[0], &prims[1]].map(|p| pricing.area(&p.bounds));
         if split_cost + a + b >= best_cost {
             return None;
         }
@@ -319,12 +346,12 @@ fn exact_split(prims: &mut [BuildPrim], bounds: &Aabb, pairs: bool) -> Option<us
         let mut acc = Aabb::EMPTY;
         for k in (1..n).rev() {
             acc.grow(&prims[order[k] as usize].bounds);
-            right_cost[k] = acc.half_area() * leaf_cost((n - k) as u32, pairs);
+            right_cost[k] = pricing.area(&acc) * leaf_cost((n - k) as u32, pairs);
         }
         let mut acc = Aabb::EMPTY;
         for k in 1..n {
             acc.grow(&prims[order[k - 1] as usize].bounds);
-            let cost = split_cost + acc.half_area() * leaf_cost(k as u32, pairs) + right_cost[k];
+            let cost = split_cost + pricing.area(&acc) * leaf_cost(k as u32, pairs) + right_cost[k];
             if cost < best_cost {
                 best_cost = cost;
                 best = Some((order, k));
@@ -357,6 +384,17 @@ const PAIR_COST: f32 = 1.25;
 /// larger leaves that most rays enter: its `direct` frame took 10–15 % longer and
 /// its `path` 3 % more instructions, while meshes gain 10–30 % (docs/performance.md).
 const PAIR_MIN: usize = 256;
+/// Trees of at most this many triangles price a box by its volume too
+/// ([`Pricing::area`], [`ROOM_VOLUME`]): small scenes are often rooms, whose
+/// rays start and end inside the scene's box, and a box that takes in much of
+/// the room is entered by every ray that starts or ends in it, however small
+/// its area. The lab box priced by area alone put each side wall in a leaf
+/// with two faces of a block, boxes that most rays enter.
+const ROOM_MAX: usize = PAIR_MIN;
+/// The volume's weight, times the scene's largest extent. On the lab box 1, 2 and 4
+/// give the same tree (0.5 a worse one): walls in leaves of their own, the blocks
+/// apart from them.
+const ROOM_VOLUME: f32 = 2.0;
 
 /// The mapping of (doubled) centroids to `bins` bins on all three axes at once.
 #[derive(Clone, Copy)]
@@ -579,7 +617,8 @@ impl Sweep {
     /// Half area times leaf cost of the boxes so far, one lane per axis (the same
     /// operations as [`Aabb::half_area`] and [`leaf_cost`], lane by lane).
     #[inline(always)]
-    fn cost(&self, pairs: bool) -> Vec4 {
+    fn cost(&self, pricing: Pricing) -> Vec4 {
+        let pairs = pricing.pairs;
         let d = self.boxes.map(|b| (b.max - b.min).max(Vec4::ZERO));
         let x = Vec4::new(d[0].x, d[1].x, d[2].x, 0.0);
         let y = Vec4::new(d[0].y, d[1].y, d[2].y, 0.0);
@@ -591,7 +630,7 @@ impl Sweep {
             leaf_cost(c[2], pairs),
             0.0,
         );
-        (x * y + y * z + z * x) * leaf
+        (x * y + y * z + z * x + Vec4::splat(pricing.volume) * (x * y * z)) * leaf
     }
 }
 
@@ -604,14 +643,14 @@ fn best_split(
     cbounds: &Aabb,
     bounds: &Aabb,
     isa: Isa,
-    pairs: bool,
+    pricing: Pricing,
 ) -> Option<BinSplit> {
     let run = BinRun {
         prims,
         cbounds,
         bounds,
         isa,
-        pairs,
+        pricing,
     };
     if prims.len() < MANY_BINS_MIN {
         best_split_in::<FEW_BINS, { FEW_BINS.next_power_of_two() }>(run)
@@ -631,7 +670,7 @@ struct BinRun<'a> {
     cbounds: &'a Aabb,
     bounds: &'a Aabb,
     isa: Isa,
-    pairs: bool,
+    pricing: Pricing,
 }
 
 fn best_split_in<const BINS: usize, const SLOTS: usize>(run: BinRun<'_>) -> Option<BinSplit> {
@@ -640,7 +679,7 @@ fn best_split_in<const BINS: usize, const SLOTS: usize>(run: BinRun<'_>) -> Opti
         cbounds,
         bounds,
         isa,
-        pairs,
+        pricing,
     } = run;
     const { assert!(BINS <= SLOTS && SLOTS.is_power_of_two()) };
     let grid = BinGrid::new(cbounds, BINS);
@@ -660,7 +699,7 @@ fn best_split_in<const BINS: usize, const SLOTS: usize>(run: BinRun<'_>) -> Opti
     }
     debug_assert!(prims.len() > MAX_LEAF, "smaller runs take the exact split");
     // Costs are compared multiplied by the parent's area (no division per bin).
-    let parent_area = bounds.half_area();
+    let parent_area = pricing.area(bounds);
     let split_cost = Vec4::splat(TRAVERSAL_COST * parent_area);
     // Sweep from the right for every right side's cost, then from the left; the
     // three axes side by side, each lane keeping its first cheapest bin.
@@ -668,7 +707,7 @@ fn best_split_in<const BINS: usize, const SLOTS: usize>(run: BinRun<'_>) -> Opti
     let mut sweep = Sweep::new();
     for i in (1..BINS).rev() {
         sweep.add(&bins, i);
-        right_cost[i] = sweep.cost(pairs);
+        right_cost[i] = sweep.cost(pricing);
     }
     let mut best_cost = Vec4::INFINITY;
     let mut best_bin = [usize::MAX; 3];
@@ -676,7 +715,7 @@ fn best_split_in<const BINS: usize, const SLOTS: usize>(run: BinRun<'_>) -> Opti
     let n = prims.len() as u32;
     for i in 0..BINS - 1 {
         sweep.add(&bins, i);
-        let cost = split_cost + sweep.cost(pairs) + right_cost[i + 1];
+        let cost = split_cost + sweep.cost(pricing) + right_cost[i + 1];
         let better = cost.cmplt(best_cost).bitmask();
         if better == 0 {
             continue;
