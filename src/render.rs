@@ -893,8 +893,18 @@ impl Tile<'_> {
                 for qx in (0..blocks_end).step_by(4) {
                     let block: [(usize, usize); 8] =
                         std::array::from_fn(|i| (qx + i % 4, qy + i / 4));
-                    let ray = |(x, y): (usize, usize)| pixel_ray(camera, seed, s, x, y0 + y, width);
-                    let primary: [Ray; 8] = std::array::from_fn(|i| ray(block[i]));
+                    let point = |i: usize| pixel_point(seed, s, block[i].0, y0 + block[i].1, width);
+                    let points: [(f32, f32); 8] = std::array::from_fn(point);
+                    let half = |h: usize| {
+                        let lanes = &points[4 * h..4 * h + 4];
+                        camera.rays4(
+                            std::array::from_fn(|i| lanes[i].0),
+                            std::array::from_fn(|i| lanes[i].1),
+                        )
+                    };
+                    let (top, bottom) = (half(0), half(1));
+                    let primary: [Ray; 8] =
+                        std::array::from_fn(|i| if i < 4 { top[i] } else { bottom[i - 4] });
                     rays += 8;
                     let hits = scene.intersect8(&primary, f32::INFINITY);
                     if AOVS {
@@ -1010,13 +1020,20 @@ impl PathStart {
 /// 0, uniformly jittered by the (seed, pixel, sample) generator otherwise.
 #[inline]
 fn pixel_ray(camera: &Camera, seed: u64, s: u32, x: usize, y: usize, width: usize) -> Ray {
+    let (px, py) = pixel_point(seed, s, x, y, width);
+    camera.ray(px, py)
+}
+
+/// The image point of [`pixel_ray`].
+#[inline]
+fn pixel_point(seed: u64, s: u32, x: usize, y: usize, width: usize) -> (f32, f32) {
     let (dx, dy) = if s == 0 {
         (0.5, 0.5)
     } else {
         let mut rng = Rng::for_sample(seed, (y * width + x) as u64, s);
         (rng.next_f32(), rng.next_f32())
     };
-    camera.ray(x as f32 + dx, y as f32 + dy)
+    (x as f32 + dx, y as f32 + dy)
 }
 
 /// The value of one pixel sample, for tests and tools that probe single pixels.

@@ -6,9 +6,10 @@ use std::f32::consts::PI;
 use std::fmt;
 use std::str::FromStr;
 
-use glam::Vec3A;
+use glam::{Vec3A, Vec4};
 
-use crate::geometry::ray::{Hit, Ray};
+use crate::geometry::ray::{Hit, Ray, SHADOW_EPSILON};
+use crate::geometry::sqrt4;
 use crate::sampling::sampler::Rng;
 use crate::scene::Scene;
 use path::PathOptions;
@@ -160,10 +161,11 @@ impl Integrator {
         let mut t_max = [0.0; N];
         let mut lit = [false; N];
         let mut irradiance = [Vec3A::ZERO; N];
-        for lane in 0..N {
-            if let Some((ray, t, d)) =
-                hits[lane].and_then(|h| unshadowed_light(scene, &h, rays[lane].dir))
-            {
+        for (lane, light) in unshadowed_lights(scene, rays, &hits)
+            .into_iter()
+            .enumerate()
+        {
+            if let Some((ray, t, d)) = light {
                 (shadow[lane], t_max[lane], irradiance[lane]) = (ray, t, d);
                 lit[lane] = true;
                 *count += 1;
@@ -233,6 +235,109 @@ fn unshadowed_light(scene: &Scene, hit: &Hit, dir: Vec3A) -> Option<(Ray, f32, V
     }
     let (shadow, t_max) = sp.ray_to(light.position);
     Some((shadow, t_max, light.power * (cos / (4.0 * PI * r2))))
+}
+
+/// [`unshadowed_light`] for the hits of `N` rays (a multiple of four), bit for
+/// bit, four lanes at a time: the surface points are found lane by lane, then
+/// the distances, cosines, offsets and shadow-ray directions are computed in
+/// the lanes of SSE registers, with the scalar code's operations in its order,
+/// so that the lanes' square roots and divisions overlap (lane by lane, waiting
+/// for them took about a sixth of the lab's `direct` frame).
+#[inline(always)]
+fn unshadowed_lights<const N: usize>(
+    scene: &Scene,
+    rays: &[Ray; N],
+    hits: &[Option<Hit>; N],
+) -> [Option<(Ray, f32, Vec3A)>; N] {
+    const { assert!(N.is_multiple_of(4)) };
+    let light = &scene.light;
+    let target = light.position;
+    let mut out = [None; N];
+    for quad in 0..N / 4 {
+        let base = 4 * quad;
+        // Lanes without a hit compute on a point of the first hit, unused.
+        let Some(any) = hits[base..base + 4].iter().flatten().next() else {
+            continue;
+        };
+        // (Written out: `array::from_fn` and `map` here were left as calls.)
+        let point = |i: usize| {
+            let lane = base + i;
+            scene.surface_point(hits[lane].as_ref().unwrap_or(any), rays[lane].dir)
+        };
+        let (s0, s1, s2, s3) = (point(0), point(1), point(2), point(3));
+        let p = soa(s0.p, s1.p, s2.p, s3.p);
+        let n = soa(s0.n, s1.n, s2.n, s3.n);
+        let error = soa(s0.error, s1.error, s2.error, s3.error);
+        let l = [
+            Vec4::splat(target.x),
+            Vec4::splat(target.y),
+            Vec4::splat(target.z),
+        ];
+        // `to_light`, `r2`, `cos` of `unshadowed_light`.
+        let to_light = [l[0] - p[0], l[1] - p[1], l[2] - p[2]];
+        let r2 = dot4(&to_light, &to_light);
+        let facing = dot4(&to_light, &n);
+        let cos = facing / sqrt4(r2);
+        // `SurfacePoint::offset_origin(target - p)`: the offset along the
+        // normal, to the side of the light, then rounded away from `p`.
+        let d = dot4(&[n[0].abs(), n[1].abs(), n[2].abs()], &error);
+        let away = facing.cmplt(Vec4::ZERO);
+        let side = |o: Vec4| Vec4::select(away, -o, o);
+        let offset = [side(d * n[0]), side(d * n[1]), side(d * n[2])];
+        let mut origin = [p[0] + offset[0], p[1] + offset[1], p[2] + offset[2]];
+        for (axis, o) in origin.iter_mut().enumerate() {
+            let mut lanes = o.to_array();
+            for (x, off) in lanes.iter_mut().zip(offset[axis].to_array()) {
+                if off > 0.0 {
+                    *x = x.next_up();
+                } else if off < 0.0 {
+                    *x = x.next_down();
+                }
+            }
+            *o = Vec4::from_array(lanes);
+        }
+        // `SurfacePoint::ray_to(target)`.
+        let to = [l[0] - origin[0], l[1] - origin[1], l[2] - origin[2]];
+        let dist = sqrt4(dot4(&to, &to));
+        let dir = [to[0] / dist, to[1] / dist, to[2] / dist];
+        let skip = dist * Vec4::splat(SHADOW_EPSILON);
+        let start = [
+            origin[0] + dir[0] * skip,
+            origin[1] + dir[1] * skip,
+            origin[2] + dir[2] * skip,
+        ];
+        let t_max = dist - Vec4::splat(2.0) * skip;
+        let scale = cos / (Vec4::splat(4.0 * PI) * r2);
+        for i in 0..4 {
+            let lane = base + i;
+            if hits[lane].is_none() || !(cos[i] > 0.0 && r2[i] > 0.0) {
+                continue;
+            }
+            let at = |v: &[Vec4; 3]| Vec3A::new(v[0][i], v[1][i], v[2][i]);
+            out[lane] = Some((
+                Ray::new(at(&start), at(&dir)),
+                t_max[i],
+                light.power * scale[i],
+            ));
+        }
+    }
+    out
+}
+
+/// Four vectors as three lanes of coordinates.
+#[inline(always)]
+fn soa(a: Vec3A, b: Vec3A, c: Vec3A, d: Vec3A) -> [Vec4; 3] {
+    [
+        Vec4::new(a.x, b.x, c.x, d.x),
+        Vec4::new(a.y, b.y, c.y, d.y),
+        Vec4::new(a.z, b.z, c.z, d.z),
+    ]
+}
+
+/// `Vec3A::dot` lane by lane: `(x·x' + y·y') + z·z'`, in glam's order.
+#[inline(always)]
+fn dot4(a: &[Vec4; 3], b: &[Vec4; 3]) -> Vec4 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
 impl fmt::Display for Integrator {
@@ -359,5 +464,45 @@ mod tests {
         }
         assert_eq!("path".parse::<Integrator>(), Ok(Integrator::path()));
         assert!("bogus".parse::<Integrator>().is_err());
+    }
+
+    /// The lab's shadow rays set up four lanes at a time are the ones set up
+    /// one by one, bit for bit: rays, `t_max` and irradiance, and which lanes
+    /// are lit (misses, points facing away from the light, the box's blocks).
+    #[test]
+    fn shadow_rays_in_lanes_equal_shadow_rays_one_by_one() {
+        let scene = crate::scene::cornell::scene();
+        let camera =
+            crate::camera::Camera::lab(crate::scene::cornell::CAMERA_POSITION, 0.0, 0.0, 64, 64);
+        let mut rng = Rng::new(8, 8);
+        let (mut lit, mut unlit) = (0, 0);
+        for _ in 0..2000 {
+            let rays: [Ray; 8] = std::array::from_fn(|_| {
+                let (x, y) = (rng.next_f32() * 80.0 - 8.0, rng.next_f32() * 80.0 - 8.0);
+                camera.ray(x, y)
+            });
+            let hits = rays.map(|r| scene.intersect(&r, f32::INFINITY));
+            let lanes = unshadowed_lights(&scene, &rays, &hits);
+            for ((ray, hit), got) in rays.iter().zip(hits).zip(lanes) {
+                let want = hit.and_then(|h| unshadowed_light(&scene, &h, ray.dir));
+                let bits = |l: Option<(Ray, f32, Vec3A)>| {
+                    l.map(|(r, t, d)| {
+                        [r.origin, r.dir, d]
+                            .map(|v| v.to_array().map(f32::to_bits))
+                            .concat()
+                            .into_iter()
+                            .chain([t.to_bits()])
+                            .collect::<Vec<u32>>()
+                    })
+                };
+                assert_eq!(bits(got), bits(want), "{ray:?} {hit:?}");
+                if want.is_some() {
+                    lit += 1;
+                } else {
+                    unlit += 1;
+                }
+            }
+        }
+        assert!(lit > 8000 && unlit > 1000, "{lit} lit, {unlit} not");
     }
 }
