@@ -315,10 +315,9 @@ struct Hits8 {
 /// `packet::candidates` does it lane by lane.
 #[inline(always)]
 fn test_triangle(q: &Query8<'_>, p: &Packet, i: usize, t_max: F8) -> Hits8 {
-    let tri = p.triangle(i);
-    let a = sheared(q, tri[0]);
-    let b = sheared(q, tri[1]);
-    let c = sheared(q, tri[2]);
+    let a = sheared(q, p, 0, i);
+    let b = sheared(q, p, 1, i);
+    let c = sheared(q, p, 2, i);
     match watertight8(a, b, c, t_max) {
         Ok(hits) => hits,
         Err(()) => scalar_lanes(q, p, i, t_max),
@@ -452,15 +451,22 @@ pub(super) fn pair_occluded(r: &PacketRay, pair: &[Packet], t_max: f32) -> Resul
     Ok(hits.valid.any())
 }
 
-/// A vertex in each ray's sheared frame (a function, not a closure: closures
-/// were left as calls, outside the AVX2 code).
+/// Vertex `vertex` of triangle `i` of `p` in each ray's sheared frame (a
+/// function, not a closure: closures were left as calls, outside the AVX2
+/// code). Each coordinate is broadcast straight from the packet (one
+/// `vbroadcastss`), not gathered into a vector first and picked out of it.
 #[inline(always)]
-fn sheared(q: &Query8<'_>, v: glam::Vec3A) -> (F8, F8, F8) {
+fn sheared(q: &Query8<'_>, p: &Packet, vertex: usize, i: usize) -> (F8, F8, F8) {
     let [kx, ky, kz] = q.k;
     let [sx, sy, sz] = q.shear;
-    let dx = F8::splat(v[kx]) - q.origin_k[0];
-    let dy = F8::splat(v[ky]) - q.origin_k[1];
-    let dz = F8::splat(v[kz]) - q.origin_k[2];
+    let row = &p.v[vertex];
+    let coordinate = |axis: usize| -> f32 {
+        let lanes: &[f32; 4] = row[axis].as_ref();
+        lanes[i]
+    };
+    let dx = F8::splat(coordinate(kx)) - q.origin_k[0];
+    let dy = F8::splat(coordinate(ky)) - q.origin_k[1];
+    let dz = F8::splat(coordinate(kz)) - q.origin_k[2];
     (dx - sx * dz, dy - sy * dz, sz * dz)
 }
 
