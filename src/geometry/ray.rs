@@ -80,20 +80,8 @@ impl SurfacePoint {
         }
         let po = self.p + offset;
         // Round away from p so that the offset survives the addition's rounding.
-        let round = |x: f32, o: f32| {
-            if o > 0.0 {
-                x.next_up()
-            } else if o < 0.0 {
-                x.next_down()
-            } else {
-                x
-            }
-        };
-        Vec3A::new(
-            round(po.x, offset.x),
-            round(po.y, offset.y),
-            round(po.z, offset.z),
-        )
+        // (`extend` costs one insert; `from_vec4` nothing.)
+        Vec3A::from_vec4(super::step_towards4(po.extend(0.0), offset.extend(0.0)))
     }
 
     /// A ray towards `target` for a shadow test, with the `t_max` that stops just

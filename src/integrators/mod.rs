@@ -9,7 +9,7 @@ use std::str::FromStr;
 use glam::{Vec3A, Vec4};
 
 use crate::geometry::ray::{Hit, Ray, SHADOW_EPSILON};
-use crate::geometry::sqrt4;
+use crate::geometry::{sqrt4, step_towards4};
 use crate::sampling::sampler::Rng;
 use crate::scene::Scene;
 use path::PathOptions;
@@ -284,18 +284,8 @@ fn unshadowed_lights<const N: usize>(
         let away = facing.cmplt(Vec4::ZERO);
         let side = |o: Vec4| Vec4::select(away, -o, o);
         let offset = [side(d * n[0]), side(d * n[1]), side(d * n[2])];
-        let mut origin = [p[0] + offset[0], p[1] + offset[1], p[2] + offset[2]];
-        for (axis, o) in origin.iter_mut().enumerate() {
-            let mut lanes = o.to_array();
-            for (x, off) in lanes.iter_mut().zip(offset[axis].to_array()) {
-                if off > 0.0 {
-                    *x = x.next_up();
-                } else if off < 0.0 {
-                    *x = x.next_down();
-                }
-            }
-            *o = Vec4::from_array(lanes);
-        }
+        let step = |a: usize| step_towards4(p[a] + offset[a], offset[a]);
+        let origin = [step(0), step(1), step(2)];
         // `SurfacePoint::ray_to(target)`.
         let to = [l[0] - origin[0], l[1] - origin[1], l[2] - origin[2]];
         let dist = sqrt4(dot4(&to, &to));

@@ -125,7 +125,7 @@ fn sobol1_reversed(r: u32) -> u32 {
 
 /// A 32-bit integer hash with good avalanche (Wellons' "lowbias32").
 #[inline]
-fn hash32(mut x: u32) -> u32 {
+const fn hash32(mut x: u32) -> u32 {
     x ^= x >> 16;
     x = x.wrapping_mul(0x7feb_352d);
     x ^= x >> 15;
@@ -194,6 +194,145 @@ pub fn sample_2d(index: u32, pair: u32, seed: u32) -> Vec2 {
     // Both final reversals in one.
     let both = ((x1 as u64) << 32 | x0 as u64).reverse_bits();
     Vec2::new(to_unit((both >> 32) as u32), to_unit(both as u32))
+}
+
+/// The nibbles 0..16 with their four bits reversed.
+#[cfg(target_arch = "x86_64")]
+const NIBBLES_REVERSED: [u8; 16] = [0, 8, 4, 12, 2, 10, 6, 14, 1, 9, 5, 13, 3, 11, 7, 15];
+/// [`NIBBLES_REVERSED`] in the high half of a byte.
+#[cfg(target_arch = "x86_64")]
+const NIBBLES_REVERSED_HIGH: [u8; 16] = {
+    let mut t = NIBBLES_REVERSED;
+    let mut i = 0;
+    while i < 16 {
+        t[i] <<= 4;
+        i += 1;
+    }
+    t
+};
+
+/// Pairs [`first_pairs`] computes at once: one per AVX2 lane.
+pub const FIRST_PAIRS: usize = 8;
+
+/// `hash32(pair + 0x9e37_79b9)` for the first pairs: the per-pair half of
+/// [`pair_seeds`]' first hash, which does not depend on the pixel.
+const PAIR_KEYS: [u32; FIRST_PAIRS] = {
+    let mut k = [0u32; FIRST_PAIRS];
+    let mut p = 0;
+    while p < FIRST_PAIRS {
+        k[p] = hash32((p as u32).wrapping_add(0x9e37_79b9));
+        p += 1;
+    }
+    k
+};
+
+/// Pairs `0..FIRST_PAIRS` of sample `index` for the pixel seeded `seed`, as
+/// `(x, y)` arrays: bit for bit `sample_2d(index, p, seed)` for each pair `p`.
+/// On AVX2 CPUs the eight pairs are one pass of eight lanes (about a hundred
+/// instructions, where one [`sample_2d`] takes about 160: its hashes and bit
+/// reversals are long chains of scalar work that vectorise lane by lane).
+pub fn first_pairs(index: u32, seed: u32) -> ([f32; FIRST_PAIRS], [f32; FIRST_PAIRS]) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU has AVX2.
+        return unsafe { first_pairs_avx2(index, seed) };
+    }
+    first_pairs_scalar(index, seed)
+}
+
+/// [`first_pairs`] one pair at a time.
+pub fn first_pairs_scalar(index: u32, seed: u32) -> ([f32; FIRST_PAIRS], [f32; FIRST_PAIRS]) {
+    let (mut xs, mut ys) = ([0.0; FIRST_PAIRS], [0.0; FIRST_PAIRS]);
+    for p in 0..FIRST_PAIRS {
+        let v = sample_2d(index, p as u32, seed);
+        (xs[p], ys[p]) = (v.x, v.y);
+    }
+    (xs, ys)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn first_pairs_avx2(index: u32, seed: u32) -> ([f32; FIRST_PAIRS], [f32; FIRST_PAIRS]) {
+    use std::arch::x86_64::*;
+    let splat = |x: u32| _mm256_set1_epi32(x as i32);
+    let mul = |a: __m256i, k: u32| _mm256_mullo_epi32(a, splat(k));
+    let hash = |mut x: __m256i| {
+        x = _mm256_xor_si256(x, _mm256_srli_epi32::<16>(x));
+        x = mul(x, 0x7feb_352d);
+        x = _mm256_xor_si256(x, _mm256_srli_epi32::<15>(x));
+        x = mul(x, 0x846c_a68b);
+        _mm256_xor_si256(x, _mm256_srli_epi32::<16>(x))
+    };
+    let laine_karras = |mut v: __m256i, seed: __m256i| {
+        v = _mm256_xor_si256(v, mul(v, 0x3d20_adea));
+        v = _mm256_add_epi32(v, seed);
+        v = _mm256_mullo_epi32(v, _mm256_or_si256(_mm256_srli_epi32::<16>(seed), splat(1)));
+        v = _mm256_xor_si256(v, mul(v, 0x0552_6c56));
+        _mm256_xor_si256(v, mul(v, 0x53a2_2864))
+    };
+    // Bit reversal of each lane: its bytes reversed by one shuffle, each byte's
+    // bits by two nibble look-ups.
+    let reverse = |x: __m256i| {
+        // The same table in both 128-bit halves (`vpshufb` looks up within each).
+        let table = |bytes: [u8; 16]| {
+            // SAFETY: 16 bytes are read from a 16-byte array.
+            _mm256_broadcastsi128_si256(unsafe { _mm_loadu_si128(bytes.as_ptr().cast()) })
+        };
+        let bytes = table([3, 2, 1, 0, 7, 6, 5, 4, 11, 10, 9, 8, 15, 14, 13, 12]);
+        // Nibble n reversed, in the high and in the low half of a byte.
+        let high = table(NIBBLES_REVERSED_HIGH);
+        let low = table(NIBBLES_REVERSED);
+        let nibble = _mm256_set1_epi8(0x0f);
+        let x = _mm256_shuffle_epi8(x, bytes);
+        let lo = _mm256_and_si256(x, nibble);
+        let hi = _mm256_and_si256(_mm256_srli_epi16::<4>(x), nibble);
+        _mm256_or_si256(_mm256_shuffle_epi8(high, lo), _mm256_shuffle_epi8(low, hi))
+    };
+    // Sobol' dimension 1 on bit-reversed index and value (`sobol1_reversed`):
+    // the generator matrix is Pascal's mod 2, so the reversed value's bit m is
+    // the XOR of the reversed index's bits at the subsets of 31 - m: a subset
+    // sum in five shift steps, then one reversal.
+    let sobol1_reversed = |mut x: __m256i| {
+        let step = |x: __m256i, mask: u32, shift: i32| {
+            let moved =
+                _mm256_sll_epi32(_mm256_and_si256(x, splat(mask)), _mm_cvtsi32_si128(shift));
+            _mm256_xor_si256(x, moved)
+        };
+        x = step(x, 0x5555_5555, 1);
+        x = step(x, 0x3333_3333, 2);
+        x = step(x, 0x0f0f_0f0f, 4);
+        x = step(x, 0x00ff_00ff, 8);
+        x = step(x, 0x0000_ffff, 16);
+        reverse(x)
+    };
+    let to_unit = |x: __m256i| {
+        _mm256_mul_ps(
+            _mm256_cvtepi32_ps(_mm256_srli_epi32::<8>(x)),
+            _mm256_set1_ps(1.0 / (1u32 << 24) as f32),
+        )
+    };
+    // SAFETY (the loads and stores): `PAIR_KEYS` and the outputs hold eight u32/f32.
+    let keys = unsafe { _mm256_loadu_si256(PAIR_KEYS.as_ptr().cast()) };
+    // `pair_seeds` lane by lane.
+    let shuffle = hash(_mm256_xor_si256(splat(seed), keys));
+    let s0 = hash(_mm256_xor_si256(
+        shuffle,
+        splat(hash32(1u32.wrapping_add(0x9e37_79b9))),
+    ));
+    let s1 = hash(_mm256_xor_si256(
+        shuffle,
+        splat(hash32(2u32.wrapping_add(0x9e37_79b9))),
+    ));
+    // `sample_2d` lane by lane.
+    let r = laine_karras(splat(index.reverse_bits()), shuffle);
+    let x0 = laine_karras(reverse(r), s0);
+    let x1 = laine_karras(sobol1_reversed(r), s1);
+    let (mut xs, mut ys) = ([0.0f32; FIRST_PAIRS], [0.0f32; FIRST_PAIRS]);
+    unsafe {
+        _mm256_storeu_ps(xs.as_mut_ptr(), to_unit(reverse(x0)));
+        _mm256_storeu_ps(ys.as_mut_ptr(), to_unit(reverse(x1)));
+    }
+    (xs, ys)
 }
 
 /// The numbers of one sample of one pixel, handed out dimension by dimension:
@@ -436,6 +575,29 @@ mod tests {
         });
         assert_ne!(pixel_seed(1, 0), pixel_seed(0, 1));
         assert_ne!(pixel_seed(1, 0), pixel_seed(2, 0));
+    }
+
+    /// The eight pairs at once equal `sample_2d` bit for bit (AVX2 where the CPU
+    /// has it, and the scalar version).
+    #[test]
+    fn first_pairs_equal_sample_2d() {
+        let mut r = Rng::new(11, 12);
+        let cases = (0..20_000)
+            .map(|_| (r.next_u32(), r.next_u32()))
+            .chain((0..64).map(|i| (i, 7)))
+            .chain([(u32::MAX, u32::MAX), (0, 0), (1 << 31, 1)]);
+        for (index, seed) in cases {
+            for (xs, ys) in [first_pairs(index, seed), first_pairs_scalar(index, seed)] {
+                for p in 0..FIRST_PAIRS {
+                    let want = sample_2d(index, p as u32, seed);
+                    assert_eq!(
+                        (xs[p].to_bits(), ys[p].to_bits()),
+                        (want.x.to_bits(), want.y.to_bits()),
+                        "index {index} seed {seed} pair {p}"
+                    );
+                }
+            }
+        }
     }
 
     #[test]

@@ -244,8 +244,9 @@ impl Bvh {
             return None;
         }
         let boxes = BoxQuery::new(ray.origin, ray.dir);
-        // Made at the first leaf: many rays never reach one.
-        let mut tri_ray: Option<PacketRay> = None;
+        // Made at once: kept in an `Option` until the first leaf, it was copied
+        // there and back (most rays reach a leaf).
+        let tri_ray = PacketRay::new(ray.origin, ray.dir);
         let mut best: Option<Hit> = None;
         let mut t_max = t_max;
         let mut stack = Stack::<(ChildRef, f32)>::new();
@@ -253,8 +254,7 @@ impl Bvh {
         let mut cur = root;
         loop {
             if cur & LEAF != 0 {
-                let tri_ray = tri_ray.get_or_insert_with(|| PacketRay::new(ray.origin, ray.dir));
-                if let Some(h) = self.leaf_closest(isa, tri_ray, cur, t_max) {
+                if let Some(h) = self.leaf_closest(isa, &tri_ray, cur, t_max) {
                     t_max = h.t;
                     best = Some(h);
                 }
@@ -324,7 +324,7 @@ impl Bvh {
             return false;
         }
         let boxes = BoxQuery::new(ray.origin, ray.dir);
-        // Made at the first leaf: many rays never reach one.
+        // Made at the first leaf: many shadow rays never reach one.
         let mut tri_ray: Option<PacketRay> = None;
         let mut stack = Stack::<ChildRef>::new();
         let mut t_near = [0.0f32; WIDTH];
