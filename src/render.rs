@@ -838,11 +838,10 @@ impl Tile<'_> {
                 for qy in (0..n_rows).step_by(2) {
                     let blocks_end = if qy + 1 < n_rows { width / 4 * 4 } else { 0 };
                     for qx in (0..blocks_end).step_by(4) {
-                        let pixel = |x: usize, y: usize| ((y0 + y) * width + x) as u64;
                         let block: [(usize, usize); 8] =
                             std::array::from_fn(|i| (qx + i % 4, qy + i / 4));
                         let mut starts = block
-                            .map(|(x, y)| PathStart::new(camera, &options, seed, pixel(x, y), s));
+                            .map(|(x, y)| PathStart::new(camera, &options, seed, (x, y0 + y), s));
                         let primary = starts.each_ref().map(|p| p.ray);
                         rays += 8;
                         let hits = scene.intersect8(&primary, f32::INFINITY);
@@ -851,11 +850,10 @@ impl Tile<'_> {
                         }
                     }
                     for qx in (blocks_end..width).step_by(2) {
-                        let pixel = |x: usize, y: usize| ((y0 + y) * width + x) as u64;
                         if qy + 1 < n_rows && qx + 1 < width {
                             let quad = [(qx, qy), (qx + 1, qy), (qx, qy + 1), (qx + 1, qy + 1)];
                             let mut starts = quad.map(|(x, y)| {
-                                PathStart::new(camera, &options, seed, pixel(x, y), s)
+                                PathStart::new(camera, &options, seed, (x, y0 + y), s)
                             });
                             let primary = starts.each_ref().map(|p| p.ray);
                             rays += 4;
@@ -869,7 +867,7 @@ impl Tile<'_> {
                             for y in qy..(qy + 2).min(n_rows) {
                                 for x in qx..(qx + 2).min(width) {
                                     let mut start =
-                                        PathStart::new(camera, &options, seed, pixel(x, y), s);
+                                        PathStart::new(camera, &options, seed, (x, y0 + y), s);
                                     rays += 1;
                                     let hit = scene.intersect(&start.ray, f32::INFINITY);
                                     path_sample(y * width + x, &mut start, hit, &mut rays);
@@ -976,11 +974,17 @@ struct PathStart {
 
 impl PathStart {
     #[inline]
-    fn new(camera: &Camera, options: &PathOptions, seed: u64, pixel: u64, s: u32) -> Self {
-        let (x, y) = (
-            (pixel % camera.width as u64) as f32,
-            (pixel / camera.width as u64) as f32,
-        );
+    fn new(
+        camera: &Camera,
+        options: &PathOptions,
+        seed: u64,
+        (x, y): (usize, usize),
+        s: u32,
+    ) -> Self {
+        // (The pixel's column and row given, not divided out of its index: a
+        // 64-bit division per sample.)
+        let pixel = (y * camera.width as usize + x) as u64;
+        let (x, y) = (x as f32, y as f32);
         let mut sampler = match options.sampler {
             SamplerKind::Sobol => AnySampler::Sobol(path::SobolSampler::new(pixel, s, seed)),
             SamplerKind::Independent => AnySampler::Independent(Rng::for_sample(seed, pixel, s)),
@@ -1068,8 +1072,7 @@ pub fn probe_sample(
     let width = camera.width as usize;
     match integrator {
         Integrator::Path(options) => {
-            let pixel = y as u64 * camera.width as u64 + x as u64;
-            let start = PathStart::new(camera, &options, seed, pixel, s);
+            let start = PathStart::new(camera, &options, seed, (x as usize, y as usize), s);
             let hit = scene.intersect(&start.ray, f32::INFINITY);
             let ray = start.ray;
             let mut observe = |_: &SurfaceHit, _: &Material| {};
