@@ -115,7 +115,7 @@ pub struct SceneArgs {
     #[arg(long, value_name = "N", allow_hyphen_values = true, value_parser = parse_max_depth)]
     pub max_depth: Option<u32>,
     /// Sample points of `path`: `sobol` (Owen-scrambled Sobol' for the pixel and
-    /// the first bounce) or `independent` (PCG32 only).
+    /// the first two bounces) or `independent` (PCG32 only).
     #[arg(long, default_value = "sobol", value_parser = parse_sampler)]
     pub sampler: raylab::integrators::path::SamplerKind,
     /// Materials of the built-in box's parts for `path`, e.g.
