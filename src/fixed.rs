@@ -90,12 +90,90 @@ pub fn to_f64(s: i128) -> f64 {
 /// Fixed-point RGB sums of one pixel.
 pub type Fixed3 = [i128; 3];
 
-/// Adds the samples of `v` to `sum`.
+/// Adds the samples of `v` to `sum`. The three conversions run in AVX2
+/// lanes where the CPU has it (the same sums, bit for bit): one at a time they
+/// were 130 of a `direct` sample's 920 instructions.
 #[inline]
 pub fn add3(sum: &mut Fixed3, v: glam::Vec3A) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU has AVX2.
+        unsafe { add3_avx2(sum, v) };
+        return;
+    }
+    add3_scalar(sum, v);
+}
+
+/// [`add3`] one channel at a time.
+#[inline]
+pub fn add3_scalar(sum: &mut Fixed3, v: glam::Vec3A) {
     sum[0] += fixed(v.x);
     sum[1] += fixed(v.y);
     sum[2] += fixed(v.z);
+}
+
+/// [`fixed`] of x, y and z in three 64-bit lanes, each as two halves (the
+/// high and low 64 bits of the `i128`), then added to the sums with carries.
+/// AVX2's variable shifts give 0 for counts of 64 or more, which the shifts
+/// below rely on (a count "below zero" wraps to a huge one).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn add3_avx2(sum: &mut Fixed3, v: glam::Vec3A) {
+    use std::arch::x86_64::*;
+    let bits = _mm_castps_si128(v.into());
+    // Exponent, mantissa and the shifts of `fixed`, in 32-bit lanes.
+    let e = _mm_and_si128(_mm_srli_epi32::<23>(bits), _mm_set1_epi32(0xff));
+    let up = _mm_min_epi32(
+        _mm_max_epi32(_mm_sub_epi32(e, _mm_set1_epi32(86)), _mm_setzero_si128()),
+        _mm_set1_epi32(82),
+    );
+    let down = _mm_min_epi32(
+        _mm_max_epi32(_mm_sub_epi32(_mm_set1_epi32(86), e), _mm_setzero_si128()),
+        _mm_set1_epi32(63),
+    );
+    let m = _mm_or_si128(
+        _mm_and_si128(bits, _mm_set1_epi32(0x7f_ffff)),
+        _mm_set1_epi32(0x80_0000),
+    );
+    let (m, up, down) = (
+        _mm256_cvtepu32_epi64(m),
+        _mm256_cvtepu32_epi64(up),
+        _mm256_cvtepu32_epi64(down),
+    );
+    // m >> down << up as 128 bits: `up` and `down` are never both non-zero.
+    let m = _mm256_srlv_epi64(m, down);
+    let sixty_four = _mm256_set1_epi64x(64);
+    let lo = _mm256_sllv_epi64(m, up);
+    let hi = _mm256_or_si256(
+        _mm256_srlv_epi64(m, _mm256_sub_epi64(sixty_four, up)),
+        _mm256_sllv_epi64(m, _mm256_sub_epi64(up, sixty_four)),
+    );
+    // |v| ≥ 2⁴² and ±∞ clamp to 2⁴² (high half); NaN is 0.
+    let e64 = _mm256_cvtepu32_epi64(e);
+    let clamp = _mm256_cmpgt_epi64(e64, _mm256_set1_epi64x(127 + 42 - 1));
+    let nan = _mm256_cvtepi32_epi64(_mm_castps_si128(_mm_cmpunord_ps(v.into(), v.into())));
+    let keep = _mm256_andnot_si256(nan, _mm256_andnot_si256(clamp, _mm256_set1_epi64x(-1)));
+    let lo = _mm256_and_si256(lo, keep);
+    let hi = _mm256_or_si256(
+        _mm256_and_si256(hi, keep),
+        _mm256_andnot_si256(nan, _mm256_and_si256(clamp, _mm256_set1_epi64x(1 << 42))),
+    );
+    // Negative values: the 128-bit two's complement, !x + 1, whose carry
+    // reaches the high half when the low half is 0.
+    let sign = _mm256_cvtepi32_epi64(_mm_srai_epi32::<31>(bits));
+    let lo_zero = _mm256_cmpeq_epi64(lo, _mm256_setzero_si256());
+    let lo = _mm256_sub_epi64(_mm256_xor_si256(lo, sign), sign);
+    let hi = _mm256_sub_epi64(_mm256_xor_si256(hi, sign), _mm256_and_si256(sign, lo_zero));
+    let mut los = [0u64; 4];
+    let mut his = [0u64; 4];
+    // SAFETY: both arrays hold four 64-bit lanes.
+    unsafe {
+        _mm256_storeu_si256(los.as_mut_ptr().cast(), lo);
+        _mm256_storeu_si256(his.as_mut_ptr().cast(), hi);
+    }
+    for c in 0..3 {
+        sum[c] = sum[c].wrapping_add((u128::from(his[c]) << 64 | u128::from(los[c])) as i128);
+    }
 }
 
 #[cfg(test)]
@@ -148,6 +226,62 @@ mod tests {
             check(v);
             check(v.next_up());
             check(v.next_down());
+        }
+    }
+
+    /// The lanes' conversion adds exactly what the scalar one does, on random
+    /// bit patterns (NaNs, infinities, subnormals, both signs) and on the
+    /// edges of each case.
+    #[test]
+    fn lanes_add_what_one_at_a_time_adds() {
+        let mut x = 0x51_7cc1_b727_220au64;
+        let mut next = || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            x
+        };
+        let mut edges = Vec::new();
+        for v in [
+            0.0f32,
+            1.0,
+            MAX_SAMPLE,
+            f32::MAX,
+            f32::MIN_POSITIVE,
+            5.4e-20,
+            2f32.powi(-41),
+            2f32.powi(22),
+            f32::INFINITY,
+        ] {
+            for w in [v, v.next_up(), v.next_down()] {
+                edges.extend([w, -w]);
+            }
+        }
+        edges.push(f32::NAN);
+        // Far from zero, so that carries between the halves are exercised.
+        let mut lanes: Fixed3 = [1 << 100, -3, -(1 << 100) + 7];
+        let mut one = lanes;
+        for round in 0..300_000 {
+            let v = if round < edges.len() * 3 {
+                let i = round % edges.len();
+                glam::Vec3A::new(
+                    edges[i],
+                    edges[(i + 1) % edges.len()],
+                    edges[(i + 7) % edges.len()],
+                )
+            } else {
+                let r = next();
+                glam::Vec3A::new(
+                    f32::from_bits(r as u32),
+                    f32::from_bits((r >> 32) as u32),
+                    f32::from_bits((r >> 16) as u32),
+                )
+            };
+            add3(&mut lanes, v);
+            for c in 0..3 {
+                one[c] += fixed(v[c]);
+            }
+            assert_eq!(lanes, one, "round {round}: {v:?}");
         }
     }
 
