@@ -76,7 +76,8 @@ impl Default for PathOptions {
 /// A stream of sample values for one path (one pixel sample). The path tracer
 /// asks for a 2D pair for the pixel position, then per bounce a pair for the
 /// point on the light, a pair for the BSDF direction, a "minor" pair for the
-/// light and lobe choices, and one number for Russian roulette.
+/// choices of light and lobe (only when there is a choice), and one number for
+/// Russian roulette (only where it may end the path).
 pub trait PathSampler {
     /// The next two values in `[0, 1)` for a decision that gains little from
     /// stratification (which light, which lobe).
@@ -294,6 +295,7 @@ pub fn radiance_traced(
     // Beer–Lambert attenuation per unit length of the medium the ray is in.
     let mut medium = Vec3A::ZERO;
     let textures = scene.textures();
+    let lights_need_samples = scene.light_needs_samples();
     loop {
         let Some(hit) = next_hit else {
             // Escaped: the environment is seen, weighted against having
@@ -377,16 +379,26 @@ pub fn radiance_traced(
         // geometric and the shading surface, or light leaks through it.
         let same_side = |w: Vec3A| !shading || (w.dot(ng) > 0.0) == (w.dot(n) > 0.0);
 
+        // Choices and the roulette's number are drawn only where they are
+        // used: each independent number costs about a dozen instructions, and
+        // a vertex of the lab box (one point light, diffuse walls) has no
+        // choice to make. (Skipping the point on the light too, which the key
+        // light does not need, saved 1 % on the box but cost 0.5 % a ray on
+        // `cornell-area`.)
+        // Next-event estimation (nothing to gain on a delta lobe).
+        let light_sampled = !bsdf.is_specular();
         let u_light_pos = sampler.next_2d();
         let u_bsdf = sampler.next_2d();
-        let u_choice = sampler.next_2d_minor();
+        // One pair for both choices: `x` picks the light, `y` settles the
+        // light table's coin and picks the lobe.
+        let u_choice = if (light_sampled && lights_need_samples) || bsdf.chooses_lobe() {
+            sampler.next_2d_minor()
+        } else {
+            Vec2::ZERO
+        };
         let u_lobe = u_choice.y;
-        let u_rr = sampler.next_1d();
 
-        // Next-event estimation (nothing to gain on a delta lobe).
-        if !bsdf.is_specular()
-            && let Some(light) = scene.sample_light(sp.p, u_choice, u_light_pos)
-        {
+        if light_sampled && let Some(light) = scene.sample_light(sp.p, u_choice, u_light_pos) {
             let (target, li, light_pdf) = match light {
                 LightSample::Point {
                     position,
@@ -480,7 +492,7 @@ pub fn radiance_traced(
         if depth >= RR_DEPTH {
             let survive = (beta.max_element() * RR_SCALE).min(0.95);
             // (A NaN throughput ends the path too.)
-            if u_rr >= survive || survive.is_nan() {
+            if sampler.next_1d() >= survive || survive.is_nan() {
                 break;
             }
             beta /= survive;

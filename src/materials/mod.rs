@@ -361,6 +361,13 @@ impl Material {
         }
     }
 
+    /// Whether [`Material::sample`] reads `u_lobe` (glass and the glTF
+    /// material choose between lobes).
+    #[inline]
+    pub fn chooses_lobe(&self) -> bool {
+        matches!(self, Material::Dielectric { .. } | Material::Pbr(_))
+    }
+
     /// Whether the material has only delta lobes (mirror, glass, smooth
     /// conductors, a smooth [`Material::Pbr`] without a diffuse part):
     /// next-event estimation cannot hit them, so an integrator should only follow

@@ -799,6 +799,16 @@ impl Scene {
         self.point_power() > 0.0 || !self.light_table.alias.is_empty()
     }
 
+    /// Whether [`Scene::sample_light`] reads its sample values: only when there
+    /// are lights besides the key light (area lights, the environment, the
+    /// glTF lights) to choose among or to pick a point on. Without them it
+    /// returns the key light whatever the values, and a path tracer need not
+    /// draw them.
+    #[inline]
+    pub fn light_needs_samples(&self) -> bool {
+        self.light_table.total > 0.0
+    }
+
     /// Picks a light with `u_select` (by power: the key light `P`; other
     /// punctual lights [`Light::power`]; the environment `π r² ∫ L dω`; each
     /// emitting triangle `π·A·Le`, doubled for two-sided emitters; or uniformly,
@@ -809,6 +819,7 @@ impl Scene {
     /// chosen one sends nothing to `p`.
     #[inline]
     pub fn sample_light(&self, p: Vec3A, u_select: Vec2, u: Vec2) -> Option<LightSample> {
+        // (`light_needs_samples` must say when `u_select` and `u` are read.)
         let key = self.key_weight();
         let rest = self.light_table.total;
         let total = key + rest;
