@@ -17,7 +17,7 @@ use crate::geometry::ray::{Hit, Ray};
 use crate::integrators::Integrator;
 use crate::integrators::path::{self, PathOptions, PathSampler, SamplerKind};
 use crate::materials::Material;
-use crate::sampling::sampler::Rng;
+use crate::sampling::sampler::{Rng, pixel_jitter};
 use crate::scene::{Scene, SurfaceHit};
 
 /// Rows per tile: small enough to balance two cores on small images, large enough
@@ -1034,8 +1034,7 @@ fn pixel_point(seed: u64, s: u32, x: usize, y: usize, width: usize) -> (f32, f32
     let (dx, dy) = if s == 0 {
         (0.5, 0.5)
     } else {
-        let mut rng = Rng::for_sample(seed, (y * width + x) as u64, s);
-        (rng.next_f32(), rng.next_f32())
+        pixel_jitter(seed, (y * width + x) as u64, s)
     };
     (x as f32 + dx, y as f32 + dy)
 }
