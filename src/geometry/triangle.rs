@@ -119,6 +119,68 @@ pub fn axis_order(dir: Vec3A) -> [usize; 3] {
     }
 }
 
+/// The axis order of every ray of a packet, if they all share one and all are
+/// finite (`None` otherwise: such a packet is traced ray by ray). Each ray's
+/// order comes from three comparisons and a 64-entry table, branch-free: with
+/// [`axis_order`]'s branches this check was 13 % of a `direct` frame's
+/// instructions.
+#[inline(always)]
+pub fn shared_axis_order(rays: &[Ray]) -> Option<[usize; 3]> {
+    let first = rays.first()?;
+    let key = axis_key(first.dir);
+    let mut same = true;
+    // A non-finite coordinate times zero is NaN, which stays NaN in the sum.
+    let mut sum = Vec3A::ZERO;
+    for r in rays {
+        same &= axis_key(r.dir) == key;
+        sum += r.origin * 0.0 + r.dir * 0.0;
+    }
+    (same && sum == Vec3A::ZERO).then(|| ORDER_OF_KEY[key as usize])
+}
+
+/// [`axis_order`] as a number in `0..6`, `2·kz + (dir[kz] < 0)`: of the
+/// comparisons `|x| ≥ |y|`, `|x| ≥ |z|`, `|y| ≥ |z|` and the three signs, looked
+/// up in [`KEY_OF_BITS`].
+#[inline(always)]
+fn axis_key(dir: Vec3A) -> u8 {
+    let a = dir.abs();
+    let bits = u32::from(a.x >= a.y)
+        | u32::from(a.x >= a.z) << 1
+        | u32::from(a.y >= a.z) << 2
+        | dir.cmplt(Vec3A::ZERO).bitmask() << 3;
+    KEY_OF_BITS[bits as usize]
+}
+
+/// [`axis_key`] of the comparison and sign bits, as [`axis_order`] decides.
+const KEY_OF_BITS: [u8; 64] = {
+    let mut table = [0u8; 64];
+    let mut bits = 0;
+    while bits < 64 {
+        let (x_ge_y, x_ge_z, y_ge_z) = (bits & 1 != 0, bits & 2 != 0, bits & 4 != 0);
+        let kz = if x_ge_y && x_ge_z {
+            0
+        } else if y_ge_z {
+            1
+        } else {
+            2
+        };
+        let negative = (bits >> (3 + kz)) & 1;
+        table[bits] = (2 * kz + negative) as u8;
+        bits += 1;
+    }
+    table
+};
+
+/// The axis order of each [`axis_key`].
+const ORDER_OF_KEY: [[usize; 3]; 6] = [
+    [1, 2, 0],
+    [2, 1, 0],
+    [2, 0, 1],
+    [0, 2, 1],
+    [0, 1, 2],
+    [1, 0, 2],
+];
+
 /// Numbers the error bound is computed on: `f32` for one ray, [`Vec4`] for four
 /// lanes at once, with the same operations in the same order.
 pub trait Lanes: Copy + Add<Output = Self> + Mul<Output = Self> + Div<Output = Self> {
@@ -259,6 +321,56 @@ mod tests {
 
     fn hit(ray: &Ray, tri: &Triangle) -> Option<TriangleHit> {
         intersect(&RayShear::new(ray), &tri.v, f32::INFINITY)
+    }
+
+    /// The table's order is `axis_order`'s for every direction, ties, zeros
+    /// of both signs and infinities included, and a packet shares it exactly
+    /// when all its rays have it and are finite.
+    #[test]
+    fn shared_axis_order_is_axis_order() {
+        let values = [
+            0.0f32,
+            -0.0,
+            1.0,
+            -1.0,
+            0.5,
+            -0.5,
+            2.0,
+            -2.0,
+            1e-30,
+            f32::INFINITY,
+        ];
+        let mut dirs = Vec::new();
+        for &x in &values {
+            for &y in &values {
+                for &z in &values {
+                    dirs.push(Vec3A::new(x, y, z));
+                }
+            }
+        }
+        let mut rng = crate::sampling::sampler::Rng::new(3, 4);
+        for _ in 0..20_000 {
+            dirs.push(Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) - 0.5);
+        }
+        let o = Vec3A::new(0.25, -1.0, 3.0);
+        for (i, &d) in dirs.iter().enumerate() {
+            let one = [Ray::new(o, d)];
+            let want = d.is_finite().then(|| axis_order(d));
+            assert_eq!(shared_axis_order(&one), want, "{d:?}");
+            // Paired with another direction: shared only if both orders agree.
+            let e = dirs[(i * 7 + 3) % dirs.len()];
+            let two = [Ray::new(o, d), Ray::new(o, e)];
+            let want = (d.is_finite() && e.is_finite() && axis_order(d) == axis_order(e))
+                .then(|| axis_order(d));
+            assert_eq!(shared_axis_order(&two), want, "{d:?} {e:?}");
+        }
+        for bad in [f32::NAN, f32::INFINITY, -f32::INFINITY] {
+            let rays = [
+                Ray::new(o, Vec3A::X),
+                Ray::new(Vec3A::new(0.0, bad, 0.0), Vec3A::X),
+            ];
+            assert_eq!(shared_axis_order(&rays), None);
+        }
     }
 
     fn unit() -> Triangle {

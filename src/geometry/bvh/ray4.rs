@@ -13,7 +13,7 @@ use super::node::{ChildRef, EMPTY, LEAF, WIDTH, safe_inverse};
 use super::packet::{Packet, candidates};
 use super::{Bvh, Stack};
 use crate::geometry::ray::{Hit, Ray, gamma};
-use crate::geometry::triangle::{self, RayShear, axis_order};
+use crate::geometry::triangle::{self, RayShear, shared_axis_order};
 
 /// Per-packet constants: origins and safe inverse directions by axis, and the
 /// triangle test's shared axis order with per-lane origins and shears.
@@ -31,16 +31,7 @@ impl<'a> Query4<'a> {
     /// not finite): the caller traces them one by one.
     #[inline(always)]
     fn new(rays: &'a [Ray; 4]) -> Option<Self> {
-        let k = axis_order(rays[0].dir);
-        for r in rays {
-            // Element by element: comparing the arrays whole loaded 16 bytes just
-            // written as two 8-byte stores, a store-forwarding stall per ray.
-            let kr = axis_order(r.dir);
-            let same = kr[0] == k[0] && kr[1] == k[1] && kr[2] == k[2];
-            if !same || !r.origin.is_finite() || !r.dir.is_finite() {
-                return None;
-            }
-        }
+        let k = shared_axis_order(rays)?;
         let [a, b, c, d] = rays;
         let origin = [
             Vec4::new(a.origin.x, b.origin.x, c.origin.x, d.origin.x),

@@ -21,7 +21,9 @@ use super::node::{ChildRef, EMPTY, Isa, LEAF, WIDTH, safe_inverse};
 use super::packet::{Packet, PacketRay};
 use super::{Bvh, Stack};
 use crate::geometry::ray::{Hit, Ray, gamma};
-use crate::geometry::triangle::{self, Lanes, RayShear, TriangleHit, axis_order, t_error_bound};
+use crate::geometry::triangle::{
+    self, Lanes, RayShear, TriangleHit, shared_axis_order, t_error_bound,
+};
 
 /// Eight f32 lanes (also used as a mask: all bits set = true).
 #[derive(Clone, Copy, Debug)]
@@ -241,15 +243,7 @@ impl<'a> Query8<'a> {
     /// order for the triangle test.
     #[inline(always)]
     fn shared_axes(rays: &[Ray; 8]) -> Option<[usize; 3]> {
-        let k = axis_order(rays[0].dir);
-        for r in rays {
-            let kr = axis_order(r.dir);
-            let same = kr[0] == k[0] && kr[1] == k[1] && kr[2] == k[2];
-            if !same || !r.origin.is_finite() || !r.dir.is_finite() {
-                return None;
-            }
-        }
-        Some(k)
+        shared_axis_order(rays)
     }
 
     /// The packet's constants; called inside the AVX2 functions only (the lanes
