@@ -171,6 +171,12 @@ const KEY_OF_BITS: [u8; 64] = {
     table
 };
 
+/// [`axis_order`] for the largest axis `kz` and the sign of `dir[kz]`.
+#[inline(always)]
+pub fn axis_order_of(kz: usize, negative: bool) -> [usize; 3] {
+    ORDER_OF_KEY[2 * kz + usize::from(negative)]
+}
+
 /// The axis order of each [`axis_key`].
 const ORDER_OF_KEY: [[usize; 3]; 6] = [
     [1, 2, 0],

@@ -21,9 +21,7 @@ use super::node::{ChildRef, EMPTY, Isa, LEAF, WIDTH, safe_inverse};
 use super::packet::{Packet, PacketRay};
 use super::{Bvh, Stack};
 use crate::geometry::ray::{Hit, Ray, gamma};
-use crate::geometry::triangle::{
-    self, Lanes, RayShear, TriangleHit, shared_axis_order, t_error_bound,
-};
+use crate::geometry::triangle::{self, Lanes, RayShear, TriangleHit, axis_order_of, t_error_bound};
 
 /// Eight f32 lanes (also used as a mask: all bits set = true).
 #[derive(Clone, Copy, Debug)]
@@ -239,17 +237,14 @@ struct Query8<'a> {
 }
 
 impl<'a> Query8<'a> {
-    /// Whether the rays can be traced together: all finite, with the same axis
-    /// order for the triangle test.
+    /// The packet's constants, or `None` when the rays cannot be traced
+    /// together: one is not finite, or they do not share the triangle test's
+    /// axis order ([`axis_order`], decided here in the lanes: ray by ray it was
+    /// 13 % of a `direct` frame's instructions). Called inside the AVX2
+    /// functions only (the lanes are gathered with plain stores, then loaded
+    /// once).
     #[inline(always)]
-    fn shared_axes(rays: &[Ray; 8]) -> Option<[usize; 3]> {
-        shared_axis_order(rays)
-    }
-
-    /// The packet's constants; called inside the AVX2 functions only (the lanes
-    /// are gathered with plain stores, then loaded once).
-    #[inline(always)]
-    fn new(rays: &'a [Ray; 8], k: [usize; 3]) -> Self {
+    fn new(rays: &'a [Ray; 8]) -> Option<Self> {
         let mut lanes = [[0.0f32; 8]; 9];
         for (i, r) in rays.iter().enumerate() {
             let inv = safe_inverse(r.dir);
@@ -274,15 +269,56 @@ impl<'a> Query8<'a> {
             F8::from_array(lanes[7]),
             F8::from_array(lanes[8]),
         ];
+        // A non-finite coordinate times zero is NaN, which stays NaN.
+        let zero = F8::zero();
+        let mut sum = zero;
+        for a in 0..3 {
+            sum = sum + origin[a] * zero + dir[a] * zero;
+        }
+        // `axis_order` lane by lane: the largest axis (ties to the first) and
+        // the sign along it, which must be the same in every lane.
+        let [ax, ay, az] = dir.map(Lanes::abs);
+        let x_largest = ay.cmple(ax) & az.cmple(ax);
+        let y_largest = !x_largest & az.cmple(ay);
+        let along = F8::select(x_largest, dir[0], F8::select(y_largest, dir[1], dir[2]));
+        let negative = along.cmplt(zero).bitmask();
+        let (x_largest, y_largest) = (x_largest.bitmask(), y_largest.bitmask());
+        let uniform = |bits: u32| bits == 0 || bits == 0xff;
+        if sum.cmpeq(zero).bitmask() != 0xff
+            || !uniform(x_largest)
+            || !uniform(y_largest)
+            || !uniform(negative)
+        {
+            return None;
+        }
+        let kz = if x_largest != 0 {
+            0
+        } else if y_largest != 0 {
+            1
+        } else {
+            2
+        };
+        let k = axis_order_of(kz, negative != 0);
         let inv_z = F8::splat(1.0) / dir[k[2]];
-        Self {
+        Some(Self {
             rays,
             origin,
             inv_dir,
             k,
             origin_k: [origin[k[0]], origin[k[1]], origin[k[2]]],
             shear: [dir[k[0]] * inv_z, dir[k[1]] * inv_z, inv_z],
-        }
+        })
+    }
+
+    /// Whether every ray starts at the first one's origin.
+    #[inline(always)]
+    fn one_origin(&self) -> bool {
+        (0..3).all(|a| {
+            self.origin[a]
+                .cmpeq(F8::splat(self.rays[0].origin[a]))
+                .bitmask()
+                == 0xff
+        })
     }
 
     /// Entry and exit distances of the slab of axis `a` of child `c`.
@@ -559,15 +595,24 @@ impl Bvh {
             return None;
         }
         let root = self.root?;
-        let k = Query8::shared_axes(rays)?;
-        let shared_origin = rays.iter().all(|r| r.origin == rays[0].origin);
         // SAFETY: `Isa::Avx2` is only chosen when the CPU has AVX2.
-        Some(unsafe {
-            if shared_origin {
-                self.intersect8_from_one_point_avx2(rays, k, root, t_max)
-            } else {
-                self.intersect8_avx2(rays, k, root, t_max)
-            }
+        unsafe { self.intersect8_either_avx2(rays, root, t_max) }
+    }
+
+    /// Packets from one point take the interval test, the others the eight
+    /// slab tests.
+    #[target_feature(enable = "avx2")]
+    fn intersect8_either_avx2(
+        &self,
+        rays: &[Ray; 8],
+        root: ChildRef,
+        t_max: f32,
+    ) -> Option<[Option<Hit>; 8]> {
+        let q = &Query8::new(rays)?;
+        Some(if q.one_origin() {
+            self.intersect8_from_one_point_avx2(q, root, t_max)
+        } else {
+            self.intersect8_avx2(q, root, t_max)
         })
     }
 
@@ -582,20 +627,12 @@ impl Bvh {
             return None;
         }
         let root = self.root?;
-        let k = Query8::shared_axes(rays)?;
         // SAFETY: as above.
-        Some(unsafe { self.occluded8_avx2(rays, k, root, t_max, active) })
+        unsafe { self.occluded8_avx2(rays, root, t_max, active) }
     }
 
     #[target_feature(enable = "avx2")]
-    fn intersect8_avx2(
-        &self,
-        rays: &[Ray; 8],
-        k: [usize; 3],
-        root: ChildRef,
-        t_max: f32,
-    ) -> [Option<Hit>; 8] {
-        let q = &Query8::new(rays, k);
+    fn intersect8_avx2(&self, q: &Query8<'_>, root: ChildRef, t_max: f32) -> [Option<Hit>; 8] {
         let mut best_t = F8::splat(t_max);
         let (mut b1, mut b2) = (F8::zero(), F8::zero());
         let mut prim = [u32::MAX; 8];
@@ -654,13 +691,11 @@ impl Bvh {
     #[target_feature(enable = "avx2")]
     fn intersect8_from_one_point_avx2(
         &self,
-        rays: &[Ray; 8],
-        k: [usize; 3],
+        q: &Query8<'_>,
         root: ChildRef,
         t_max: f32,
     ) -> [Option<Hit>; 8] {
-        let q = &Query8::new(rays, k);
-        let origin = rays[0].origin;
+        let origin = q.rays[0].origin;
         let inv_lo = [0, 1, 2].map(|a| q.inv_dir[a].min_element());
         let inv_hi = [0, 1, 2].map(|a| q.inv_dir[a].max_element());
         let exit_scale = F8::splat(1.0 + 2.0 * gamma(3));
@@ -720,12 +755,11 @@ impl Bvh {
     fn occluded8_avx2(
         &self,
         rays: &[Ray; 8],
-        k: [usize; 3],
         root: ChildRef,
         t_max: [f32; 8],
         active: [bool; 8],
-    ) -> [bool; 8] {
-        let q = &Query8::new(rays, k);
+    ) -> Option<[bool; 8]> {
+        let q = &Query8::new(rays)?;
         let t_max = F8::from_array(t_max);
         let bits = active
             .iter()
@@ -757,7 +791,7 @@ impl Bvh {
                 }
             }
         }
-        std::array::from_fn(|lane| blocked >> lane & 1 != 0)
+        Some(std::array::from_fn(|lane| blocked >> lane & 1 != 0))
     }
 }
 
@@ -874,6 +908,65 @@ mod tests {
     /// Eight rays traced together, from one point or from nearby points, give
     /// the single rays' closest hits (the same `t` bit for bit; barycentrics
     /// where the triangle is the same) and any-hit answers.
+    /// The lanes' decision to trace a packet together, and its axis order,
+    /// are those of `shared_axis_order` ray by ray: on packets of tied, signed
+    /// zero, infinite and NaN components, and on nearly parallel ones.
+    #[test]
+    fn packets_share_the_axis_order_the_rays_have() {
+        #[target_feature(enable = "avx2")]
+        fn lanes(rays: &[Ray; 8]) -> Option<([usize; 3], bool)> {
+            Query8::new(rays).map(|q| (q.k, q.one_origin()))
+        }
+        if !std::arch::is_x86_feature_detected!("avx2") {
+            return;
+        }
+        let mut rng = Rng::new(31, 0);
+        let values = [0.0f32, -0.0, 1.0, -1.0, 0.5, -2.0, f32::INFINITY, f32::NAN];
+        let (mut shared, mut apart) = (0, 0);
+        for round in 0..40_000 {
+            let base = Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) - 0.5;
+            let pick = |rng: &mut Rng| values[(rng.next_f32() * 8.0) as usize % 8];
+            let tied = Vec3A::new(pick(&mut rng), pick(&mut rng), pick(&mut rng));
+            let origin = Vec3A::new(1.0, 2.0, 3.0);
+            let odd_lane = (rng.next_f32() * 16.0) as usize;
+            let rays: [Ray; 8] = std::array::from_fn(|lane| {
+                let d = match round % 3 {
+                    // Built of the special values, the same in every lane but
+                    // perhaps one.
+                    0 if lane == odd_lane => {
+                        Vec3A::new(pick(&mut rng), pick(&mut rng), pick(&mut rng))
+                    }
+                    0 => tied,
+                    1 => {
+                        base + (Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) - 0.5)
+                            * 0.1
+                    }
+                    _ => base,
+                };
+                let o = if round % 5 == 0 {
+                    origin + d * 0.5
+                } else {
+                    origin
+                };
+                Ray::new(o, d)
+            });
+            // SAFETY: the CPU has AVX2.
+            let got = unsafe { lanes(&rays) };
+            let want = crate::geometry::triangle::shared_axis_order(&rays);
+            assert_eq!(got.map(|g| g.0), want, "round {round}: {rays:?}");
+            if let Some((_, one)) = got {
+                assert_eq!(one, rays.iter().all(|r| r.origin == rays[0].origin));
+                shared += 1;
+            } else {
+                apart += 1;
+            }
+        }
+        assert!(
+            shared > 10_000 && apart > 10_000,
+            "{shared} shared, {apart} apart"
+        );
+    }
+
     #[test]
     fn eight_rays_together_agree_with_one_at_a_time() {
         let mut rng = Rng::new(23, 0);
