@@ -119,6 +119,42 @@ pub fn add3_scalar(sum: &mut Fixed3, v: glam::Vec3A) {
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 fn add3_avx2(sum: &mut Fixed3, v: glam::Vec3A) {
+    let (lo, hi) = fixed_halves(v);
+    add_halves(sum, lo, hi);
+}
+
+/// Adds eight samples to the sums of their pixels: `sums[index[k]] += v[k]`
+/// (the eight of a 4×2 block of the lab's integrators). The same sums as
+/// eight [`add3`] calls, for fewer instructions (one call and one feature
+/// test, the constants loaded once).
+#[inline]
+pub fn add8(sums: &mut [Fixed3], index: [usize; 8], v: [glam::Vec3A; 8]) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU has AVX2.
+        unsafe { add8_avx2(sums, index, v) };
+        return;
+    }
+    for (i, v) in index.into_iter().zip(v) {
+        add3_scalar(&mut sums[i], v);
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn add8_avx2(sums: &mut [Fixed3], index: [usize; 8], v: [glam::Vec3A; 8]) {
+    for (i, v) in index.into_iter().zip(v) {
+        let (lo, hi) = fixed_halves(v);
+        add_halves(&mut sums[i], lo, hi);
+    }
+}
+
+/// [`fixed`] of x, y and z (and w, unused) as the low and high 64 bits of
+/// each `i128`, in four 64-bit lanes.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+fn fixed_halves(v: glam::Vec3A) -> (std::arch::x86_64::__m256i, std::arch::x86_64::__m256i) {
     use std::arch::x86_64::*;
     let bits = _mm_castps_si128(v.into());
     // Exponent, mantissa and the shifts of `fixed`, in 32-bit lanes.
@@ -164,6 +200,15 @@ fn add3_avx2(sum: &mut Fixed3, v: glam::Vec3A) {
     let lo_zero = _mm256_cmpeq_epi64(lo, _mm256_setzero_si256());
     let lo = _mm256_sub_epi64(_mm256_xor_si256(lo, sign), sign);
     let hi = _mm256_sub_epi64(_mm256_xor_si256(hi, sign), _mm256_and_si256(sign, lo_zero));
+    (lo, hi)
+}
+
+/// Adds the x, y and z lanes of [`fixed_halves`] to `sum`, with carries.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+fn add_halves(sum: &mut Fixed3, lo: std::arch::x86_64::__m256i, hi: std::arch::x86_64::__m256i) {
+    use std::arch::x86_64::*;
     let mut los = [0u64; 4];
     let mut his = [0u64; 4];
     // SAFETY: both arrays hold four 64-bit lanes.
@@ -282,6 +327,41 @@ mod tests {
                 one[c] += fixed(v[c]);
             }
             assert_eq!(lanes, one, "round {round}: {v:?}");
+        }
+    }
+
+    /// Eight samples at once add what they add one at a time, to the pixels
+    /// named (some named twice).
+    #[test]
+    fn eight_at_once_add_what_one_at_a_time_adds() {
+        let mut x = 0x2f1d_9a3b_57c4_e601u64;
+        let mut next = move || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            x
+        };
+        let mut together = vec![[5i128 << 90, -7, 3]; 16];
+        let mut apart = together.clone();
+        for round in 0..20_000 {
+            let index: [usize; 8] = std::array::from_fn(|_| (next() % 16) as usize);
+            let v: [glam::Vec3A; 8] = std::array::from_fn(|_| {
+                let r = next();
+                let f = |b: u64| {
+                    // Mostly ordinary magnitudes, sometimes any bit pattern.
+                    if round % 4 == 0 {
+                        f32::from_bits(b as u32)
+                    } else {
+                        (b as u32 >> 8) as f32 / (1u32 << 20) as f32 - 8.0
+                    }
+                };
+                glam::Vec3A::new(f(r), f(r >> 21), f(r >> 42))
+            });
+            add8(&mut together, index, v);
+            for (i, v) in index.into_iter().zip(v) {
+                add3_scalar(&mut apart[i], v);
+            }
+            assert_eq!(together, apart, "round {round}");
         }
     }
 

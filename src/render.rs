@@ -726,12 +726,9 @@ fn accumulate_into(
             let rays = match sums {
                 // Into the accumulator's exact sums.
                 TileSums::Wide(exact) => {
-                    let mut add = |i: usize, v: Vec3A| {
-                        if v.is_finite() {
-                            fixed::add3(&mut exact[i], v);
-                        } else {
-                            dropped += 1;
-                        }
+                    let mut add = ExactSums {
+                        sums: exact,
+                        dropped: &mut dropped,
                     };
                     match &layout {
                         Some(layout) => tile.trace::<true>(Some(layout), &mut add, &mut gather),
@@ -748,16 +745,13 @@ fn accumulate_into(
                     } else {
                         Vec::new()
                     };
-                    let mut add = |i: usize, v: Vec3A| {
-                        if !v.is_finite() {
-                            dropped += 1;
-                        } else if let Some(w) = local.get_mut(i) {
-                            *w += v.as_dvec3();
-                        } else {
-                            rows[i] += v;
-                        }
+                    let mut add = FilmSums {
+                        rows,
+                        local: &mut local,
+                        dropped: &mut dropped,
                     };
                     let rays = tile.trace::<false>(None, &mut add, &mut gather);
+                    let FilmSums { rows, local, .. } = add;
                     for (sum, w) in rows.iter_mut().zip(local.iter()) {
                         *sum += w.as_vec3a();
                     }
@@ -768,6 +762,71 @@ fn accumulate_into(
             Tally { rays, dropped }
         })
         .sum()
+}
+
+/// Where [`Tile::trace`] hands its samples: each with its pixel's index in the
+/// tile, one at a time or the eight of a 4×2 block of the lab's integrators
+/// at once. Non-finite samples are dropped and counted.
+trait Sink {
+    /// Adds sample value `v` to pixel `i`.
+    fn add(&mut self, i: usize, v: Vec3A);
+    /// Adds `v[k]` to pixel `i[k]`, as eight [`Sink::add`] calls would.
+    fn add8(&mut self, i: [usize; 8], v: [Vec3A; 8]) {
+        for (i, v) in i.into_iter().zip(v) {
+            self.add(i, v);
+        }
+    }
+}
+
+/// A tile's exact sums (see [`Accumulator`]).
+struct ExactSums<'a> {
+    sums: &'a mut [Fixed3],
+    dropped: &'a mut u64,
+}
+
+impl Sink for ExactSums<'_> {
+    #[inline]
+    fn add(&mut self, i: usize, v: Vec3A) {
+        if v.is_finite() {
+            fixed::add3(&mut self.sums[i], v);
+        } else {
+            *self.dropped += 1;
+        }
+    }
+
+    /// The eight conversions in one call when all are finite (the usual case):
+    /// one at a time they were an eighth of a `direct` frame's instructions.
+    #[inline]
+    fn add8(&mut self, i: [usize; 8], v: [Vec3A; 8]) {
+        if v.iter().all(|v| v.is_finite()) {
+            fixed::add8(self.sums, i, v);
+        } else {
+            for (i, v) in i.into_iter().zip(v) {
+                self.add(i, v);
+            }
+        }
+    }
+}
+
+/// A tile's rows of an f32 film: many samples are summed in f64 in `local`
+/// first (when it is not empty), one goes straight into the film.
+struct FilmSums<'a> {
+    rows: &'a mut [Vec3A],
+    local: &'a mut [DVec3],
+    dropped: &'a mut u64,
+}
+
+impl Sink for FilmSums<'_> {
+    #[inline]
+    fn add(&mut self, i: usize, v: Vec3A) {
+        if !v.is_finite() {
+            *self.dropped += 1;
+        } else if let Some(w) = self.local.get_mut(i) {
+            *w += v.as_dvec3();
+        } else {
+            self.rows[i] += v;
+        }
+    }
 }
 
 /// One tile's share of a call of [`accumulate_into`]: its rows and the samples.
@@ -795,7 +854,7 @@ impl Tile<'_> {
     fn trace<const AOVS: bool>(
         &self,
         aovs: Option<&Layout>,
-        add: &mut impl FnMut(usize, Vec3A),
+        add: &mut impl Sink,
         gather: &mut impl FnMut(usize, &Ray, Option<Hit>, Option<&FirstHit>),
     ) -> u64 {
         let &Tile {
@@ -817,7 +876,7 @@ impl Tile<'_> {
                     Some(layout) if AOVS => layout,
                     // Without AOVs the path alone, observed by nothing.
                     _ => {
-                        add(i, start.trace(scene, hit, &options, rays, &mut |_, _| {}));
+                        add.add(i, start.trace(scene, hit, &options, rays, &mut |_, _| {}));
                         return;
                     }
                 };
@@ -829,7 +888,7 @@ impl Tile<'_> {
                 });
                 let shaded = seen.map(|(s, b)| layout.first_hit(&start.ray, &s, || b));
                 gather(i, &start.ray, hit, shaded.as_ref());
-                add(i, v);
+                add.add(i, v);
             };
             for s in samples.clone() {
                 // Camera rays of 4×2 pixel blocks traced together (eight AVX2
@@ -911,9 +970,19 @@ impl Tile<'_> {
                         }
                     }
                     let values = integrator.radiance8_from(scene, &primary, hits, &mut rays);
-                    for ((x, y), v) in block.into_iter().zip(values) {
-                        add(y * width + x, v);
-                    }
+                    // (Written out: `block.map` here was left as a call.)
+                    let (top, below) = (qy * width + qx, (qy + 1) * width + qx);
+                    let pixels = [
+                        top,
+                        top + 1,
+                        top + 2,
+                        top + 3,
+                        below,
+                        below + 1,
+                        below + 2,
+                        below + 3,
+                    ];
+                    add.add8(pixels, values);
                 }
                 for qx in (blocks_end..width).step_by(2) {
                     if qy + 1 < n_rows && qx + 1 < width {
@@ -934,7 +1003,7 @@ impl Tile<'_> {
                             integrator.radiance4_from(scene, &primary, hits, &mut rays)
                         };
                         for ((x, y), v) in quad.into_iter().zip(values) {
-                            add(y * width + x, v);
+                            add.add(y * width + x, v);
                         }
                     } else {
                         for y in qy..(qy + 2).min(n_rows) {
@@ -948,7 +1017,7 @@ impl Tile<'_> {
                                     gather(y * width + x, &ray, hit, None);
                                     integrator.radiance_from(scene, &ray, hit, &mut rays)
                                 };
-                                add(y * width + x, v);
+                                add.add(y * width + x, v);
                             }
                         }
                     }
