@@ -266,14 +266,12 @@ fn unshadowed_lights<const N: usize>(
             continue;
         };
         // (Written out: `array::from_fn` and `map` here were left as calls.)
-        let point = |i: usize| {
-            let lane = base + i;
-            scene.surface_point(hits[lane].as_ref().unwrap_or(any), rays[lane].dir)
-        };
-        let (s0, s1, s2, s3) = (point(0), point(1), point(2), point(3));
-        let p = soa(s0.p, s1.p, s2.p, s3.p);
-        let n = soa(s0.n, s1.n, s2.n, s3.n);
-        let error = soa(s0.error, s1.error, s2.error, s3.error);
+        let hit = |i: usize| hits[base + i].as_ref().unwrap_or(any);
+        let dir = |i: usize| rays[base + i].dir;
+        let [p, n, error] = scene.surface_points4(
+            [hit(0), hit(1), hit(2), hit(3)],
+            [dir(0), dir(1), dir(2), dir(3)],
+        );
         let l = [
             Vec4::splat(target.x),
             Vec4::splat(target.y),
@@ -318,16 +316,6 @@ fn unshadowed_lights<const N: usize>(
         }
     }
     out
-}
-
-/// Four vectors as three lanes of coordinates.
-#[inline(always)]
-fn soa(a: Vec3A, b: Vec3A, c: Vec3A, d: Vec3A) -> [Vec4; 3] {
-    [
-        Vec4::new(a.x, b.x, c.x, d.x),
-        Vec4::new(a.y, b.y, c.y, d.y),
-        Vec4::new(a.z, b.z, c.z, d.z),
-    ]
 }
 
 /// `Vec3A::dot` lane by lane: `(x·x' + y·y') + z·z'`, in glam's order.
