@@ -114,8 +114,6 @@ pub fn add3_scalar(sum: &mut Fixed3, v: glam::Vec3A) {
 
 /// [`fixed`] of x, y and z in three 64-bit lanes, each as two halves (the
 /// high and low 64 bits of the `i128`), then added to the sums with carries.
-/// AVX2's variable shifts give 0 for counts of 64 or more, which the shifts
-/// below rely on (a count "below zero" wraps to a huge one).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 fn add3_avx2(sum: &mut Fixed3, v: glam::Vec3A) {
@@ -168,8 +166,8 @@ fn add8_avx2(sums: &mut [Fixed3], index: [usize; 8], v: [glam::Vec3A; 8]) {
     // SAFETY: six pairs of four 64-bit lanes are three rows of eight u64.
     let (lo, hi): ([[u64; 8]; 3], [[u64; 8]; 3]) = unsafe {
         (
-            std::mem::transmute([lx, ly, lz]),
-            std::mem::transmute([hx, hy, hz]),
+            std::mem::transmute::<[[Wide; 2]; 3], [[u64; 8]; 3]>([lx, ly, lz]),
+            std::mem::transmute::<[[Wide; 2]; 3], [[u64; 8]; 3]>([hx, hy, hz]),
         )
     };
     for (k, &i) in index.iter().enumerate() {
@@ -182,77 +180,15 @@ fn add8_avx2(sums: &mut [Fixed3], index: [usize; 8], v: [glam::Vec3A; 8]) {
 }
 
 /// [`fixed`] of eight values: the low and high 64 bits of each `i128`, lanes
-/// 0–3 in the first register of each pair and 4–7 in the second. The 32-bit
-/// work is done on all eight lanes at once; see [`fixed_halves`] for the rest.
+/// 0–3 in the first register of each pair and 4–7 in the second.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 #[inline]
-fn fixed_halves8(
-    v: std::arch::x86_64::__m256,
-) -> (
-    [std::arch::x86_64::__m256i; 2],
-    [std::arch::x86_64::__m256i; 2],
-) {
-    use std::arch::x86_64::*;
-    let bits = _mm256_castps_si256(v);
-    let e = _mm256_and_si256(_mm256_srli_epi32::<23>(bits), _mm256_set1_epi32(0xff));
-    let up = _mm256_min_epi32(
-        _mm256_max_epi32(
-            _mm256_sub_epi32(e, _mm256_set1_epi32(86)),
-            _mm256_setzero_si256(),
-        ),
-        _mm256_set1_epi32(82),
-    );
-    let down = _mm256_min_epi32(
-        _mm256_max_epi32(
-            _mm256_sub_epi32(_mm256_set1_epi32(86), e),
-            _mm256_setzero_si256(),
-        ),
-        _mm256_set1_epi32(63),
-    );
-    let m = _mm256_or_si256(
-        _mm256_and_si256(bits, _mm256_set1_epi32(0x7f_ffff)),
-        _mm256_set1_epi32(0x80_0000),
-    );
-    let clamp = _mm256_cmpgt_epi32(e, _mm256_set1_epi32(127 + 42 - 1));
-    let nan = _mm256_castps_si256(_mm256_cmp_ps::<_CMP_UNORD_Q>(v, v));
-    let sign = _mm256_srai_epi32::<31>(bits);
-    let mut lo = [_mm256_setzero_si256(); 2];
-    let mut hi = [_mm256_setzero_si256(); 2];
-    for h in 0..2 {
-        macro_rules! half {
-            ($x:expr) => {
-                if h == 0 {
-                    _mm256_castsi256_si128($x)
-                } else {
-                    _mm256_extracti128_si256::<1>($x)
-                }
-            };
-        }
-        let m = _mm256_cvtepu32_epi64(half!(m));
-        let up = _mm256_cvtepu32_epi64(half!(up));
-        let down = _mm256_cvtepu32_epi64(half!(down));
-        let clamp = _mm256_cvtepi32_epi64(half!(clamp));
-        let nan = _mm256_cvtepi32_epi64(half!(nan));
-        let sign = _mm256_cvtepi32_epi64(half!(sign));
-        let m = _mm256_srlv_epi64(m, down);
-        let sixty_four = _mm256_set1_epi64x(64);
-        let l = _mm256_sllv_epi64(m, up);
-        let u = _mm256_or_si256(
-            _mm256_srlv_epi64(m, _mm256_sub_epi64(sixty_four, up)),
-            _mm256_sllv_epi64(m, _mm256_sub_epi64(up, sixty_four)),
-        );
-        let keep = _mm256_andnot_si256(nan, _mm256_andnot_si256(clamp, _mm256_set1_epi64x(-1)));
-        let l = _mm256_and_si256(l, keep);
-        let u = _mm256_or_si256(
-            _mm256_and_si256(u, keep),
-            _mm256_andnot_si256(nan, _mm256_and_si256(clamp, _mm256_set1_epi64x(1 << 42))),
-        );
-        let l_zero = _mm256_cmpeq_epi64(l, _mm256_setzero_si256());
-        lo[h] = _mm256_sub_epi64(_mm256_xor_si256(l, sign), sign);
-        hi[h] = _mm256_sub_epi64(_mm256_xor_si256(u, sign), _mm256_and_si256(sign, l_zero));
-    }
-    (lo, hi)
+fn fixed_halves8(v: std::arch::x86_64::__m256) -> ([Wide; 2], [Wide; 2]) {
+    let parts = fixed_parts(v);
+    let (l0, h0) = fixed_wide(&parts, false);
+    let (l1, h1) = fixed_wide(&parts, true);
+    ([l0, l1], [h0, h1])
 }
 
 /// [`fixed`] of x, y and z (and w, unused) as the low and high 64 bits of
@@ -260,28 +196,72 @@ fn fixed_halves8(
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 #[inline]
-fn fixed_halves(v: glam::Vec3A) -> (std::arch::x86_64::__m256i, std::arch::x86_64::__m256i) {
+fn fixed_halves(v: glam::Vec3A) -> (Wide, Wide) {
     use std::arch::x86_64::*;
-    let bits = _mm_castps_si128(v.into());
-    // Exponent, mantissa and the shifts of `fixed`, in 32-bit lanes.
-    let e = _mm_and_si128(_mm_srli_epi32::<23>(bits), _mm_set1_epi32(0xff));
-    let up = _mm_min_epi32(
-        _mm_max_epi32(_mm_sub_epi32(e, _mm_set1_epi32(86)), _mm_setzero_si128()),
-        _mm_set1_epi32(82),
+    // The 32-bit work costs the same on eight lanes as on four.
+    fixed_wide(&fixed_parts(_mm256_castps128_ps256(v.into())), false)
+}
+
+/// Four 64-bit lanes.
+#[cfg(target_arch = "x86_64")]
+type Wide = std::arch::x86_64::__m256i;
+
+/// The 32-bit part of [`fixed`] on eight lanes: mantissa, the left and right
+/// shifts, and the clamp, NaN and sign masks.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+fn fixed_parts(v: std::arch::x86_64::__m256) -> [Wide; 6] {
+    use std::arch::x86_64::*;
+    let bits = _mm256_castps_si256(v);
+    let e = _mm256_and_si256(_mm256_srli_epi32::<23>(bits), _mm256_set1_epi32(0xff));
+    let zero = _mm256_setzero_si256();
+    let up = _mm256_min_epi32(
+        _mm256_max_epi32(_mm256_sub_epi32(e, _mm256_set1_epi32(86)), zero),
+        _mm256_set1_epi32(82),
     );
-    let down = _mm_min_epi32(
-        _mm_max_epi32(_mm_sub_epi32(_mm_set1_epi32(86), e), _mm_setzero_si128()),
-        _mm_set1_epi32(63),
+    let down = _mm256_min_epi32(
+        _mm256_max_epi32(_mm256_sub_epi32(_mm256_set1_epi32(86), e), zero),
+        _mm256_set1_epi32(63),
     );
-    let m = _mm_or_si128(
-        _mm_and_si128(bits, _mm_set1_epi32(0x7f_ffff)),
-        _mm_set1_epi32(0x80_0000),
+    let m = _mm256_or_si256(
+        _mm256_and_si256(bits, _mm256_set1_epi32(0x7f_ffff)),
+        _mm256_set1_epi32(0x80_0000),
     );
-    let (m, up, down) = (
-        _mm256_cvtepu32_epi64(m),
-        _mm256_cvtepu32_epi64(up),
-        _mm256_cvtepu32_epi64(down),
-    );
+    // |v| ≥ 2⁴² and ±∞ clamp; NaN is 0.
+    let clamp = _mm256_cmpgt_epi32(e, _mm256_set1_epi32(127 + 42 - 1));
+    let nan = _mm256_castps_si256(_mm256_cmp_ps::<_CMP_UNORD_Q>(v, v));
+    let sign = _mm256_srai_epi32::<31>(bits);
+    [m, up, down, clamp, nan, sign]
+}
+
+/// The 64-bit part of [`fixed`] on the lower or `upper` four lanes of
+/// [`fixed_parts`]: the low and high halves of each `i128`. AVX2's variable
+/// shifts give 0 for counts of 64 or more, which the shifts rely on (a count
+/// "below zero" wraps to a huge one).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+fn fixed_wide(parts: &[Wide; 6], upper: bool) -> (Wide, Wide) {
+    use std::arch::x86_64::*;
+    // (A macro, not a closure: a closure is compiled without AVX2, and its
+    // intrinsics may be left as calls.)
+    macro_rules! half {
+        ($x:expr) => {
+            if upper {
+                _mm256_extracti128_si256::<1>($x)
+            } else {
+                _mm256_castsi256_si128($x)
+            }
+        };
+    }
+    let [m, up, down, clamp, nan, sign] = *parts;
+    let m = _mm256_cvtepu32_epi64(half!(m));
+    let up = _mm256_cvtepu32_epi64(half!(up));
+    let down = _mm256_cvtepu32_epi64(half!(down));
+    let clamp = _mm256_cvtepi32_epi64(half!(clamp));
+    let nan = _mm256_cvtepi32_epi64(half!(nan));
+    let sign = _mm256_cvtepi32_epi64(half!(sign));
     // m >> down << up as 128 bits: `up` and `down` are never both non-zero.
     let m = _mm256_srlv_epi64(m, down);
     let sixty_four = _mm256_set1_epi64x(64);
@@ -290,10 +270,6 @@ fn fixed_halves(v: glam::Vec3A) -> (std::arch::x86_64::__m256i, std::arch::x86_6
         _mm256_srlv_epi64(m, _mm256_sub_epi64(sixty_four, up)),
         _mm256_sllv_epi64(m, _mm256_sub_epi64(up, sixty_four)),
     );
-    // |v| ≥ 2⁴² and ±∞ clamp to 2⁴² (high half); NaN is 0.
-    let e64 = _mm256_cvtepu32_epi64(e);
-    let clamp = _mm256_cmpgt_epi64(e64, _mm256_set1_epi64x(127 + 42 - 1));
-    let nan = _mm256_cvtepi32_epi64(_mm_castps_si128(_mm_cmpunord_ps(v.into(), v.into())));
     let keep = _mm256_andnot_si256(nan, _mm256_andnot_si256(clamp, _mm256_set1_epi64x(-1)));
     let lo = _mm256_and_si256(lo, keep);
     let hi = _mm256_or_si256(
@@ -302,7 +278,6 @@ fn fixed_halves(v: glam::Vec3A) -> (std::arch::x86_64::__m256i, std::arch::x86_6
     );
     // Negative values: the 128-bit two's complement, !x + 1, whose carry
     // reaches the high half when the low half is 0.
-    let sign = _mm256_cvtepi32_epi64(_mm_srai_epi32::<31>(bits));
     let lo_zero = _mm256_cmpeq_epi64(lo, _mm256_setzero_si256());
     let lo = _mm256_sub_epi64(_mm256_xor_si256(lo, sign), sign);
     let hi = _mm256_sub_epi64(_mm256_xor_si256(hi, sign), _mm256_and_si256(sign, lo_zero));
