@@ -1089,7 +1089,9 @@ struct PathStart {
 }
 
 impl PathStart {
-    #[inline]
+    /// (Inlined: as a call it copied the sampler's sixteen pairs out again,
+    /// 0.7 % of the box's `path`.)
+    #[inline(always)]
     fn new(
         camera: &Camera,
         options: &PathOptions,
