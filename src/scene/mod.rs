@@ -1023,7 +1023,9 @@ impl Scene {
     /// Everything shading needs at a hit: the point, its front geometric normal,
     /// the shading normal (interpolated vertex normals, then the material's
     /// normal map, turned to the geometric normal's side) and the attributes.
-    #[inline]
+    /// (Inlined: as a call it wrote the whole record out and the path tracer
+    /// read it back, 1 % of the lab box's `path`.)
+    #[inline(always)]
     pub fn surface(&self, hit: &Hit) -> SurfaceHit {
         let prim = hit.prim as usize;
         let ng = self.normals[prim];
