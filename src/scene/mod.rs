@@ -817,7 +817,9 @@ impl Scene {
     /// environment), to light the point `p`. `u_select.x` chooses, `u_select.y`
     /// settles the alias table's coin. `None` when the scene has no light or the
     /// chosen one sends nothing to `p`.
-    #[inline]
+    /// (Inlined: as a call its sample came back through memory, 1.7 % of the
+    /// lab box's `path`.)
+    #[inline(always)]
     pub fn sample_light(&self, p: Vec3A, u_select: Vec2, u: Vec2) -> Option<LightSample> {
         // (`light_needs_samples` must say when `u_select` and `u` are read.)
         let key = self.key_weight();
