@@ -293,18 +293,12 @@ fn concentric_disk(u: Vec2) -> Vec2 {
     }
     // The angle from the larger axis, φ ∈ [−π/4, π/4]; on the y side the
     // point's angle is π/2 − φ, whose cosine and sine are φ's sine and cosine.
+    // (One division for either side.)
     let x_major = o.x.abs() > o.y.abs();
-    let (r, ratio) = if x_major {
-        (o.x, o.y / o.x)
-    } else {
-        (o.y, o.x / o.y)
-    };
-    let (s, c) = sin_cos_quarter(FRAC_PI_4 * ratio);
-    if x_major {
-        r * Vec2::new(c, s)
-    } else {
-        r * Vec2::new(s, c)
-    }
+    let (r, other) = if x_major { (o.x, o.y) } else { (o.y, o.x) };
+    let (s, c) = sin_cos_quarter(FRAC_PI_4 * (other / r));
+    let (x, y) = if x_major { (c, s) } else { (s, c) };
+    r * Vec2::new(x, y)
 }
 
 /// Sine and cosine of `x` in `[−π/4, π/4]` by Cephes' minimax polynomials
