@@ -106,7 +106,7 @@ pub fn add3(sum: &mut Fixed3, v: glam::Vec3A) {
 
 /// [`add3`] one channel at a time.
 #[inline]
-pub fn add3_scalar(sum: &mut Fixed3, v: glam::Vec3A) {
+fn add3_scalar(sum: &mut Fixed3, v: glam::Vec3A) {
     sum[0] += fixed(v.x);
     sum[1] += fixed(v.y);
     sum[2] += fixed(v.z);
@@ -288,7 +288,7 @@ fn fixed_wide(parts: &[Wide; 6], upper: bool) -> (Wide, Wide) {
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 #[inline]
-fn add_halves(sum: &mut Fixed3, lo: std::arch::x86_64::__m256i, hi: std::arch::x86_64::__m256i) {
+fn add_halves(sum: &mut Fixed3, lo: Wide, hi: Wide) {
     use std::arch::x86_64::*;
     let mut los = [0u64; 4];
     let mut his = [0u64; 4];

@@ -385,7 +385,8 @@ pub fn radiance_traced(
         // choice to make. (Skipping the point on the light too, which the key
         // light does not need, saved 1 % on the box but cost 0.5 % a ray on
         // `cornell-area`.)
-        // Next-event estimation (nothing to gain on a delta lobe).
+        // Next-event estimation only off non-delta lobes (a delta lobe has
+        // nothing to gain from it).
         let light_sampled = !bsdf.is_specular();
         let u_light_pos = sampler.next_2d();
         let u_bsdf = sampler.next_2d();

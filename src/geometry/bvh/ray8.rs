@@ -241,8 +241,7 @@ impl<'a> Query8<'a> {
     /// together: one is not finite, or they do not share the triangle test's
     /// axis order ([`axis_order`], decided here in the lanes: ray by ray it was
     /// 13 % of a `direct` frame's instructions). Called inside the AVX2
-    /// functions only (the lanes are gathered with plain stores, then loaded
-    /// once).
+    /// functions only (the lanes come from one transpose, [`transpose`]).
     #[inline(always)]
     fn new(rays: &'a [Ray; 8]) -> Option<Self> {
         let (origin, dir) = transpose(rays);
