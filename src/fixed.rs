@@ -160,6 +160,44 @@ fn add8_avx2(sums: &mut [Fixed3], index: [usize; 8], v: [glam::Vec3A; 8]) {
         _mm256_shuffle_ps::<0xee>(t0, t2),
         _mm256_shuffle_ps::<0x44>(t1, t3),
     ];
+    add_channels(sums, index, channels);
+}
+
+/// Adds eight samples given channel by channel (`v[c][k]` is channel `c` of
+/// sample `k`) to the sums of their pixels, as [`add8`] does.
+#[inline]
+pub fn add8_channels(sums: &mut [Fixed3], index: [usize; 8], v: &[[f32; 8]; 3]) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU has AVX2.
+        unsafe { add8_channels_avx2(sums, index, v) };
+        return;
+    }
+    for (k, i) in index.into_iter().enumerate() {
+        add3_scalar(&mut sums[i], glam::Vec3A::new(v[0][k], v[1][k], v[2][k]));
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn add8_channels_avx2(sums: &mut [Fixed3], index: [usize; 8], v: &[[f32; 8]; 3]) {
+    use std::arch::x86_64::*;
+    // SAFETY: each row is eight f32.
+    let channels = unsafe {
+        [
+            _mm256_loadu_ps(v[0].as_ptr()),
+            _mm256_loadu_ps(v[1].as_ptr()),
+            _mm256_loadu_ps(v[2].as_ptr()),
+        ]
+    };
+    add_channels(sums, index, channels);
+}
+
+/// `sums[index[k]] += fixed(channels[c][k])` for the three channels.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+fn add_channels(sums: &mut [Fixed3], index: [usize; 8], channels: [std::arch::x86_64::__m256; 3]) {
     let (lx, hx) = fixed_halves8(channels[0]);
     let (ly, hy) = fixed_halves8(channels[1]);
     let (lz, hz) = fixed_halves8(channels[2]);

@@ -47,6 +47,7 @@ pub mod nan_check;
 pub mod render;
 pub mod sampling;
 pub mod scene;
+mod simd;
 pub mod textures;
 pub mod workload;
 

@@ -15,10 +15,16 @@ use crate::film::Film;
 use crate::fixed::{self, Fixed3};
 use crate::geometry::ray::{Hit, Ray};
 use crate::integrators::Integrator;
+#[cfg(target_arch = "x86_64")]
+use crate::integrators::lab8;
 use crate::integrators::path::{self, PathOptions, PathSampler, SamplerKind};
 use crate::materials::Material;
+#[cfg(target_arch = "x86_64")]
+use crate::sampling::sampler::pixel_jitter8;
 use crate::sampling::sampler::{Rng, pixel_jitter};
 use crate::scene::{Scene, SurfaceHit};
+#[cfg(target_arch = "x86_64")]
+use crate::simd::F8;
 
 /// Rows per tile: small enough to balance two cores on small images, large enough
 /// that scheduling costs nothing; even, so that tiles hold whole pixel quads.
@@ -776,6 +782,12 @@ trait Sink {
             self.add(i, v);
         }
     }
+    /// [`Sink::add8`] of values given channel by channel (`v[c][k]` is
+    /// channel `c` of sample `k`).
+    fn add8_channels(&mut self, i: [usize; 8], v: &[[f32; 8]; 3]) {
+        let at = |k: usize| Vec3A::new(v[0][k], v[1][k], v[2][k]);
+        self.add8(i, [at(0), at(1), at(2), at(3), at(4), at(5), at(6), at(7)]);
+    }
 }
 
 /// A tile's exact sums (see [`Accumulator`]).
@@ -803,6 +815,19 @@ impl Sink for ExactSums<'_> {
         } else {
             for (i, v) in i.into_iter().zip(v) {
                 self.add(i, v);
+            }
+        }
+    }
+
+    #[inline]
+    fn add8_channels(&mut self, i: [usize; 8], v: &[[f32; 8]; 3]) {
+        // (A fold, not `all`: without the early exit it is compiled to lanes.)
+        let finite = v.iter().flatten().fold(true, |all, x| all & x.is_finite());
+        if finite {
+            fixed::add8_channels(self.sums, i, v);
+        } else {
+            for (k, &i) in i.iter().enumerate() {
+                self.add(i, Vec3A::new(v[0][k], v[1][k], v[2][k]));
             }
         }
     }
@@ -869,7 +894,7 @@ impl Tile<'_> {
             // SAFETY: the CPU has AVX2.
             return unsafe { self.trace_lab_avx2::<AOVS>(add, gather) };
         }
-        self.trace_lab::<AOVS>(add, gather)
+        self.trace_lab::<AOVS, false>(add, gather)
     }
 
     /// [`Tile::trace`] for `path`.
@@ -913,8 +938,29 @@ impl Tile<'_> {
                 for qx in (0..blocks_end).step_by(4) {
                     let block: [(usize, usize); 8] =
                         std::array::from_fn(|i| (qx + i % 4, qy + i / 4));
-                    let mut starts =
-                        block.map(|(x, y)| PathStart::new(camera, &options, seed, (x, y0 + y), s));
+                    // (Written out: `block.map` here was left as a call, its
+                    // eight samplers copied out of it, 0.4 % of the box's `path`.)
+                    macro_rules! start {
+                        ($i:expr) => {
+                            PathStart::new(
+                                camera,
+                                &options,
+                                seed,
+                                (block[$i].0, y0 + block[$i].1),
+                                s,
+                            )
+                        };
+                    }
+                    let mut starts = [
+                        start!(0),
+                        start!(1),
+                        start!(2),
+                        start!(3),
+                        start!(4),
+                        start!(5),
+                        start!(6),
+                        start!(7),
+                    ];
                     let primary = starts.each_ref().map(|p| p.ray);
                     rays += 8;
                     let hits = scene.intersect8(&primary, f32::INFINITY);
@@ -958,12 +1004,15 @@ impl Tile<'_> {
         add: &mut impl Sink,
         gather: &mut impl FnMut(usize, &Ray, Option<Hit>, Option<&FirstHit>),
     ) -> u64 {
-        self.trace_lab::<AOVS>(add, gather)
+        self.trace_lab::<AOVS, true>(add, gather)
     }
 
-    /// [`Tile::trace`] for the lab's integrators (`flat`, `direct`).
+    /// [`Tile::trace`] for the lab's integrators (`flat`, `direct`); with
+    /// `LANES` (only in [`Tile::trace_lab_avx2`]) its 4×2 blocks are shaded in
+    /// AVX2 lanes from the camera rays to the values (`integrators::lab8`)
+    /// where the scene allows it.
     #[inline(always)]
-    fn trace_lab<const AOVS: bool>(
+    fn trace_lab<const AOVS: bool, const LANES: bool>(
         &self,
         add: &mut impl Sink,
         gather: &mut impl FnMut(usize, &Ray, Option<Hit>, Option<&FirstHit>),
@@ -979,6 +1028,13 @@ impl Tile<'_> {
             n_rows,
         } = self;
         let mut rays = 0u64;
+        // Whether the blocks can be shaded in lanes (checked once a tile).
+        #[cfg(target_arch = "x86_64")]
+        // (Pixel coordinates below 2²⁴: `block_points` counts on their being
+        // exact in f32.)
+        let lanes =
+            LANES && !AOVS && width < 1 << 24 && y0 + n_rows < 1 << 24 && scene.lab_lanes_apply();
+        let direct = integrator == Integrator::Direct;
         for s in samples.clone() {
             // 4×2 pixel blocks traced together (eight AVX2 lanes), then the last
             // columns as 2×2 quads; a last odd row or column alone.
@@ -997,26 +1053,9 @@ impl Tile<'_> {
                         (qx + 2, qy + 1),
                         (qx + 3, qy + 1),
                     ];
-                    macro_rules! row {
-                        ($y:expr) => {{
-                            let point = |x: usize| pixel_point(seed, s, x, y0 + $y, width);
-                            let (a, b, c) = (point(qx), point(qx + 1), point(qx + 2));
-                            let d = point(qx + 3);
-                            camera.rays4([a.0, b.0, c.0, d.0], [a.1, b.1, c.1, d.1])
-                        }};
-                    }
-                    let (top, bottom) = (row!(qy), row!(qy + 1));
-                    let primary: [Ray; 8] = [
-                        top[0], top[1], top[2], top[3], bottom[0], bottom[1], bottom[2], bottom[3],
-                    ];
-                    rays += 8;
-                    let hits = scene.intersect8(&primary, f32::INFINITY);
-                    if AOVS {
-                        for (((x, y), ray), hit) in block.into_iter().zip(&primary).zip(hits) {
-                            gather(y * width + x, ray, hit, None);
-                        }
-                    }
-                    let values = integrator.radiance8_from(scene, &primary, hits, &mut rays);
+                    let mut px = [0.0; 8];
+                    let mut py = [0.0; 8];
+                    let mut have_points = false;
                     // (Written out: `block.map` here was left as a call.)
                     let (top, below) = (qy * width + qx, (qy + 1) * width + qx);
                     let pixels = [
@@ -1029,6 +1068,38 @@ impl Tile<'_> {
                         below + 2,
                         below + 3,
                     ];
+                    #[cfg(target_arch = "x86_64")]
+                    if LANES && lanes {
+                        // SAFETY (both calls): `LANES` is set only in
+                        // `trace_lab_avx2`, called only when the CPU has AVX2.
+                        (px, py) = unsafe { block_points(seed, s, (qx, y0 + qy), width) };
+                        have_points = true;
+                        let shaded = unsafe { lab8::radiance8(scene, camera, &px, &py, direct) };
+                        if let Some((values, shadow_rays)) = shaded {
+                            rays += 8 + u64::from(shadow_rays);
+                            add.add8_channels(pixels, &values);
+                            continue;
+                        }
+                    }
+                    if !have_points {
+                        for (i, &(x, y)) in block.iter().enumerate() {
+                            (px[i], py[i]) = pixel_point(seed, s, x, y0 + y, width);
+                        }
+                    }
+                    let top_rays =
+                        camera.rays4([px[0], px[1], px[2], px[3]], [py[0], py[1], py[2], py[3]]);
+                    let bottom_rays =
+                        camera.rays4([px[4], px[5], px[6], px[7]], [py[4], py[5], py[6], py[7]]);
+                    let (t, b) = (top_rays, bottom_rays);
+                    let primary: [Ray; 8] = [t[0], t[1], t[2], t[3], b[0], b[1], b[2], b[3]];
+                    rays += 8;
+                    let hits = scene.intersect8(&primary, f32::INFINITY);
+                    if AOVS {
+                        for (((x, y), ray), hit) in block.into_iter().zip(&primary).zip(hits) {
+                            gather(y * width + x, ray, hit, None);
+                        }
+                    }
+                    let values = integrator.radiance8_from(scene, &primary, hits, &mut rays);
                     add.add8(pixels, values);
                 }
                 for qx in (blocks_end..width).step_by(2) {
@@ -1144,6 +1215,25 @@ impl PathStart {
 fn pixel_ray(camera: &Camera, seed: u64, s: u32, x: usize, y: usize, width: usize) -> Ray {
     let (px, py) = pixel_point(seed, s, x, y, width);
     camera.ray(px, py)
+}
+
+/// [`pixel_point`] of the 4×2 block of pixels from `(x, y)`, its jitter in
+/// AVX2 lanes (`pixel_jitter8`), bit for bit.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+fn block_points(seed: u64, s: u32, (x, y): (usize, usize), width: usize) -> ([f32; 8], [f32; 8]) {
+    // Pixel coordinates below 2²⁴ are exact in f32, and so are their sums
+    // with 1, 2 and 3.
+    let column = F8::splat(x as f32) + F8::from_array([0.0, 1.0, 2.0, 3.0, 0.0, 1.0, 2.0, 3.0]);
+    let row = F8::splat(y as f32) + F8::from_array([0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0, 1.0]);
+    let (dx, dy) = if s == 0 {
+        (F8::splat(0.5), F8::splat(0.5))
+    } else {
+        let first = (y * width + x) as u64;
+        pixel_jitter8(seed, [first, first + width as u64], s)
+    };
+    ((column + dx).to_array(), (row + dy).to_array())
 }
 
 /// The image point of [`pixel_ray`].

@@ -1,5 +1,6 @@
 //! Integrators: what colour a camera ray brings back.
 
+pub(crate) mod lab8;
 pub mod path;
 
 use std::f32::consts::PI;

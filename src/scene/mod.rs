@@ -11,6 +11,7 @@ pub mod compose;
 pub mod cornell;
 pub mod framing;
 pub mod gltf;
+mod lanes;
 pub mod load;
 pub mod mesh;
 pub mod mtl;

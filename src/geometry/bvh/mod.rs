@@ -22,6 +22,8 @@ use crate::geometry::ray::{Hit, Ray};
 use crate::geometry::triangle::{Triangle, TriangleHit};
 use node::{BoxQuery, ChildRef, EMPTY, Isa, LEAF, NodeBoxes, WIDTH, leaf_parts};
 use packet::{Packet, PacketRay};
+#[cfg(target_arch = "x86_64")]
+pub(crate) use ray8::{Closest8, Rays8};
 pub use stream::IN_FLIGHT;
 
 /// Traversal stack size: at most `WIDTH - 1` entries per level of the tree, whose

@@ -8,243 +8,67 @@
 //! operation (no FMA), so hits agree bit for bit with [`Bvh::intersect`]; only
 //! which of two triangles at exactly the same `t` is reported may differ.
 //!
-//! The lane type [`F8`] wraps `__m256`. Its methods are `#[inline(always)]` and
-//! only ever run inside the `#[target_feature(enable = "avx2")]` entry points
-//! below, into which they inline as single instructions.
+//! The lane type is [`F8`] (`crate::simd`), used only inside the
+//! `#[target_feature(enable = "avx2")]` entry points below.
 
 #![cfg(target_arch = "x86_64")]
 
 use std::arch::x86_64::*;
-use std::ops::{Add, BitAnd, BitOr, Div, Mul, Not, Sub};
 
 use super::node::{ChildRef, EMPTY, Isa, LEAF, WIDTH};
 use super::packet::{Packet, PacketRay};
 use super::{Bvh, Stack};
 use crate::geometry::ray::{Hit, Ray, gamma};
 use crate::geometry::triangle::{self, Lanes, RayShear, TriangleHit, axis_order_of, t_error_bound};
+use crate::simd::F8;
 
-/// Eight f32 lanes (also used as a mask: all bits set = true).
+/// Eight rays in the lanes of AVX2 registers: origins and directions by axis
+/// (lane `i` is ray `i`). The lab's 4×2 pixel blocks make their camera and
+/// shadow rays in this form and trace them without going through `[Ray; 8]`.
 #[derive(Clone, Copy, Debug)]
-#[repr(transparent)]
-pub(super) struct F8(__m256);
-
-// SAFETY (for every `unsafe` block on `F8` below): the intrinsics need AVX (and
-// AVX2 for none of them beyond AVX); `F8` values are only made and used inside
-// functions compiled with AVX2 enabled, which are only called when
-// `Isa::detect` found AVX2.
-impl F8 {
-    #[inline(always)]
-    fn splat(x: f32) -> F8 {
-        F8(unsafe { _mm256_set1_ps(x) })
-    }
-    #[inline(always)]
-    fn zero() -> F8 {
-        F8(unsafe { _mm256_setzero_ps() })
-    }
-    /// `lo` in lanes 0–3 and `hi` in lanes 4–7.
-    #[inline(always)]
-    fn halves(lo: glam::Vec4, hi: glam::Vec4) -> F8 {
-        F8(unsafe { _mm256_set_m128(hi.into(), lo.into()) })
-    }
-    #[inline(always)]
-    fn from_array(a: [f32; 8]) -> F8 {
-        F8(unsafe { _mm256_loadu_ps(a.as_ptr()) })
-    }
-    #[inline(always)]
-    fn to_array(self) -> [f32; 8] {
-        let mut a = [0.0; 8];
-        unsafe { _mm256_storeu_ps(a.as_mut_ptr(), self.0) };
-        a
-    }
-    #[inline(always)]
-    fn min(self, o: F8) -> F8 {
-        F8(unsafe { _mm256_min_ps(self.0, o.0) })
-    }
-    #[inline(always)]
-    fn max_(self, o: F8) -> F8 {
-        F8(unsafe { _mm256_max_ps(self.0, o.0) })
-    }
-    #[inline(always)]
-    fn cmple(self, o: F8) -> F8 {
-        F8(unsafe { _mm256_cmp_ps::<_CMP_LE_OQ>(self.0, o.0) })
-    }
-    #[inline(always)]
-    fn cmplt(self, o: F8) -> F8 {
-        F8(unsafe { _mm256_cmp_ps::<_CMP_LT_OQ>(self.0, o.0) })
-    }
-    #[inline(always)]
-    fn cmpgt(self, o: F8) -> F8 {
-        F8(unsafe { _mm256_cmp_ps::<_CMP_GT_OQ>(self.0, o.0) })
-    }
-    #[inline(always)]
-    fn cmpeq(self, o: F8) -> F8 {
-        F8(unsafe { _mm256_cmp_ps::<_CMP_EQ_OQ>(self.0, o.0) })
-    }
-    #[inline(always)]
-    fn cmpne(self, o: F8) -> F8 {
-        F8(unsafe { _mm256_cmp_ps::<_CMP_NEQ_UQ>(self.0, o.0) })
-    }
-    /// Lanes of `a` where `mask` is set, else of `b`.
-    #[inline(always)]
-    fn select(mask: F8, a: F8, b: F8) -> F8 {
-        F8(unsafe { _mm256_blendv_ps(b.0, a.0, mask.0) })
-    }
-    #[inline(always)]
-    fn bitmask(self) -> u32 {
-        unsafe { _mm256_movemask_ps(self.0) as u32 }
-    }
-    #[inline(always)]
-    fn any(self) -> bool {
-        self.bitmask() != 0
-    }
-    /// ±1 with the sign of each lane (as `Vec4::signum` for non-NaN lanes).
-    #[inline(always)]
-    fn signum(self) -> F8 {
-        unsafe {
-            let sign = _mm256_and_ps(self.0, _mm256_set1_ps(-0.0));
-            F8(_mm256_or_ps(sign, _mm256_set1_ps(1.0)))
-        }
-    }
-    #[inline(always)]
-    fn lane(self, i: usize) -> f32 {
-        self.to_array()[i]
-    }
-    /// The smallest lane.
-    #[inline(always)]
-    fn min_element(self) -> f32 {
-        unsafe {
-            let m = _mm_min_ps(
-                _mm256_castps256_ps128(self.0),
-                _mm256_extractf128_ps::<1>(self.0),
-            );
-            let m = _mm_min_ps(m, _mm_movehl_ps(m, m));
-            let m = _mm_min_ss(m, _mm_shuffle_ps::<1>(m, m));
-            _mm_cvtss_f32(m)
-        }
-    }
-    /// The largest lane.
-    #[inline(always)]
-    fn max_element(self) -> f32 {
-        unsafe {
-            let m = _mm_max_ps(
-                _mm256_castps256_ps128(self.0),
-                _mm256_extractf128_ps::<1>(self.0),
-            );
-            let m = _mm_max_ps(m, _mm_movehl_ps(m, m));
-            let m = _mm_max_ss(m, _mm_shuffle_ps::<1>(m, m));
-            _mm_cvtss_f32(m)
-        }
-    }
-    /// The smallest of lanes 0–3.
-    #[inline(always)]
-    fn min_lower(self) -> f32 {
-        unsafe {
-            let m = _mm256_castps256_ps128(self.0);
-            let m = _mm_min_ps(m, _mm_movehl_ps(m, m));
-            let m = _mm_min_ss(m, _mm_shuffle_ps::<1>(m, m));
-            _mm_cvtss_f32(m)
-        }
-    }
-    /// All lanes set where `bits` has a bit.
-    #[inline(always)]
-    fn mask_from_bits(bits: u32) -> F8 {
-        unsafe {
-            let lanes = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
-            let b = _mm256_set1_epi32(bits as i32);
-            F8(_mm256_castsi256_ps(_mm256_cmpeq_epi32(
-                _mm256_and_si256(b, lanes),
-                lanes,
-            )))
-        }
-    }
+pub(crate) struct Rays8 {
+    /// Origins' x, y and z.
+    pub(crate) origin: [F8; 3],
+    /// Directions' x, y and z.
+    pub(crate) dir: [F8; 3],
 }
 
-impl Add for F8 {
-    type Output = F8;
+impl Rays8 {
+    /// Ray `lane` (for the rare lanes that take the scalar test).
     #[inline(always)]
-    fn add(self, o: F8) -> F8 {
-        F8(unsafe { _mm256_add_ps(self.0, o.0) })
-    }
-}
-impl Sub for F8 {
-    type Output = F8;
-    #[inline(always)]
-    fn sub(self, o: F8) -> F8 {
-        F8(unsafe { _mm256_sub_ps(self.0, o.0) })
-    }
-}
-impl Mul for F8 {
-    type Output = F8;
-    #[inline(always)]
-    fn mul(self, o: F8) -> F8 {
-        F8(unsafe { _mm256_mul_ps(self.0, o.0) })
-    }
-}
-impl Div for F8 {
-    type Output = F8;
-    #[inline(always)]
-    fn div(self, o: F8) -> F8 {
-        F8(unsafe { _mm256_div_ps(self.0, o.0) })
-    }
-}
-impl BitAnd for F8 {
-    type Output = F8;
-    #[inline(always)]
-    fn bitand(self, o: F8) -> F8 {
-        F8(unsafe { _mm256_and_ps(self.0, o.0) })
-    }
-}
-impl BitOr for F8 {
-    type Output = F8;
-    #[inline(always)]
-    fn bitor(self, o: F8) -> F8 {
-        F8(unsafe { _mm256_or_ps(self.0, o.0) })
-    }
-}
-impl Not for F8 {
-    type Output = F8;
-    #[inline(always)]
-    fn not(self) -> F8 {
-        F8(unsafe { _mm256_xor_ps(self.0, _mm256_castsi256_ps(_mm256_set1_epi32(-1))) })
-    }
-}
-
-impl Lanes for F8 {
-    #[inline(always)]
-    fn splat(x: f32) -> Self {
-        F8::splat(x)
-    }
-    #[inline(always)]
-    fn abs(self) -> Self {
-        F8(unsafe { _mm256_andnot_ps(_mm256_set1_ps(-0.0), self.0) })
-    }
-    /// As `Vec4::max` (SSE `maxps`): the second operand where either is NaN.
-    #[inline(always)]
-    fn max(self, other: Self) -> Self {
-        self.max_(other)
+    fn ray(&self, lane: usize) -> Ray {
+        let at = |v: &[F8; 3]| glam::Vec3A::new(v[0].lane(lane), v[1].lane(lane), v[2].lane(lane));
+        Ray::new(at(&self.origin), at(&self.dir))
     }
 }
 
 /// Per-packet constants: origins and safe inverse directions by axis, and the
 /// triangle test's shared axis order with per-lane origins and shears.
-struct Query8<'a> {
-    rays: &'a [Ray; 8],
-    origin: [F8; 3],
+struct Query8 {
+    rays: Rays8,
     inv_dir: [F8; 3],
     k: [usize; 3],
     origin_k: [F8; 3],
     shear: [F8; 3],
 }
 
-impl<'a> Query8<'a> {
+impl Query8 {
+    /// [`Query8::from_lanes`] of the rays as the lanes of one transpose
+    /// ([`transpose`]).
+    #[inline(always)]
+    fn new(rays: &[Ray; 8]) -> Option<Self> {
+        let (origin, dir) = transpose(rays);
+        Self::from_lanes(Rays8 { origin, dir })
+    }
+
     /// The packet's constants, or `None` when the rays cannot be traced
     /// together: one is not finite, or they do not share the triangle test's
     /// axis order ([`axis_order`], decided here in the lanes: ray by ray it was
     /// 13 % of a `direct` frame's instructions). Called inside the AVX2
-    /// functions only (the lanes come from one transpose, [`transpose`]).
+    /// functions only.
     #[inline(always)]
-    fn new(rays: &'a [Ray; 8]) -> Option<Self> {
-        let (origin, dir) = transpose(rays);
+    fn from_lanes(rays: Rays8) -> Option<Self> {
+        let Rays8 { origin, dir } = rays;
         // `safe_inverse` lane by lane: zeros made the smallest normal number
         // of their sign, then the division.
         let inv_dir = [
@@ -285,7 +109,6 @@ impl<'a> Query8<'a> {
         let inv_z = F8::splat(1.0) / dir[k[2]];
         Some(Self {
             rays,
-            origin,
             inv_dir,
             k,
             origin_k: [origin[k[0]], origin[k[1]], origin[k[2]]],
@@ -296,18 +119,18 @@ impl<'a> Query8<'a> {
     /// Whether every ray starts at the first one's origin.
     #[inline(always)]
     fn one_origin(&self) -> bool {
-        let first = self.rays[0].origin;
-        let same = self.origin[0].cmpeq(F8::splat(first.x))
-            & self.origin[1].cmpeq(F8::splat(first.y))
-            & self.origin[2].cmpeq(F8::splat(first.z));
+        let origin = &self.rays.origin;
+        let same = origin[0].cmpeq(origin[0].broadcast_first())
+            & origin[1].cmpeq(origin[1].broadcast_first())
+            & origin[2].cmpeq(origin[2].broadcast_first());
         same.bitmask() == 0xff
     }
 
     /// Entry and exit distances of the slab of axis `a` of child `c`.
     #[inline(always)]
     fn slab(&self, bounds: &[[f32; WIDTH]; 6], c: usize, a: usize) -> (F8, F8) {
-        let t0 = (F8::splat(bounds[a][c]) - self.origin[a]) * self.inv_dir[a];
-        let t1 = (F8::splat(bounds[a + 3][c]) - self.origin[a]) * self.inv_dir[a];
+        let t0 = (F8::splat(bounds[a][c]) - self.rays.origin[a]) * self.inv_dir[a];
+        let t1 = (F8::splat(bounds[a + 3][c]) - self.rays.origin[a]) * self.inv_dir[a];
         (t0.min(t1), t0.max_(t1))
     }
 
@@ -393,7 +216,7 @@ struct Hits8 {
 /// The watertight test of the eight rays against triangle `i` of `p`, as
 /// `packet::candidates` does it lane by lane.
 #[inline(always)]
-fn test_triangle(q: &Query8<'_>, p: &Packet, i: usize, t_max: F8) -> Hits8 {
+fn test_triangle(q: &Query8, p: &Packet, i: usize, t_max: F8) -> Hits8 {
     let a = sheared(q, p, 0, i);
     let b = sheared(q, p, 1, i);
     let c = sheared(q, p, 2, i);
@@ -556,25 +379,44 @@ macro_rules! closest_in_leaf {
     };
 }
 
-/// The packet's answers from the closest hits `closest_in_leaf!` kept (only
-/// inside AVX2 code: compiled without it, its lane reads were left as calls).
-#[target_feature(enable = "avx2")]
-#[inline]
-fn closest_hits(found: u32, best_t: F8, b1: F8, b2: F8, prim: F8) -> [Option<Hit>; 8] {
-    let (t, b1, b2) = (best_t.to_array(), b1.to_array(), b2.to_array());
-    let prim = prim.to_array();
-    let mut hits = [None; 8];
-    for (lane, hit) in hits.iter_mut().enumerate() {
-        if found >> lane & 1 != 0 {
-            *hit = Some(Hit {
-                t: t[lane],
-                prim: prim[lane].to_bits(),
-                b1: b1[lane],
-                b2: b2[lane],
-            });
+/// The closest hits of eight rays, in lanes: which lanes hit (`found`, bit
+/// `i` for lane `i`) and, in those lanes, `t`, the barycentrics and the
+/// triangle's index (as a bit pattern).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Closest8 {
+    /// The lanes that hit, one bit each.
+    pub(crate) found: u32,
+    /// Ray parameters.
+    pub(crate) t: F8,
+    /// Weights of `v1`.
+    pub(crate) b1: F8,
+    /// Weights of `v2`.
+    pub(crate) b2: F8,
+    /// Triangle indices, as the bit patterns of the lanes.
+    pub(crate) prim: F8,
+}
+
+impl Closest8 {
+    /// The packet's answers as eight [`Hit`]s (only inside AVX2 code: compiled
+    /// without it, its lane reads were left as calls).
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    pub(crate) fn hits(self) -> [Option<Hit>; 8] {
+        let (t, b1, b2) = (self.t.to_array(), self.b1.to_array(), self.b2.to_array());
+        let prim = self.prim.to_array();
+        let mut hits = [None; 8];
+        for (lane, hit) in hits.iter_mut().enumerate() {
+            if self.found >> lane & 1 != 0 {
+                *hit = Some(Hit {
+                    t: t[lane],
+                    prim: prim[lane].to_bits(),
+                    b1: b1[lane],
+                    b2: b2[lane],
+                });
+            }
         }
+        hits
     }
-    hits
 }
 
 /// Vertex `vertex` of triangle `i` of `p` in each ray's sheared frame (a
@@ -582,7 +424,7 @@ fn closest_hits(found: u32, best_t: F8, b1: F8, b2: F8, prim: F8) -> [Option<Hit
 /// code). Each coordinate is broadcast straight from the packet (one
 /// `vbroadcastss`), not gathered into a vector first and picked out of it.
 #[inline(always)]
-fn sheared(q: &Query8<'_>, p: &Packet, vertex: usize, i: usize) -> (F8, F8, F8) {
+fn sheared(q: &Query8, p: &Packet, vertex: usize, i: usize) -> (F8, F8, F8) {
     let [kx, ky, kz] = q.k;
     let [sx, sy, sz] = q.shear;
     let row = &p.v[vertex];
@@ -599,11 +441,11 @@ fn sheared(q: &Query8<'_>, p: &Packet, vertex: usize, i: usize) -> (F8, F8, F8) 
 /// The scalar test lane by lane, for the rare exact-zero edge functions.
 #[cold]
 #[inline(never)]
-fn scalar_lanes(q: &Query8<'_>, p: &Packet, i: usize, t_max: F8) -> Hits8 {
+fn scalar_lanes(q: &Query8, p: &Packet, i: usize, t_max: F8) -> Hits8 {
     let tri = p.triangle(i);
     let t_max = t_max.to_array();
     let hits: [Option<triangle::TriangleHit>; 8] = std::array::from_fn(|lane| {
-        triangle::intersect(&RayShear::new(&q.rays[lane]), &tri, t_max[lane])
+        triangle::intersect(&RayShear::new(&q.rays.ray(lane)), &tri, t_max[lane])
     });
     let get = |f: fn(&triangle::TriangleHit) -> f32| {
         F8::from_array(hits.map(|h| h.as_ref().map_or(0.0, f)))
@@ -645,10 +487,54 @@ impl Bvh {
         t_max: f32,
     ) -> Option<[Option<Hit>; 8]> {
         let q = &Query8::new(rays)?;
-        Some(if q.one_origin() {
+        Some(self.intersect8_query(q, root, t_max).hits())
+    }
+
+    /// The closest hits of a packet: packets from one point take the interval
+    /// test, the others the eight slab tests.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    fn intersect8_query(&self, q: &Query8, root: ChildRef, t_max: f32) -> Closest8 {
+        if q.one_origin() {
             self.intersect8_from_one_point_avx2(q, root, t_max)
         } else {
             self.intersect8_avx2(q, root, t_max)
+        }
+    }
+
+    /// [`Bvh::intersect8`] of eight rays given in lanes, answered in lanes
+    /// (the same hits): `None` when this tree does not use AVX2 or the rays
+    /// cannot share a packet (then trace them as `[Ray; 8]`).
+    #[target_feature(enable = "avx2")]
+    pub(crate) fn intersect8_lanes(&self, rays: &Rays8, t_max: f32) -> Option<Closest8> {
+        if self.isa != Isa::Avx2 {
+            return None;
+        }
+        let q = &Query8::from_lanes(*rays)?;
+        Some(match self.root {
+            Some(root) => self.intersect8_query(q, root, t_max),
+            None => Closest8 {
+                found: 0,
+                t: F8::splat(t_max),
+                b1: F8::zero(),
+                b2: F8::zero(),
+                prim: F8::zero(),
+            },
+        })
+    }
+
+    /// [`Bvh::occluded8`] of eight rays given in lanes: bit `i` of the answer
+    /// set when lane `i` is `active` (bit `i`) and blocked within its `t_max`;
+    /// `None` as for [`Bvh::intersect8_lanes`].
+    #[target_feature(enable = "avx2")]
+    pub(crate) fn occluded8_lanes(&self, rays: &Rays8, t_max: F8, active: u32) -> Option<u32> {
+        if self.isa != Isa::Avx2 {
+            return None;
+        }
+        let q = &Query8::from_lanes(*rays)?;
+        Some(match self.root {
+            Some(root) => self.occluded8_query(q, root, t_max, F8::mask_from_bits(active)),
+            None => 0,
         })
     }
 
@@ -668,7 +554,7 @@ impl Bvh {
     }
 
     #[target_feature(enable = "avx2")]
-    fn intersect8_avx2(&self, q: &Query8<'_>, root: ChildRef, t_max: f32) -> [Option<Hit>; 8] {
+    fn intersect8_avx2(&self, q: &Query8, root: ChildRef, t_max: f32) -> Closest8 {
         let mut best_t = F8::splat(t_max);
         let (mut b1, mut b2) = (F8::zero(), F8::zero());
         let mut prim = F8::splat(f32::from_bits(u32::MAX));
@@ -714,7 +600,13 @@ impl Bvh {
                 stack.push((n, nv));
             }
         }
-        closest_hits(found, best_t, b1, b2, prim)
+        Closest8 {
+            found,
+            t: best_t,
+            b1,
+            b2,
+            prim,
+        }
     }
 
     /// [`Bvh::intersect8`] for rays from one point (a pinhole camera's): a
@@ -725,13 +617,9 @@ impl Bvh {
     /// the rays are those at the extreme inverses: a box that any ray's own
     /// slab test enters passes the packet's test too, and every hit is found.
     #[target_feature(enable = "avx2")]
-    fn intersect8_from_one_point_avx2(
-        &self,
-        q: &Query8<'_>,
-        root: ChildRef,
-        t_max: f32,
-    ) -> [Option<Hit>; 8] {
-        let origin = q.rays[0].origin;
+    fn intersect8_from_one_point_avx2(&self, q: &Query8, root: ChildRef, t_max: f32) -> Closest8 {
+        let o = &q.rays.origin;
+        let origin = [o[0].first(), o[1].first(), o[2].first()];
         // (Written out: a closure here is compiled without AVX2 and was left
         // as a call with its intrinsics.)
         let inv = &q.inv_dir;
@@ -795,7 +683,13 @@ impl Bvh {
             }
             stack.sort_far_to_near(base);
         }
-        closest_hits(found, best_t, b1, b2, prim)
+        Closest8 {
+            found,
+            t: best_t,
+            b1,
+            b2,
+            prim,
+        }
     }
 
     #[target_feature(enable = "avx2")]
@@ -807,12 +701,19 @@ impl Bvh {
         active: [bool; 8],
     ) -> Option<[bool; 8]> {
         let q = &Query8::new(rays)?;
-        let t_max = F8::from_array(t_max);
         let bits = active
             .iter()
             .enumerate()
             .fold(0, |m, (i, &a)| m | (a as u32) << i);
-        let mut open = F8::mask_from_bits(bits);
+        let blocked =
+            self.occluded8_query(q, root, F8::from_array(t_max), F8::mask_from_bits(bits));
+        Some(std::array::from_fn(|lane| blocked >> lane & 1 != 0))
+    }
+
+    /// The lanes of `open` that something blocks within their `t_max`, as bits.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    fn occluded8_query(&self, q: &Query8, root: ChildRef, t_max: F8, mut open: F8) -> u32 {
         let mut blocked = 0u32;
         let mut stack = Stack::<ChildRef>::new();
         stack.push(root);
@@ -838,7 +739,7 @@ impl Bvh {
                 }
             }
         }
-        Some(std::array::from_fn(|lane| blocked >> lane & 1 != 0))
+        blocked
     }
 }
 
