@@ -148,6 +148,24 @@ impl Query8 {
     }
 }
 
+/// One axis of the interval test of rays from one point `origin` (that axis's
+/// coordinate) whose inverse directions lie in `[inv_lo, inv_hi]`: the entry
+/// and exit distances of eight boxes' slabs `[lower, upper]`, the smallest and
+/// the largest over the rays. `(b − o)·inv` and its rounding are monotonic in
+/// `inv`, so they are the products with the extreme inverses.
+#[inline(always)]
+fn interval_slab(lower: F8, upper: F8, origin: f32, inv_lo: f32, inv_hi: f32) -> (F8, F8) {
+    let o = F8::splat(origin);
+    let (lo, hi) = (F8::splat(inv_lo), F8::splat(inv_hi));
+    let (d0, d1) = (lower - o, upper - o);
+    let zero = F8::zero();
+    let first0 = d0 * F8::select(d0.cmplt(zero), hi, lo);
+    let first1 = d1 * F8::select(d1.cmplt(zero), hi, lo);
+    let last0 = d0 * F8::select(d0.cmplt(zero), lo, hi);
+    let last1 = d1 * F8::select(d1.cmplt(zero), lo, hi);
+    (first0.min(first1), last0.max_(last1))
+}
+
 /// `safe_inverse` lane by lane: zeros made the smallest normal number of their
 /// sign, then the division. (A function, not a closure: closures do not
 /// inherit the caller's AVX2, and their intrinsics were left as calls.)
@@ -644,17 +662,13 @@ impl Bvh {
             let mut enter = F8::zero();
             let mut exit = F8::splat(f32::INFINITY);
             for a in 0..3 {
-                let o = F8::splat(origin[a]);
-                let (lo, hi) = (F8::splat(inv_lo[a]), F8::splat(inv_hi[a]));
-                let d0 = F8::from_array(node.bounds[a]) - o;
-                let d1 = F8::from_array(node.bounds[a + 3]) - o;
-                let zero = F8::zero();
-                let first0 = d0 * F8::select(d0.cmplt(zero), hi, lo);
-                let first1 = d1 * F8::select(d1.cmplt(zero), hi, lo);
-                let last0 = d0 * F8::select(d0.cmplt(zero), lo, hi);
-                let last1 = d1 * F8::select(d1.cmplt(zero), lo, hi);
-                enter = enter.max_(first0.min(first1));
-                exit = exit.min(last0.max_(last1));
+                let (lower, upper) = (
+                    F8::from_array(node.bounds[a]),
+                    F8::from_array(node.bounds[a + 3]),
+                );
+                let (first, last) = interval_slab(lower, upper, origin[a], inv_lo[a], inv_hi[a]);
+                enter = enter.max_(first);
+                exit = exit.min(last);
             }
             let exit = exit * exit_scale;
             let mut mask = enter.cmple(exit.min(F8::splat(reach))).bitmask();
@@ -816,16 +830,15 @@ impl Bvh {
                     F8::from_array(node.bounds[a + 3]),
                 );
                 overlap = overlap & lower.cmple(reach_hi[a]) & reach_lo[a].cmple(upper);
-                let o = F8::splat(target[a]);
-                let (lo, hi) = (F8::splat(inv_lo[a]), F8::splat(inv_hi[a]));
-                let d0 = (lower - margin) - o;
-                let d1 = (upper + margin) - o;
-                let first0 = d0 * F8::select(d0.cmplt(zero), hi, lo);
-                let first1 = d1 * F8::select(d1.cmplt(zero), hi, lo);
-                let last0 = d0 * F8::select(d0.cmplt(zero), lo, hi);
-                let last1 = d1 * F8::select(d1.cmplt(zero), lo, hi);
-                enter = enter.max_(first0.min(first1));
-                exit = exit.min(last0.max_(last1));
+                let (first, last) = interval_slab(
+                    lower - margin,
+                    upper + margin,
+                    target[a],
+                    inv_lo[a],
+                    inv_hi[a],
+                );
+                enter = enter.max_(first);
+                exit = exit.min(last);
             }
             let mut mask = (enter.cmple((exit * exit_scale).min(one)) & overlap).bitmask();
             while mask != 0 {
