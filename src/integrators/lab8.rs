@@ -94,7 +94,7 @@ pub(crate) fn radiance8(
             borrow!(shadow.dir[2]),
         ],
     };
-    let blocked = scene.occluded8_towards(&shadow, lit_lanes & t_max, lit, scene.light.position);
+    let blocked = scene.occluded8_lanes(&shadow, lit_lanes & t_max, lit);
     let open = F8::mask_from_bits(lit & !blocked);
     // `ρ ∘ (D + N)`, with `D = P·cos/(4πr²)` where the light is seen.
     let power = scene.light.power;

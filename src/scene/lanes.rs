@@ -55,31 +55,17 @@ impl Scene {
         self.bvh.intersect8_lanes(rays, f32::INFINITY)
     }
 
-    /// [`Scene::occluded8`] of rays in lanes that all end near `target` (the
-    /// point light's shadow rays): bit `i` set when lane `i` is `active` and
-    /// blocked within its `t_max`. Only for scenes where
+    /// [`Scene::occluded8`] of rays in lanes: bit `i` set when lane `i` is
+    /// `active` and blocked within its `t_max`. Only for scenes where
     /// [`Scene::lab_lanes_apply`].
     #[target_feature(enable = "avx2")]
     #[inline]
-    pub(crate) fn occluded8_towards(
-        &self,
-        rays: &Rays8,
-        t_max: F8,
-        active: u32,
-        target: glam::Vec3A,
-    ) -> u32 {
+    pub(crate) fn occluded8_lanes(&self, rays: &Rays8, t_max: F8, active: u32) -> u32 {
         debug_assert!(!self.has_alpha);
-        if let Some(blocked) = self.bvh.occluded8_towards(rays, t_max, active, target) {
+        if let Some(blocked) = self.bvh.occluded8_lanes(rays, t_max, active) {
             return blocked;
         }
-        self.occluded8_one_by_one_lanes(rays, t_max, active)
-    }
-
-    /// [`Scene::occluded8`] of rays in lanes that cannot share a packet (rare).
-    #[cold]
-    #[target_feature(enable = "avx2")]
-    #[inline(never)]
-    fn occluded8_one_by_one_lanes(&self, rays: &Rays8, t_max: F8, active: u32) -> u32 {
+        // Rays that cannot share a packet (rare): as `[Ray; 8]`.
         let (origin, dir) = (rays.origin.map(F8::to_array), rays.dir.map(F8::to_array));
         let at = |v: &[[f32; 8]; 3], i: usize| glam::Vec3A::new(v[0][i], v[1][i], v[2][i]);
         let rays = std::array::from_fn(|i| Ray::new(at(&origin, i), at(&dir, i)));

@@ -17,7 +17,6 @@ use std::arch::x86_64::*;
 
 use super::node::{ChildRef, EMPTY, Isa, LEAF, WIDTH};
 use super::packet::{Packet, PacketRay};
-use super::sah::ROOM_MAX;
 use super::{Bvh, Stack};
 use crate::geometry::ray::{Hit, Ray, gamma};
 use crate::geometry::triangle::{self, Lanes, RayShear, TriangleHit, axis_order_of, t_error_bound};
@@ -146,24 +145,6 @@ impl Query8 {
         let far = fx.min(fy).min(fz) * F8::splat(1.0 + 2.0 * gamma(3));
         (near, near.cmple(far.min(t_max)))
     }
-}
-
-/// One axis of the interval test of rays from one point `origin` (that axis's
-/// coordinate) whose inverse directions lie in `[inv_lo, inv_hi]`: the entry
-/// and exit distances of eight boxes' slabs `[lower, upper]`, the smallest and
-/// the largest over the rays. `(b − o)·inv` and its rounding are monotonic in
-/// `inv`, so they are the products with the extreme inverses.
-#[inline(always)]
-fn interval_slab(lower: F8, upper: F8, origin: f32, inv_lo: f32, inv_hi: f32) -> (F8, F8) {
-    let o = F8::splat(origin);
-    let (lo, hi) = (F8::splat(inv_lo), F8::splat(inv_hi));
-    let (d0, d1) = (lower - o, upper - o);
-    let zero = F8::zero();
-    let first0 = d0 * F8::select(d0.cmplt(zero), hi, lo);
-    let first1 = d1 * F8::select(d1.cmplt(zero), hi, lo);
-    let last0 = d0 * F8::select(d0.cmplt(zero), lo, hi);
-    let last1 = d1 * F8::select(d1.cmplt(zero), lo, hi);
-    (first0.min(first1), last0.max_(last1))
 }
 
 /// `safe_inverse` lane by lane: zeros made the smallest normal number of their
@@ -542,6 +523,21 @@ impl Bvh {
         })
     }
 
+    /// [`Bvh::occluded8`] of eight rays given in lanes: bit `i` of the answer
+    /// set when lane `i` is `active` (bit `i`) and blocked within its `t_max`;
+    /// `None` as for [`Bvh::intersect8_lanes`].
+    #[target_feature(enable = "avx2")]
+    pub(crate) fn occluded8_lanes(&self, rays: &Rays8, t_max: F8, active: u32) -> Option<u32> {
+        if self.isa != Isa::Avx2 {
+            return None;
+        }
+        let q = &Query8::from_lanes(*rays)?;
+        Some(match self.root {
+            Some(root) => self.occluded8_query(q, root, t_max, F8::mask_from_bits(active)),
+            None => 0,
+        })
+    }
+
     /// [`Bvh::occluded8`] on AVX2 when the rays can share the axis order.
     pub(super) fn occluded8_wide(
         &self,
@@ -662,13 +658,17 @@ impl Bvh {
             let mut enter = F8::zero();
             let mut exit = F8::splat(f32::INFINITY);
             for a in 0..3 {
-                let (lower, upper) = (
-                    F8::from_array(node.bounds[a]),
-                    F8::from_array(node.bounds[a + 3]),
-                );
-                let (first, last) = interval_slab(lower, upper, origin[a], inv_lo[a], inv_hi[a]);
-                enter = enter.max_(first);
-                exit = exit.min(last);
+                let o = F8::splat(origin[a]);
+                let (lo, hi) = (F8::splat(inv_lo[a]), F8::splat(inv_hi[a]));
+                let d0 = F8::from_array(node.bounds[a]) - o;
+                let d1 = F8::from_array(node.bounds[a + 3]) - o;
+                let zero = F8::zero();
+                let first0 = d0 * F8::select(d0.cmplt(zero), hi, lo);
+                let first1 = d1 * F8::select(d1.cmplt(zero), hi, lo);
+                let last0 = d0 * F8::select(d0.cmplt(zero), lo, hi);
+                let last1 = d1 * F8::select(d1.cmplt(zero), lo, hi);
+                enter = enter.max_(first0.min(first1));
+                exit = exit.min(last0.max_(last1));
             }
             let exit = exit * exit_scale;
             let mut mask = enter.cmple(exit.min(F8::splat(reach))).bitmask();
@@ -710,170 +710,6 @@ impl Bvh {
         Some(std::array::from_fn(|lane| blocked >> lane & 1 != 0))
     }
 
-    /// [`Bvh::occluded8`] of eight rays given in lanes that all end near one
-    /// point `target` (a point light's shadow rays): bit `i` of the answer set
-    /// when lane `i` is `active` (bit `i`) and blocked within its `t_max`. In
-    /// trees of a room's size (at most `ROOM_MAX` triangles) the nodes are
-    /// culled from `target` ([`Bvh::occluded8_back_from`]), which took 2.3 %
-    /// off the lab box's `direct`; in deeper trees its looser culling cost
-    /// more (the bunny's `direct` +3.4 %), and each box is tested against each
-    /// ray. `None` when this tree does not use AVX2 or the rays cannot share a
-    /// packet.
-    #[target_feature(enable = "avx2")]
-    pub(crate) fn occluded8_towards(
-        &self,
-        rays: &Rays8,
-        t_max: F8,
-        active: u32,
-        target: glam::Vec3A,
-    ) -> Option<u32> {
-        if self.isa != Isa::Avx2 {
-            return None;
-        }
-        let q = &Query8::from_lanes(*rays)?;
-        let Some(root) = self.root else {
-            return Some(0);
-        };
-        let open = F8::mask_from_bits(active);
-        Some(if self.triangles <= ROOM_MAX && target.is_finite() {
-            self.occluded8_back_from(q, root, t_max, open, target)
-        } else {
-            self.occluded8_query(q, root, t_max, open)
-        })
-    }
-
-    /// The lanes of `open` that something blocks within their `t_max` (as
-    /// [`Bvh::occluded8_query`]'s bits), for rays that all end near `target`:
-    /// the nodes are culled as the packets from one point are
-    /// ([`Bvh::intersect8`]'s interval test), from `target` back along the
-    /// segments to the rays' origins, eight boxes at once, and by the box of
-    /// the segments. The boxes are grown by a margin far above the rounding of
-    /// either direction, so every leaf in which a ray's own test could hit is
-    /// visited; the leaves test each ray exactly. So the answers are those of
-    /// the eight slab tests of each box (a unit test compares them).
-    #[target_feature(enable = "avx2")]
-    #[inline]
-    fn occluded8_back_from(
-        &self,
-        q: &Query8,
-        root: ChildRef,
-        t_max: F8,
-        mut open: F8,
-        target: glam::Vec3A,
-    ) -> u32 {
-        let target = [target.x, target.y, target.z];
-        // The segments backwards, `target + s·(origin − target)` for `s` in
-        // [0, 1], and the range of their inverse directions by axis.
-        let o = &q.rays.origin;
-        let back = [
-            safe_inverse8(o[0] - F8::splat(target[0])),
-            safe_inverse8(o[1] - F8::splat(target[1])),
-            safe_inverse8(o[2] - F8::splat(target[2])),
-        ];
-        let inv_lo = [
-            back[0].min_element(),
-            back[1].min_element(),
-            back[2].min_element(),
-        ];
-        let inv_hi = [
-            back[0].max_element(),
-            back[1].max_element(),
-            back[2].max_element(),
-        ];
-        // 10⁻⁵ of the largest coordinate: the rounding of the rays, of the
-        // segments backwards and of the triangle test is below 2·10⁻⁶ of it
-        // (a few ε of the coordinates and of the segments' lengths, at most
-        // 2√3 times as long). Not more: shadow rays start 10⁻⁴ of their length
-        // off their surface (`SHADOW_EPSILON`), and a larger margin took in
-        // the leaf of the surface itself: on the lab box three times the
-        // leaves, and 3 % more instructions.
-        let largest = (Lanes::abs(o[0])
-            .max_(Lanes::abs(o[1]))
-            .max_(Lanes::abs(o[2])))
-        .max_element()
-        .max(target[0].abs().max(target[1].abs()).max(target[2].abs()));
-        let margin = F8::splat(1e-5 * largest);
-        // And the box of the segments, grown by the margin: where a direction
-        // changes sign across the packet, its inverses span everything and the
-        // interval test says nothing along that axis; the box still does.
-        let reach_lo = [
-            F8::splat(o[0].min_element().min(target[0])) - margin,
-            F8::splat(o[1].min_element().min(target[1])) - margin,
-            F8::splat(o[2].min_element().min(target[2])) - margin,
-        ];
-        let reach_hi = [
-            F8::splat(o[0].max_element().max(target[0])) + margin,
-            F8::splat(o[1].max_element().max(target[1])) + margin,
-            F8::splat(o[2].max_element().max(target[2])) + margin,
-        ];
-        let exit_scale = F8::splat(1.0 + 2.0 * gamma(3));
-        let one = F8::splat(1.0);
-        let zero = F8::zero();
-        let mut blocked = 0u32;
-        let mut stack = Stack::<ChildRef>::new();
-        stack.push(root);
-        while let Some(cur) = stack.pop() {
-            if cur & LEAF != 0 {
-                if !self.occlude_in_leaf(q, cur, t_max, &mut open, &mut blocked) {
-                    break;
-                }
-                continue;
-            }
-            let node = &self.nodes[cur as usize];
-            let kids = &self.children[cur as usize];
-            let mut enter = zero;
-            let mut exit = F8::splat(f32::INFINITY);
-            let mut overlap = F8::splat(f32::from_bits(u32::MAX));
-            for a in 0..3 {
-                let (lower, upper) = (
-                    F8::from_array(node.bounds[a]),
-                    F8::from_array(node.bounds[a + 3]),
-                );
-                overlap = overlap & lower.cmple(reach_hi[a]) & reach_lo[a].cmple(upper);
-                let (first, last) = interval_slab(
-                    lower - margin,
-                    upper + margin,
-                    target[a],
-                    inv_lo[a],
-                    inv_hi[a],
-                );
-                enter = enter.max_(first);
-                exit = exit.min(last);
-            }
-            let mut mask = (enter.cmple((exit * exit_scale).min(one)) & overlap).bitmask();
-            while mask != 0 {
-                let c = mask.trailing_zeros() as usize;
-                mask &= mask - 1;
-                if kids[c] != EMPTY {
-                    stack.push(kids[c]);
-                }
-            }
-        }
-        blocked
-    }
-
-    /// The any-hit leaf test of the eight-ray packets: the lanes of `open` that
-    /// a triangle of leaf `cur` blocks within their `t_max` leave `open` for
-    /// `blocked`; whether any lane is still open.
-    #[inline(always)]
-    fn occlude_in_leaf(
-        &self,
-        q: &Query8,
-        cur: ChildRef,
-        t_max: F8,
-        open: &mut F8,
-        blocked: &mut u32,
-    ) -> bool {
-        for p in self.leaf(cur) {
-            for i in 0..p.len() {
-                let hit = test_triangle(q, p, i, t_max).valid & *open;
-                *blocked |= hit.bitmask();
-                *open = *open & !hit;
-            }
-        }
-        open.any()
-    }
-
     /// The lanes of `open` that something blocks within their `t_max`, as bits.
     #[target_feature(enable = "avx2")]
     #[inline]
@@ -883,7 +719,14 @@ impl Bvh {
         stack.push(root);
         while let Some(cur) = stack.pop() {
             if cur & LEAF != 0 {
-                if !self.occlude_in_leaf(q, cur, t_max, &mut open, &mut blocked) {
+                for p in self.leaf(cur) {
+                    for i in 0..p.len() {
+                        let hit = test_triangle(q, p, i, t_max).valid & open;
+                        blocked |= hit.bitmask();
+                        open = open & !hit;
+                    }
+                }
+                if !open.any() {
                     break;
                 }
                 continue;
@@ -1144,107 +987,6 @@ mod tests {
         assert!(
             hits > 6000 && blocked > 3000,
             "{hits} hits, {blocked} blocked"
-        );
-    }
-
-    /// Shadow packets culled from their common end point answer as the
-    /// per-ray box tests do, lane for lane: on a grid of unit squares (edges
-    /// and vertices met exactly by rays along the axes and the diagonals) and
-    /// on loose triangles, with segments that end in the surfaces and graze
-    /// them, lights inside and outside the scene's bounds.
-    #[test]
-    fn shadow_packets_from_their_end_point_agree_with_the_ray_by_ray_tests() {
-        #[target_feature(enable = "avx2")]
-        fn both(
-            bvh: &Bvh,
-            rays: &[Ray; 8],
-            t_max: [f32; 8],
-            active: u32,
-            to: Vec3A,
-        ) -> Option<(u32, u32)> {
-            let (origin, dir) = transpose(rays);
-            let lanes = Rays8 { origin, dir };
-            let t_max = F8::from_array(t_max);
-            let q = &Query8::from_lanes(lanes)?;
-            let open = F8::mask_from_bits(active);
-            Some((
-                bvh.occluded8_back_from(q, bvh.root?, t_max, open, to),
-                bvh.occluded8_query(q, bvh.root?, t_max, open),
-            ))
-        }
-        if Isa::detect() != Isa::Avx2 {
-            return;
-        }
-        let mut rng = Rng::new(41, 0);
-        let mut tris = Vec::new();
-        // A floor of unit squares at y = 0 and a wall at z = 3.
-        for i in -4..4 {
-            for j in -4..4 {
-                let (x, z) = (i as f32, j as f32);
-                let v = |a: f32, b: f32| Vec3A::new(x + a, 0.0, z + b);
-                tris.push(Triangle::new(v(0.0, 0.0), v(1.0, 0.0), v(1.0, 1.0)));
-                tris.push(Triangle::new(v(0.0, 0.0), v(1.0, 1.0), v(0.0, 1.0)));
-                let w = |a: f32, b: f32| Vec3A::new(x + a, 2.0 + z + b, 3.0);
-                tris.push(Triangle::new(w(0.0, 0.0), w(1.0, 0.0), w(1.0, 1.0)));
-            }
-        }
-        for _ in 0..200 {
-            let c = Vec3A::new(
-                rng.next_f32() * 8.0 - 4.0,
-                rng.next_f32() * 4.0,
-                rng.next_f32() * 8.0 - 4.0,
-            );
-            let e = Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 0.6 - 0.3;
-            tris.push(Triangle::new(c, c + e, c + Vec3A::new(e.z, -e.x, e.y)));
-        }
-        let bvh = Bvh::build(&tris);
-        let (mut compared, mut blocked, mut open) = (0, 0, 0);
-        for round in 0..20_000 {
-            let mut r = || rng.next_f32();
-            let exact = round % 3 == 0;
-            let light = if exact {
-                Vec3A::new(
-                    (r() * 8.0).floor() - 4.0,
-                    (r() * 5.0).floor() + 1.0,
-                    (r() * 8.0).floor() - 4.0,
-                )
-            } else {
-                Vec3A::new(r() * 12.0 - 6.0, r() * 6.0 + 0.5, r() * 12.0 - 6.0)
-            };
-            let centre = Vec3A::new(
-                r() * 8.0 - 4.0,
-                if round % 2 == 0 { 0.0 } else { r() * 3.0 },
-                r() * 8.0 - 4.0,
-            );
-            let spread = [0.02, 0.3, 2.0][round % 3];
-            let rays: [Ray; 8] = std::array::from_fn(|_| {
-                let mut p = centre + (Vec3A::new(r(), r(), r()) - 0.5) * spread;
-                if exact {
-                    // Integer points: segments along edges and through vertices.
-                    p = p.round();
-                }
-                p.y = p.y.max(1e-3 * (round % 5) as f32);
-                let to = light - p;
-                Ray::new(p, to / to.length())
-            });
-            let t_max: [f32; 8] = std::array::from_fn(|i| {
-                let d = (light - rays[i].origin).length();
-                if round % 4 == 0 { d } else { d * (1.0 - 2e-4) }
-            });
-            let active = (r() * 256.0) as u32 | 1;
-            // SAFETY: the CPU has AVX2.
-            let Some((towards, per_ray)) = (unsafe { both(&bvh, &rays, t_max, active, light) })
-            else {
-                continue;
-            };
-            assert_eq!(towards, per_ray, "round {round}");
-            compared += 1;
-            blocked += towards.count_ones();
-            open += (active & !towards).count_ones();
-        }
-        assert!(
-            compared > 15_000 && blocked > 10_000 && open > 40_000,
-            "{compared} {blocked} {open}"
         );
     }
 }

@@ -390,7 +390,7 @@ const PAIR_MIN: usize = 256;
 /// the room is entered by every ray that starts or ends in it, however small
 /// its area. The lab box priced by area alone put each side wall in a leaf
 /// with two faces of a block, boxes that most rays enter.
-pub(super) const ROOM_MAX: usize = PAIR_MIN;
+const ROOM_MAX: usize = PAIR_MIN;
 /// The volume's weight, times the scene's largest extent. On the lab box 1, 2 and 4
 /// give the same tree (0.5 a worse one): walls in leaves of their own, the blocks
 /// apart from them.
