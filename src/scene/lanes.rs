@@ -179,6 +179,10 @@ fn mul_lanes(index: __m256i, size: usize) -> __m256i {
 #[inline(always)]
 fn gather(base: *const u8, offset: __m256i, at: usize) -> F8 {
     // SAFETY: only inside AVX2 code; the callers' offsets point at f32 fields of
-    // elements of the arrays `base` starts.
+    // elements of the arrays `base` starts: triangle indices come from the
+    // tree built over `triangles` (0 where there is no hit, and only when some
+    // lane hit, so that there are triangles), `Scene::from_parts` checked that
+    // `normals` and `material_of` are as long as `triangles` and that every
+    // material index is in range.
     F8(unsafe { _mm256_i32gather_ps::<1>(base.add(at).cast(), offset) })
 }
