@@ -910,14 +910,13 @@ impl Tile<'_> {
         let mut rays = 0u64;
         // One path from its camera ray's hit into pixel `i`, its AOVs
         // gathered from the first hit as the path shades it.
+        // (It returns the value, which the caller adds: a block's eight in
+        // one `add8`.)
         let mut path_sample = |i: usize, start: &mut PathStart, hit, rays: &mut u64| {
             let layout = match aovs {
                 Some(layout) if AOVS => layout,
                 // Without AOVs the path alone, observed by nothing.
-                _ => {
-                    add.add(i, start.trace(scene, hit, &options, rays, &mut |_, _| {}));
-                    return;
-                }
+                _ => return start.trace(scene, hit, &options, rays, &mut |_, _| {}),
             };
             // The path only copies what it shaded the hit with; the AOVs
             // are made of it afterwards, outside the path tracer's loop.
@@ -927,7 +926,7 @@ impl Tile<'_> {
             });
             let shaded = seen.map(|(s, b)| layout.first_hit(&start.ray, &s, || b));
             gather(i, &start.ray, hit, shaded.as_ref());
-            add.add(i, v);
+            v
         };
         for s in samples.clone() {
             // Camera rays of 4×2 pixel blocks traced together (eight AVX2
@@ -964,9 +963,15 @@ impl Tile<'_> {
                     let primary = starts.each_ref().map(|p| p.ray);
                     rays += 8;
                     let hits = scene.intersect8(&primary, f32::INFINITY);
-                    for (((x, y), start), hit) in block.into_iter().zip(&mut starts).zip(hits) {
-                        path_sample(y * width + x, start, hit, &mut rays);
+                    let mut pixels = [0; 8];
+                    let mut values = [Vec3A::ZERO; 8];
+                    for (k, (((x, y), start), hit)) in
+                        block.into_iter().zip(&mut starts).zip(hits).enumerate()
+                    {
+                        pixels[k] = y * width + x;
+                        values[k] = path_sample(pixels[k], start, hit, &mut rays);
                     }
+                    add.add8(pixels, values);
                 }
                 for qx in (blocks_end..width).step_by(2) {
                     if qy + 1 < n_rows && qx + 1 < width {
@@ -977,7 +982,8 @@ impl Tile<'_> {
                         rays += 4;
                         let hits = scene.intersect4(&primary, f32::INFINITY);
                         for (((x, y), start), hit) in quad.into_iter().zip(&mut starts).zip(hits) {
-                            path_sample(y * width + x, start, hit, &mut rays);
+                            let v = path_sample(y * width + x, start, hit, &mut rays);
+                            add.add(y * width + x, v);
                         }
                     } else {
                         for y in qy..(qy + 2).min(n_rows) {
@@ -986,7 +992,8 @@ impl Tile<'_> {
                                     PathStart::new(camera, &options, seed, (x, y0 + y), s);
                                 rays += 1;
                                 let hit = scene.intersect(&start.ray, f32::INFINITY);
-                                path_sample(y * width + x, &mut start, hit, &mut rays);
+                                let v = path_sample(y * width + x, &mut start, hit, &mut rays);
+                                add.add(y * width + x, v);
                             }
                         }
                     }
