@@ -1035,13 +1035,12 @@ impl Tile<'_> {
             n_rows,
         } = self;
         let mut rays = 0u64;
-        // Whether the blocks can be shaded in lanes (checked once a tile).
+        // Whether the blocks are shaded in lanes (checked once a tile; pixel
+        // coordinates below 2²⁴, which `block_points` counts on being exact
+        // in f32).
         #[cfg(target_arch = "x86_64")]
-        // (Pixel coordinates below 2²⁴: `block_points` counts on their being
-        // exact in f32.)
         let lanes =
             LANES && !AOVS && width < 1 << 24 && y0 + n_rows < 1 << 24 && scene.lab_lanes_apply();
-        let direct = integrator == Integrator::Direct;
         for s in samples.clone() {
             // 4×2 pixel blocks traced together (eight AVX2 lanes), then the last
             // columns as 2×2 quads; a last odd row or column alone.
@@ -1060,9 +1059,6 @@ impl Tile<'_> {
                         (qx + 2, qy + 1),
                         (qx + 3, qy + 1),
                     ];
-                    let mut px = [0.0; 8];
-                    let mut py = [0.0; 8];
-                    let mut have_points = false;
                     // (Written out: `block.map` here was left as a call.)
                     let (top, below) = (qy * width + qx, (qy + 1) * width + qx);
                     let pixels = [
@@ -1075,22 +1071,26 @@ impl Tile<'_> {
                         below + 2,
                         below + 3,
                     ];
+                    // The image points, their jitter in lanes where the block is.
                     #[cfg(target_arch = "x86_64")]
-                    if LANES && lanes {
-                        // SAFETY (both calls): `LANES` is set only in
-                        // `trace_lab_avx2`, called only when the CPU has AVX2.
-                        (px, py) = unsafe { block_points(seed, s, (qx, y0 + qy), width) };
-                        have_points = true;
+                    let (px, py) = if lanes {
+                        // SAFETY: `lanes` is only set in `trace_lab_avx2`
+                        // (`LANES`), called only when the CPU has AVX2.
+                        unsafe { block_points(seed, s, (qx, y0 + qy), width) }
+                    } else {
+                        block_points_one_by_one(seed, s, &block, y0, width)
+                    };
+                    #[cfg(not(target_arch = "x86_64"))]
+                    let (px, py) = block_points_one_by_one(seed, s, &block, y0, width);
+                    #[cfg(target_arch = "x86_64")]
+                    if lanes {
+                        let direct = integrator == Integrator::Direct;
+                        // SAFETY: as above.
                         let shaded = unsafe { lab8::radiance8(scene, camera, &px, &py, direct) };
                         if let Some((values, shadow_rays)) = shaded {
                             rays += 8 + u64::from(shadow_rays);
                             add.add8_channels(pixels, &values);
                             continue;
-                        }
-                    }
-                    if !have_points {
-                        for (i, &(x, y)) in block.iter().enumerate() {
-                            (px[i], py[i]) = pixel_point(seed, s, x, y0 + y, width);
                         }
                     }
                     let top_rays =
@@ -1241,6 +1241,22 @@ fn block_points(seed: u64, s: u32, (x, y): (usize, usize), width: usize) -> ([f3
         pixel_jitter8(seed, [first, first + width as u64], s)
     };
     ((column + dx).to_array(), (row + dy).to_array())
+}
+
+/// [`pixel_point`] of the pixels of `block` (rows from `y0`), one by one.
+#[inline(always)]
+fn block_points_one_by_one(
+    seed: u64,
+    s: u32,
+    block: &[(usize, usize); 8],
+    y0: usize,
+    width: usize,
+) -> ([f32; 8], [f32; 8]) {
+    let (mut px, mut py) = ([0.0; 8], [0.0; 8]);
+    for (i, &(x, y)) in block.iter().enumerate() {
+        (px[i], py[i]) = pixel_point(seed, s, x, y0 + y, width);
+    }
+    (px, py)
 }
 
 /// The image point of [`pixel_ray`].

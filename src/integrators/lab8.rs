@@ -50,19 +50,16 @@ pub(crate) fn radiance8(
         F8::splat(ambient.y),
         F8::splat(ambient.z),
     ];
-    // `rho ∘ ambient` where no lane is lit, as the scalar code.
-    let unlit = [
-        (rho[0] * ambient[0]).to_array(),
-        (rho[1] * ambient[1]).to_array(),
-        (rho[2] * ambient[2]).to_array(),
-    ];
     if !direct {
         return Some(([rho[0].to_array(), rho[1].to_array(), rho[2].to_array()], 0));
     }
-    if hits.found == 0 {
-        return Some((unlit, 0));
-    }
     let Some(lights) = shadow_rays8(scene, &hits, &rays.dir) else {
+        // `ρ ∘ N` where no lane is lit, as the scalar code.
+        let unlit = [
+            (rho[0] * ambient[0]).to_array(),
+            (rho[1] * ambient[1]).to_array(),
+            (rho[2] * ambient[2]).to_array(),
+        ];
         return Some((unlit, 0));
     };
     let Shadows8 {
@@ -123,10 +120,13 @@ struct Shadows8 {
 }
 
 /// [`super::unshadowed_light`] of eight hits (rays along `dir`), in lanes;
-/// `None` when no hit faces the light.
+/// `None` when no lane hit, or no hit faces the light.
 #[target_feature(enable = "avx2")]
 #[inline]
 fn shadow_rays8(scene: &Scene, hits: &Closest8, dir: &[F8; 3]) -> Option<Shadows8> {
+    if hits.found == 0 {
+        return None;
+    }
     // `unshadowed_light`: the distance and cosine to the light.
     let light = &scene.light;
     let target = [
