@@ -15,9 +15,9 @@ use crate::film::Film;
 use crate::fixed::{self, Fixed3};
 use crate::geometry::ray::{Hit, Ray};
 use crate::integrators::Integrator;
-#[cfg(target_arch = "x86_64")]
-use crate::integrators::lab8;
 use crate::integrators::path::{self, PathOptions, PathSampler, SamplerKind};
+#[cfg(target_arch = "x86_64")]
+use crate::integrators::{lab8, path8};
 use crate::materials::Material;
 #[cfg(target_arch = "x86_64")]
 use crate::sampling::sampler::pixel_jitter8;
@@ -905,6 +905,17 @@ impl Tile<'_> {
         add: &mut impl Sink,
         gather: &mut impl FnMut(usize, &Ray, Option<Hit>, Option<&FirstHit>),
     ) -> u64 {
+        // Eight paths shaded at once where the scene allows (diffuse surfaces,
+        // the key light): the same values, 20 % less time (docs/performance.md).
+        #[cfg(target_arch = "x86_64")]
+        if !AOVS
+            && options.sampler == SamplerKind::Sobol
+            && std::arch::is_x86_feature_detected!("avx2")
+            && self.scene.path_lanes_apply()
+        {
+            // SAFETY: the CPU has AVX2.
+            return unsafe { self.trace_path_lanes(options, add) };
+        }
         let (scene, camera, seed, samples) = (self.scene, self.camera, self.seed, &self.samples);
         let (width, y0, n_rows) = (self.width, self.y0, self.n_rows);
         let mut rays = 0u64;
@@ -1001,6 +1012,75 @@ impl Tile<'_> {
             }
         }
         rays
+    }
+
+    /// [`Tile::trace_path`] with eight paths in AVX2 lanes ([`path8`]): the
+    /// tile's samples in sample order, each lane taking the next when its path
+    /// ends. Only for scenes where [`Scene::path_lanes_apply`].
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn trace_path_lanes(&self, options: PathOptions, add: &mut impl Sink) -> u64 {
+        let (scene, camera, seed) = (self.scene, self.camera, self.seed);
+        let (width, y0, n_rows) = (self.width, self.y0, self.n_rows);
+        let mut rays = 0u64;
+        // The camera rays of eight pixels of a row are traced as one packet
+        // (the last pixels of a row one by one), then handed out in turn.
+        let mut samples = self.samples.clone();
+        let mut sample = if width > 0 && n_rows > 0 {
+            samples.next()
+        } else {
+            None
+        };
+        let (mut x, mut y) = (0, 0);
+        let mut ready: [Option<path8::Start>; 8] = [const { None }; 8];
+        let (mut taken, mut made) = (0, 0);
+        let mut next = || {
+            if taken == made {
+                let s = sample?;
+                let n = (width - x).min(8);
+                let mut primary = [Ray::new(Vec3A::ZERO, Vec3A::Z); 8];
+                for (k, (slot, ray)) in ready.iter_mut().zip(&mut primary).take(n).enumerate() {
+                    let px = x + k;
+                    // As `PathStart::new`.
+                    let pixel = ((y0 + y) * camera.width as usize + px) as u64;
+                    let mut sampler = path::SobolSampler::new(pixel, s, seed);
+                    let d = sampler.next_2d();
+                    *ray = camera.ray(px as f32 + d.x, (y0 + y) as f32 + d.y);
+                    *slot = Some((y * width + px, sampler, *ray, None));
+                }
+                if n == 8 {
+                    let hits = scene.intersect8(&primary, f32::INFINITY);
+                    for (slot, hit) in ready.iter_mut().zip(hits) {
+                        if let Some(start) = slot {
+                            start.3 = hit;
+                        }
+                    }
+                } else {
+                    for (slot, ray) in ready.iter_mut().zip(&primary).take(n) {
+                        if let Some(start) = slot {
+                            start.3 = scene.intersect(ray, f32::INFINITY);
+                        }
+                    }
+                }
+                rays += n as u64;
+                (taken, made) = (0, n);
+                x += n;
+                if x == width {
+                    x = 0;
+                    y += 1;
+                    if y == n_rows {
+                        y = 0;
+                        sample = samples.next();
+                    }
+                }
+            }
+            taken += 1;
+            ready[taken - 1].take()
+        };
+        let traced = path8::trace(scene, options.max_depth, &mut next, &mut |i, v| {
+            add.add(i, v)
+        });
+        rays + traced
     }
 
     /// [`Tile::trace_lab`] compiled with AVX2.

@@ -2,6 +2,7 @@
 
 pub(crate) mod lab8;
 pub mod path;
+pub(crate) mod path8;
 
 use std::f32::consts::PI;
 use std::fmt;

@@ -45,6 +45,26 @@ impl Scene {
             && fits(self.materials.len() * size_of::<SurfaceMaterial>())
     }
 
+    /// Whether `path` can shade eight paths in lanes
+    /// (`crate::integrators::path8`): the conditions of
+    /// [`Scene::lab_lanes_apply`], and every material a fixed Lambertian
+    /// reflector whose BSDF reflectance is its base colour, emitting nothing;
+    /// flat shading (no mesh has vertex normals); a black environment; and
+    /// the key light the only light (nothing to choose).
+    pub(crate) fn path_lanes_apply(&self) -> bool {
+        use crate::materials::Material;
+        self.lab_lanes_apply()
+            && self.materials.iter().all(|m| {
+                matches!(m.kind, MaterialKind::Fixed(Material::Diffuse { reflectance })
+                    if reflectance.to_array().map(f32::to_bits)
+                        == m.reflectance.to_array().map(f32::to_bits))
+                    && !m.is_emissive()
+            })
+            && self.meshes.iter().all(|m| m.normals.is_empty())
+            && self.environment.is_black()
+            && !self.light_needs_samples()
+    }
+
     /// [`Scene::intersect8`] of rays in lanes, answered in lanes; `None` when
     /// they cannot be traced as one packet (trace them as `[Ray; 8]`). Only
     /// for scenes where [`Scene::lab_lanes_apply`].
@@ -82,6 +102,25 @@ impl Scene {
     #[target_feature(enable = "avx2")]
     #[inline]
     pub(crate) fn surface_points8(&self, hits: &Closest8, dir: &[F8; 3]) -> Points8 {
+        let mut point = self.surface_points8_front(hits);
+        if self.two_sided {
+            let n = point.n;
+            // `n.dot(dir) > 0`, in glam's order of the sums.
+            let away = (n[0] * dir[0] + n[1] * dir[1] + n[2] * dir[2]).cmpgt(F8::zero());
+            point.n = [
+                F8::select(away, n[0].neg(), n[0]),
+                F8::select(away, n[1].neg(), n[1]),
+                F8::select(away, n[2].neg(), n[2]),
+            ];
+        }
+        point
+    }
+
+    /// [`Scene::surface_points8`] with the triangles' front normals, as
+    /// [`Scene::surface`] gives them (`SurfaceHit::ng`).
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    pub(crate) fn surface_points8_front(&self, hits: &Closest8) -> Points8 {
         assert!(hits.found != 0 && !self.triangles.is_empty());
         let prim = prim_lanes(hits);
         let triangles = self.triangles.as_ptr().cast::<u8>();
@@ -113,20 +152,11 @@ impl Scene {
         ];
         let normals = self.normals.as_ptr().cast::<u8>();
         let at = mul_lanes(prim, size_of::<glam::Vec3A>());
-        let mut n = [
+        let n = [
             gather(normals, at, 0),
             gather(normals, at, 4),
             gather(normals, at, 8),
         ];
-        if self.two_sided {
-            // `n.dot(dir) > 0`, in glam's order of the sums.
-            let away = (n[0] * dir[0] + n[1] * dir[1] + n[2] * dir[2]).cmpgt(F8::zero());
-            n = [
-                F8::select(away, n[0].neg(), n[0]),
-                F8::select(away, n[1].neg(), n[1]),
-                F8::select(away, n[2].neg(), n[2]),
-            ];
-        }
         Points8 { p, n, error }
     }
 

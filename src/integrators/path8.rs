@@ -1,0 +1,542 @@
+//! The `path` integrator on eight paths at once, their shading in the lanes
+//! of AVX2 registers: for scenes of diffuse surfaces lit by the key point
+//! light (the lab box, meshes in it; see [`Scene::path_lanes_apply`]).
+//!
+//! Each lane holds one path. The rays are traced one by one (a packet of
+//! bounce rays enters every leaf its rays do, and cost as much as the rays
+//! alone: docs/performance.md), but everything between two traces, the hit's
+//! surface point, frame, light sample, shadow ray, BSDF sample and the ray
+//! that leaves, is done for the eight paths together. When a path ends its
+//! lane takes the next sample, so the lanes stay full until the samples run
+//! out.
+//!
+//! Each lane does the scalar path tracer's operations in its order (no FMA),
+//! so every sample's value is that of [`super::path::radiance_from`] bit for
+//! bit (a unit test compares them); only the order in which samples finish
+//! changes, which the exact sums do not see.
+
+#![cfg(target_arch = "x86_64")]
+
+use std::f32::consts::{FRAC_1_PI, FRAC_PI_4};
+
+use glam::Vec3A;
+
+use super::path::{PathSampler, RR_DEPTH, RR_SCALE, SobolSampler};
+use crate::geometry::bvh::Closest8;
+use crate::geometry::ray::{Hit, Ray, SHADOW_EPSILON};
+use crate::geometry::triangle::Lanes;
+use crate::scene::{LightSample, Scene};
+use crate::simd::F8;
+
+/// `(x·x' + y·y') + z·z'` lane by lane, in glam's order.
+#[inline(always)]
+fn dot(a: &[F8; 3], b: &[F8; 3]) -> F8 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+/// One path's start: its tag (the caller's, e.g. the pixel it adds to), its
+/// sampler after the camera's pair, its camera ray and that ray's closest hit
+/// (traced by the caller, which counts it).
+pub(crate) type Start = (usize, SobolSampler, Ray, Option<Hit>);
+
+/// The eight lanes' paths, lane `i` of every array path `i`.
+struct Paths {
+    /// The lanes holding a path, one bit each.
+    active: u32,
+    tag: [usize; 8],
+    sampler: [Option<SobolSampler>; 8],
+    depth: [u32; 8],
+    /// The ray that found the current hit.
+    origin: [[f32; 8]; 3],
+    dir: [[f32; 8]; 3],
+    /// The current hit.
+    prim: [u32; 8],
+    b1: [f32; 8],
+    b2: [f32; 8],
+    /// Throughput and radiance so far.
+    beta: [[f32; 8]; 3],
+    l: [[f32; 8]; 3],
+}
+
+impl Paths {
+    #[inline(always)]
+    fn vec(v: &[[f32; 8]; 3], i: usize) -> Vec3A {
+        Vec3A::new(v[0][i], v[1][i], v[2][i])
+    }
+
+    #[inline(always)]
+    fn set(v: &mut [[f32; 8]; 3], i: usize, x: Vec3A) {
+        v[0][i] = x.x;
+        v[1][i] = x.y;
+        v[2][i] = x.z;
+    }
+
+    #[inline(always)]
+    fn load(v: &[[f32; 8]; 3]) -> [F8; 3] {
+        [
+            F8::from_array(v[0]),
+            F8::from_array(v[1]),
+            F8::from_array(v[2]),
+        ]
+    }
+
+    #[inline(always)]
+    fn store(v: &mut [[f32; 8]; 3], x: &[F8; 3]) {
+        v[0] = x[0].to_array();
+        v[1] = x[1].to_array();
+        v[2] = x[2].to_array();
+    }
+}
+
+/// Traces every path that `next` starts (until it returns `None`) with
+/// `max_depth` as [`super::path::PathOptions::max_depth`], and gives each
+/// path's tag and value to `emit`; returns the rays cast after the camera
+/// rays. Only for scenes where [`Scene::path_lanes_apply`].
+#[target_feature(enable = "avx2")]
+pub(crate) fn trace(
+    scene: &Scene,
+    max_depth: u32,
+    next: &mut impl FnMut() -> Option<Start>,
+    emit: &mut impl FnMut(usize, Vec3A),
+) -> u64 {
+    debug_assert!(scene.path_lanes_apply());
+    // The key light is the only one, so every vertex gets the same sample.
+    let light = match scene.sample_light(Vec3A::ZERO, glam::Vec2::ZERO, glam::Vec2::ZERO) {
+        Some(LightSample::Point {
+            position,
+            intensity,
+        }) => Some((position, intensity)),
+        _ => None,
+    };
+    let mut rays = 0u64;
+    let mut lanes = Paths {
+        active: 0,
+        tag: [0; 8],
+        sampler: [const { None }; 8],
+        depth: [0; 8],
+        origin: [[0.0; 8]; 3],
+        dir: [[0.0; 8]; 3],
+        prim: [0; 8],
+        b1: [0.0; 8],
+        b2: [0.0; 8],
+        beta: [[0.0; 8]; 3],
+        l: [[0.0; 8]; 3],
+    };
+    let mut exhausted = false;
+    loop {
+        // Fill the empty lanes with new paths whose camera ray hits.
+        if !exhausted {
+            for i in 0..8 {
+                if lanes.active >> i & 1 != 0 {
+                    continue;
+                }
+                loop {
+                    let Some((tag, sampler, ray, hit)) = next() else {
+                        exhausted = true;
+                        break;
+                    };
+                    let Some(hit) = hit else {
+                        // Escaped into a black environment.
+                        emit(tag, Vec3A::ZERO);
+                        continue;
+                    };
+                    lanes.active |= 1 << i;
+                    lanes.tag[i] = tag;
+                    lanes.sampler[i] = Some(sampler);
+                    lanes.depth[i] = 0;
+                    Paths::set(&mut lanes.origin, i, ray.origin);
+                    Paths::set(&mut lanes.dir, i, ray.dir);
+                    lanes.prim[i] = hit.prim;
+                    lanes.b1[i] = hit.b1;
+                    lanes.b2[i] = hit.b2;
+                    Paths::set(&mut lanes.beta, i, Vec3A::ONE);
+                    Paths::set(&mut lanes.l, i, Vec3A::ZERO);
+                    break;
+                }
+                if exhausted {
+                    break;
+                }
+            }
+        }
+        if lanes.active == 0 {
+            return rays;
+        }
+        rays += vertex(scene, light, max_depth, &mut lanes, emit);
+    }
+}
+
+/// Ends path `i` with its value.
+#[inline(always)]
+fn finish(lanes: &mut Paths, i: usize, emit: &mut impl FnMut(usize, Vec3A)) {
+    lanes.active &= !(1 << i);
+    emit(lanes.tag[i], Paths::vec(&lanes.l, i));
+}
+
+/// One vertex of every active path: shades its hit (next-event estimation
+/// towards `light`, then a BSDF sample), and traces the ray that leaves it
+/// or ends the path. Returns the rays cast.
+#[target_feature(enable = "avx2")]
+#[inline]
+fn vertex(
+    scene: &Scene,
+    light: Option<(Vec3A, Vec3A)>,
+    max_depth: u32,
+    lanes: &mut Paths,
+    emit: &mut impl FnMut(usize, Vec3A),
+) -> u64 {
+    let mut rays = 0;
+    // Mitsuba's convention: a path of `max_depth` segments ends at this hit;
+    // the others draw the light's and the BSDF's pairs.
+    let (mut ul, mut ub) = (([0.0f32; 8], [0.0f32; 8]), ([0.0f32; 8], [0.0f32; 8]));
+    for i in 0..8 {
+        if lanes.active >> i & 1 == 0 {
+            continue;
+        }
+        if lanes.depth[i] + 1 >= max_depth {
+            finish(lanes, i, emit);
+            continue;
+        }
+        let sampler = lanes.sampler[i]
+            .as_mut()
+            .expect("an active lane has a sampler");
+        let (a, b) = (sampler.next_2d(), sampler.next_2d());
+        (ul.0[i], ul.1[i], ub.0[i], ub.1[i]) = (a.x, a.y, b.x, b.y);
+    }
+    let active = lanes.active;
+    if active == 0 {
+        return 0;
+    }
+    let hits = Closest8 {
+        found: active,
+        t: F8::zero(),
+        b1: F8::from_array(lanes.b1),
+        b2: F8::from_array(lanes.b2),
+        prim: F8::from_array(lanes.prim.map(f32::from_bits)),
+    };
+    let dir = Paths::load(&lanes.dir);
+    let point = scene.surface_points8_front(&hits);
+    let (p, ng, error) = (&point.p, &point.n, &point.error);
+    let rho = scene.base_colors8(&hits);
+    let zero = F8::zero();
+    // `cos_out = -ng·dir`; one-sided BSDFs face the ray in two-sided scenes.
+    let cos_out = dot(ng, &dir).neg();
+    let n = if scene.two_sided {
+        let back = cos_out.cmplt(zero);
+        [
+            F8::select(back, ng[0].neg(), ng[0]),
+            F8::select(back, ng[1].neg(), ng[1]),
+            F8::select(back, ng[2].neg(), ng[2]),
+        ]
+    } else {
+        *ng
+    };
+    // `Frame::from_normal` (Duff et al.).
+    let one = F8::splat(1.0);
+    // `1.copysign(n.z)`.
+    let sign = (n[2] & F8::splat(-0.0)) | one;
+    let a = (one.neg()) / (sign + n[2]);
+    let b = n[0] * n[1] * a;
+    let t = [one + sign * n[0] * n[0] * a, sign * b, sign.neg() * n[0]];
+    let bt = [b, sign + n[1] * n[1] * a, n[1].neg()];
+    let wo_world = [dir[0].neg(), dir[1].neg(), dir[2].neg()];
+    // (Of `wo` in the frame, a diffuse surface needs only the height.)
+    let wo_z = dot(&wo_world, &n);
+    // `SurfacePoint::offset_origin`'s distance along the normal.
+    let d = dot(&[ng[0].abs(), ng[1].abs(), ng[2].abs()], error);
+    let off = [d * ng[0], d * ng[1], d * ng[2]];
+    // (Macros, not closures: a closure is compiled without AVX2.)
+    macro_rules! offset_origin {
+        ($w:expr) => {{
+            let away = dot($w, ng).cmplt(zero);
+            let o = [
+                F8::select(away, off[0].neg(), off[0]),
+                F8::select(away, off[1].neg(), off[1]),
+                F8::select(away, off[2].neg(), off[2]),
+            ];
+            [
+                (p[0] + o[0]).step_towards(o[0]),
+                (p[1] + o[1]).step_towards(o[1]),
+                (p[2] + o[2]).step_towards(o[2]),
+            ]
+        }};
+    }
+    let wo_above = wo_z.cmpgt(zero);
+    let mut beta = Paths::load(&lanes.beta);
+
+    // Next-event estimation towards the point light.
+    if let Some((position, intensity)) = light {
+        let target = [
+            F8::splat(position.x),
+            F8::splat(position.y),
+            F8::splat(position.z),
+        ];
+        let v = [target[0] - p[0], target[1] - p[1], target[2] - p[2]];
+        let r2 = dot(&v, &v);
+        let li = [
+            F8::splat(intensity.x) / r2,
+            F8::splat(intensity.y) / r2,
+            F8::splat(intensity.z) / r2,
+        ];
+        let len = r2.sqrt();
+        let wi_world = [v[0] / len, v[1] / len, v[2] / len];
+        let wi_z = dot(&wi_world, &n);
+        let scale = F8::splat(FRAC_1_PI) * wi_z;
+        let f = [rho[0] * scale, rho[1] * scale, rho[2] * scale];
+        macro_rules! nonzero {
+            ($x:expr) => {
+                $x[0].cmpne(zero) | $x[1].cmpne(zero) | $x[2].cmpne(zero)
+            };
+        }
+        let lit = (wo_above & wi_z.cmpgt(zero) & nonzero!(li) & nonzero!(f)).bitmask() & active;
+        if lit != 0 {
+            // `SurfacePoint::ray_to(target)`.
+            let origin = offset_origin!(&v);
+            let to = [
+                target[0] - origin[0],
+                target[1] - origin[1],
+                target[2] - origin[2],
+            ];
+            let dist = dot(&to, &to).sqrt();
+            let sdir = [to[0] / dist, to[1] / dist, to[2] / dist];
+            let skip = dist * F8::splat(SHADOW_EPSILON);
+            let start = [
+                (origin[0] + sdir[0] * skip).to_array(),
+                (origin[1] + sdir[1] * skip).to_array(),
+                (origin[2] + sdir[2] * skip).to_array(),
+            ];
+            let t_max = (dist - F8::splat(2.0) * skip).to_array();
+            let sdir = [sdir[0].to_array(), sdir[1].to_array(), sdir[2].to_array()];
+            let mut open = 0u32;
+            for (i, &t_max) in t_max.iter().enumerate() {
+                if lit >> i & 1 == 0 {
+                    continue;
+                }
+                rays += 1;
+                let ray = Ray::new(Paths::vec(&start, i), Paths::vec(&sdir, i));
+                if !scene.occluded(&ray, t_max) {
+                    open |= 1 << i;
+                }
+            }
+            if open != 0 {
+                let open = F8::mask_from_bits(open);
+                let mut l = Paths::load(&lanes.l);
+                for c in 0..3 {
+                    // `l += β·f·Li·1` (a point light's MIS weight is 1).
+                    let add = l[c] + beta[c] * f[c] * li[c] * one;
+                    l[c] = F8::select(open, add, l[c]);
+                }
+                Paths::store(&mut lanes.l, &l);
+            }
+        }
+    }
+
+    // The BSDF sample: a cosine-weighted direction (`concentric_disk`, then
+    // up to the hemisphere).
+    let (u0, u1) = (F8::from_array(ub.0), F8::from_array(ub.1));
+    let two = F8::splat(2.0);
+    let ox = two * u0 - one;
+    let oy = two * u1 - one;
+    let centre = ox.cmpeq(zero) & oy.cmpeq(zero);
+    let x_major = ox.abs().cmpgt(oy.abs());
+    let r = F8::select(x_major, ox, oy);
+    let other = F8::select(x_major, oy, ox);
+    let (s, c) = sin_cos_quarter(F8::splat(FRAC_PI_4) * (other / r));
+    let dx = F8::select(centre, zero, r * F8::select(x_major, c, s));
+    let dy = F8::select(centre, zero, r * F8::select(x_major, s, c));
+    let z = (one - (dx * dx + dy * dy)).max_(zero).sqrt();
+    let leaves = (wo_above & z.cmpgt(zero)).bitmask() & active;
+    let wi_world = [
+        dx * t[0] + dy * bt[0] + z * n[0],
+        dx * t[1] + dy * bt[1] + z * n[1],
+        dx * t[2] + dy * bt[2] + z * n[2],
+    ];
+    let origin = offset_origin!(&wi_world);
+    for (c, b) in beta.iter_mut().enumerate() {
+        *b = *b * rho[c];
+    }
+    Paths::store(&mut lanes.beta, &beta);
+    Paths::store(&mut lanes.origin, &origin);
+    Paths::store(&mut lanes.dir, &wi_world);
+
+    // Each path's roulette and next hit, one by one.
+    for i in 0..8 {
+        if active >> i & 1 == 0 {
+            continue;
+        }
+        if leaves >> i & 1 == 0 {
+            finish(lanes, i, emit);
+            continue;
+        }
+        lanes.depth[i] += 1;
+        let mut beta = Paths::vec(&lanes.beta, i);
+        if beta == Vec3A::ZERO {
+            finish(lanes, i, emit);
+            continue;
+        }
+        if lanes.depth[i] >= RR_DEPTH {
+            let survive = (beta.max_element() * RR_SCALE).min(0.95);
+            let sampler = lanes.sampler[i]
+                .as_mut()
+                .expect("an active lane has a sampler");
+            // (A NaN throughput ends the path too.)
+            if sampler.next_1d() >= survive || survive.is_nan() {
+                finish(lanes, i, emit);
+                continue;
+            }
+            beta /= survive;
+            Paths::set(&mut lanes.beta, i, beta);
+        }
+        rays += 1;
+        let ray = Ray::new(Paths::vec(&lanes.origin, i), Paths::vec(&lanes.dir, i));
+        match scene.intersect(&ray, f32::INFINITY) {
+            Some(hit) => {
+                lanes.prim[i] = hit.prim;
+                lanes.b1[i] = hit.b1;
+                lanes.b2[i] = hit.b2;
+            }
+            None => finish(lanes, i, emit),
+        }
+    }
+    rays
+}
+
+/// `materials::sin_cos_quarter` lane by lane.
+#[inline(always)]
+fn sin_cos_quarter(x: F8) -> (F8, F8) {
+    let x2 = x * x;
+    let sin = x + x
+        * x2
+        * (F8::splat(-1.666_665_5e-1)
+            + x2 * (F8::splat(8.332_161e-3) + x2 * F8::splat(-1.951_529_6e-4)));
+    let cos = F8::splat(1.0) - F8::splat(0.5) * x2
+        + x2 * x2
+            * (F8::splat(4.166_664_6e-2)
+                + x2 * (F8::splat(-1.388_731_6e-3) + x2 * F8::splat(2.443_315_7e-5)));
+    (sin, cos)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::PointLight;
+    use crate::geometry::triangle::Triangle;
+    use crate::integrators::path::{self, PathOptions, SamplerKind};
+    use crate::sampling::sampler::Rng;
+    use crate::scene::{SceneParts, cornell};
+
+    /// The lab box (one-sided), and forty random triangles with a wall in a
+    /// two-sided scene (the form of meshes), to hit from both sides.
+    fn scenes() -> Vec<Scene> {
+        let mut rng = Rng::new(5, 1);
+        let mut r = move || rng.next_f32() * 2.0 - 1.0;
+        let mut triangles: Vec<Triangle> = (0..40)
+            .map(|_| {
+                let c = Vec3A::new(r(), r(), r() * 0.5 + 0.5);
+                let e = |r: &mut dyn FnMut() -> f32| Vec3A::new(r(), r(), r()) * 0.4;
+                Triangle::new(c, c + e(&mut r), c + e(&mut r))
+            })
+            .collect();
+        triangles.push(Triangle::new(
+            Vec3A::new(-3.0, -3.0, 2.0),
+            Vec3A::new(3.0, -3.0, 2.0),
+            Vec3A::new(0.0, 4.0, 2.0),
+        ));
+        let rho = (0..triangles.len())
+            .map(|i| Vec3A::new(0.2 + 0.1 * (i % 5) as f32, 0.5, 0.9 - 0.1 * (i % 3) as f32))
+            .collect();
+        let light = PointLight {
+            position: Vec3A::new(0.3, -0.2, 0.4),
+            power: Vec3A::new(3.0, 5.0, 7.0),
+        };
+        let mut parts = SceneParts::lab(triangles, rho, light, Vec3A::ZERO).expect("valid");
+        parts.two_sided = true;
+        vec![cornell::scene(), Scene::from_parts(parts).expect("valid")]
+    }
+
+    #[target_feature(enable = "avx2")]
+    fn in_lanes(scene: &Scene, max_depth: u32, starts: &[Start]) -> (Vec<(usize, Vec3A)>, u64) {
+        let mut queue = starts.iter().cloned();
+        let mut values = Vec::new();
+        let rays = trace(scene, max_depth, &mut || queue.next(), &mut |tag, v| {
+            values.push((tag, v))
+        });
+        (values, rays)
+    }
+
+    /// Every path traced in lanes has the value of the same path traced alone
+    /// (`path::radiance_from` with the same sampler), bit for bit, and the
+    /// lanes cast as many rays: one- and two-sided scenes, lights inside,
+    /// outside and on a surface, a light of no power, camera rays that miss,
+    /// and paths cut at every depth.
+    #[test]
+    fn paths_in_lanes_match_paths_one_by_one() {
+        if !std::arch::is_x86_feature_detected!("avx2") {
+            return;
+        }
+        let mut rng = Rng::new(11, 0);
+        let (mut compared, mut lit, mut long) = (0, 0, 0);
+        for (k, mut scene) in scenes().into_iter().enumerate() {
+            for (round, max_depth) in [u32::MAX, 1, 2, 3, 6, u32::MAX].into_iter().enumerate() {
+                let mut r = || rng.next_f32();
+                let (lo, hi) = scene.bounds();
+                scene.light.position = match round {
+                    0 => scene.light.position,
+                    // On the ceiling or on the wall: shadow rays must stop
+                    // short of the surface the light lies on.
+                    3 if k == 0 => Vec3A::new(0.1, lo.y, 0.05),
+                    3 => Vec3A::new(0.1, -0.2, hi.z),
+                    4 => Vec3A::new(0.0, 0.0, -9.0),
+                    _ => Vec3A::new(r(), r(), r()) * 1.6 - 0.8,
+                };
+                scene.light.power = if round == 5 {
+                    Vec3A::ZERO
+                } else {
+                    Vec3A::new(3.0, 4.0, 5.0)
+                };
+                assert!(scene.path_lanes_apply());
+                let starts: Vec<Start> = (0..1500)
+                    .map(|tag| {
+                        let mut sampler = SobolSampler::new(tag as u64, round as u32, 7 + k as u64);
+                        let _camera = sampler.next_2d();
+                        let origin = lo + (hi - lo) * (Vec3A::new(r(), r(), r()) * 0.9 + 0.05);
+                        let dir = (Vec3A::new(r(), r(), r()) * 2.0 - 1.0).normalize();
+                        let ray = Ray::new(origin, dir);
+                        (tag, sampler, ray, scene.intersect(&ray, f32::INFINITY))
+                    })
+                    .collect();
+                // SAFETY: the CPU has AVX2.
+                let (mut got, rays) = unsafe { in_lanes(&scene, max_depth, &starts) };
+                got.sort_by_key(|g| g.0);
+                assert_eq!(got.len(), starts.len());
+                let options = PathOptions {
+                    max_depth,
+                    sampler: SamplerKind::Sobol,
+                };
+                let mut want_rays = 0;
+                for ((tag, sampler, ray, hit), (got_tag, v)) in starts.iter().zip(&got) {
+                    assert_eq!(tag, got_tag);
+                    let mut sampler = sampler.clone();
+                    let before = want_rays;
+                    let want = path::radiance_from(
+                        &scene,
+                        ray,
+                        *hit,
+                        &options,
+                        &mut sampler,
+                        &mut want_rays,
+                    );
+                    let bits = |v: Vec3A| v.to_array().map(f32::to_bits);
+                    assert_eq!(bits(*v), bits(want), "scene {k}, round {round}, path {tag}");
+                    compared += 1;
+                    lit += usize::from(want != Vec3A::ZERO);
+                    long += usize::from(want_rays - before > 6);
+                }
+                assert_eq!(rays, want_rays, "scene {k}, round {round}");
+            }
+        }
+        assert!(
+            compared == 18_000 && lit > 3500 && long > 800,
+            "{compared} compared, {lit} lit, {long} long"
+        );
+    }
+}
