@@ -905,8 +905,9 @@ impl Tile<'_> {
         add: &mut impl Sink,
         gather: &mut impl FnMut(usize, &Ray, Option<Hit>, Option<&FirstHit>),
     ) -> u64 {
-        // Eight paths shaded at once where the scene allows (diffuse surfaces,
-        // the key light): the same values, 20 % less time (docs/performance.md).
+        // Eight paths shaded at once where the scene allows (fixed materials,
+        // no textures): the same values in about a quarter less time
+        // (docs/performance.md).
         #[cfg(target_arch = "x86_64")]
         if !AOVS
             && options.sampler == SamplerKind::Sobol

@@ -159,7 +159,20 @@ fn shadow_rays8(scene: &Scene, hits: &Closest8, dir: &[F8; 3]) -> Option<Shadows
         (p[1] + offset[1]).step_towards(offset[1]),
         (p[2] + offset[2]).step_towards(offset[2]),
     ];
-    // `SurfacePoint::ray_to(target)`.
+    let (rays, t_max) = shadow_segments8(&origin, &target);
+    Some(Shadows8 {
+        rays,
+        t_max,
+        scale: cos / (F8::splat(4.0 * PI) * r2),
+        lit,
+    })
+}
+
+/// `SurfacePoint::ray_to(target)` after its offset origin, in lanes: the rays
+/// from `origin` towards `target` with both ends trimmed by
+/// [`SHADOW_EPSILON`] of the distance, and their `t_max`.
+#[inline(always)]
+pub(crate) fn shadow_segments8(origin: &[F8; 3], target: &[F8; 3]) -> (Rays8, F8) {
     let to = [
         target[0] - origin[0],
         target[1] - origin[1],
@@ -173,12 +186,7 @@ fn shadow_rays8(scene: &Scene, hits: &Closest8, dir: &[F8; 3]) -> Option<Shadows
         origin[1] + dir[1] * skip,
         origin[2] + dir[2] * skip,
     ];
-    Some(Shadows8 {
-        rays: Rays8 { origin: start, dir },
-        t_max: dist - F8::splat(2.0) * skip,
-        scale: cos / (F8::splat(4.0 * PI) * r2),
-        lit,
-    })
+    (Rays8 { origin: start, dir }, dist - F8::splat(2.0) * skip)
 }
 
 #[cfg(test)]

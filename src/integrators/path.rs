@@ -400,46 +400,7 @@ pub fn radiance_traced(
         let u_lobe = u_choice.y;
 
         if light_sampled && let Some(light) = scene.sample_light(sp.p, u_choice, u_light_pos) {
-            let (target, li, light_pdf) = match light {
-                LightSample::Point {
-                    position,
-                    intensity,
-                } => {
-                    let r2 = (position - sp.p).length_squared();
-                    (position, intensity / r2, None)
-                }
-                LightSample::Directional {
-                    to_light,
-                    irradiance,
-                    distance,
-                } => (sp.p + to_light * distance, irradiance, None),
-                LightSample::Environment {
-                    to_light,
-                    radiance,
-                    pdf,
-                    distance,
-                } => (sp.p + to_light * distance, radiance / pdf, Some(pdf)),
-                LightSample::Area {
-                    position,
-                    normal,
-                    radiance,
-                    two_sided,
-                    pdf_area,
-                } => {
-                    let d = position - sp.p;
-                    let r2 = d.length_squared();
-                    let mut cos_l = -normal.dot(d) / r2.sqrt();
-                    if two_sided {
-                        cos_l = cos_l.abs();
-                    }
-                    if cos_l > 0.0 {
-                        let pdf = pdf_area * r2 / cos_l;
-                        (position, radiance / pdf, Some(pdf))
-                    } else {
-                        (position, Vec3A::ZERO, None)
-                    }
-                }
-            };
+            let (target, li, light_pdf) = light_terms(sp.p, light);
             if li != Vec3A::ZERO {
                 let wi_world = (target - sp.p).normalize();
                 let wi = frame.to_local(wi_world);
@@ -502,6 +463,54 @@ pub fn radiance_traced(
         next_hit = scene.intersect(&ray, f32::INFINITY);
     }
     l
+}
+
+/// What next-event estimation needs of a light sample for the point `p`: the
+/// point the shadow ray goes to, the incident radiance over the sample's pdf
+/// (zero where an area light faces away), and that pdf for MIS (`None` for
+/// punctual lights, which BSDF sampling cannot find).
+#[inline(always)]
+pub(crate) fn light_terms(p: Vec3A, light: LightSample) -> (Vec3A, Vec3A, Option<f32>) {
+    match light {
+        LightSample::Point {
+            position,
+            intensity,
+        } => {
+            let r2 = (position - p).length_squared();
+            (position, intensity / r2, None)
+        }
+        LightSample::Directional {
+            to_light,
+            irradiance,
+            distance,
+        } => (p + to_light * distance, irradiance, None),
+        LightSample::Environment {
+            to_light,
+            radiance,
+            pdf,
+            distance,
+        } => (p + to_light * distance, radiance / pdf, Some(pdf)),
+        LightSample::Area {
+            position,
+            normal,
+            radiance,
+            two_sided,
+            pdf_area,
+        } => {
+            let d = position - p;
+            let r2 = d.length_squared();
+            let mut cos_l = -normal.dot(d) / r2.sqrt();
+            if two_sided {
+                cos_l = cos_l.abs();
+            }
+            if cos_l > 0.0 {
+                let pdf = pdf_area * r2 / cos_l;
+                (position, radiance / pdf, Some(pdf))
+            } else {
+                (position, Vec3A::ZERO, None)
+            }
+        }
+    }
 }
 
 /// The shading normal `ns` (on the front side, like `ng`) adjusted so that the

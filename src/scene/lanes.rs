@@ -47,22 +47,34 @@ impl Scene {
 
     /// Whether `path` can shade eight paths in lanes
     /// (`crate::integrators::path8`): the conditions of
-    /// [`Scene::lab_lanes_apply`], and every material a fixed Lambertian
-    /// reflector whose BSDF reflectance is its base colour, emitting nothing;
-    /// flat shading (no mesh has vertex normals); a black environment; and
-    /// the key light the only light (nothing to choose).
+    /// [`Scene::lab_lanes_apply`]; every material a fixed Lambertian reflector
+    /// (whose BSDF reflectance is its base colour), mirror or glass, without an
+    /// emission texture; flat shading (no mesh has vertex normals); and a black
+    /// environment.
     pub(crate) fn path_lanes_apply(&self) -> bool {
         use crate::materials::Material;
+        let bits = |v: glam::Vec3A| v.to_array().map(f32::to_bits);
         self.lab_lanes_apply()
             && self.materials.iter().all(|m| {
-                matches!(m.kind, MaterialKind::Fixed(Material::Diffuse { reflectance })
-                    if reflectance.to_array().map(f32::to_bits)
-                        == m.reflectance.to_array().map(f32::to_bits))
-                    && !m.is_emissive()
+                m.emission_texture.is_none()
+                    && match m.kind {
+                        MaterialKind::Fixed(Material::Diffuse { reflectance }) => {
+                            bits(reflectance) == bits(m.reflectance)
+                        }
+                        MaterialKind::Fixed(
+                            Material::Mirror { .. } | Material::Dielectric { .. },
+                        ) => true,
+                        _ => false,
+                    }
             })
             && self.meshes.iter().all(|m| m.normals.is_empty())
             && self.environment.is_black()
-            && !self.light_needs_samples()
+    }
+
+    /// The index of triangle `prim`'s material (in [`Scene::materials`]).
+    #[inline(always)]
+    pub(crate) fn material_index(&self, prim: u32) -> usize {
+        self.material_of[prim as usize] as usize
     }
 
     /// [`Scene::intersect8`] of rays in lanes, answered in lanes; `None` when
