@@ -906,8 +906,8 @@ impl Tile<'_> {
         gather: &mut impl FnMut(usize, &Ray, Option<Hit>, Option<&FirstHit>),
     ) -> u64 {
         // Eight paths shaded at once where the scene allows (fixed materials,
-        // no textures): the same values in about a quarter less time
-        // (docs/performance.md).
+        // no textures): the same values, a fifth to a quarter less time on the
+        // lab box, less on `cornell-area` (docs/performance.md).
         #[cfg(target_arch = "x86_64")]
         if !AOVS
             && options.sampler == SamplerKind::Sobol
