@@ -194,12 +194,10 @@ mod tests {
     use glam::Vec3A;
 
     use super::*;
-    use crate::PointLight;
     use crate::geometry::ray::Hit;
-    use crate::geometry::triangle::Triangle;
     use crate::integrators::Integrator;
     use crate::sampling::sampler::Rng;
-    use crate::scene::{SceneParts, cornell};
+    use crate::scene::cornell;
 
     #[target_feature(enable = "avx2")]
     fn lanes(
@@ -261,34 +259,11 @@ mod tests {
         (values, count)
     }
 
-    /// Eight random triangles and a wall in a two-sided scene (the form of
+    /// Forty random triangles and a wall in a two-sided scene (the form of
     /// meshes), to hit from both sides, and the lab box.
     fn scenes() -> Vec<Scene> {
-        let mut rng = Rng::new(5, 0);
-        let mut r = move || rng.next_f32() * 2.0 - 1.0;
-        let mut triangles: Vec<Triangle> = (0..40)
-            .map(|_| {
-                let c = Vec3A::new(r(), r(), r() * 0.5 + 0.5);
-                let e = |r: &mut dyn FnMut() -> f32| Vec3A::new(r(), r(), r()) * 0.4;
-                Triangle::new(c, c + e(&mut r), c + e(&mut r))
-            })
-            .collect();
-        triangles.push(Triangle::new(
-            Vec3A::new(-3.0, -3.0, 2.0),
-            Vec3A::new(3.0, -3.0, 2.0),
-            Vec3A::new(0.0, 4.0, 2.0),
-        ));
-        let rho = (0..triangles.len())
-            .map(|i| Vec3A::new(0.2 + 0.1 * (i % 5) as f32, 0.5, 0.9 - 0.1 * (i % 3) as f32))
-            .collect();
-        let light = PointLight {
-            position: Vec3A::new(0.3, -0.2, 0.4),
-            power: Vec3A::new(3.0, 5.0, 7.0),
-        };
-        let mut parts =
-            SceneParts::lab(triangles, rho, light, Vec3A::new(0.1, 0.2, 0.3)).expect("valid");
-        parts.two_sided = true;
-        vec![cornell::scene(), Scene::from_parts(parts).expect("valid")]
+        let random = super::super::random_two_sided_scene(0, Vec3A::new(0.1, 0.2, 0.3));
+        vec![cornell::scene(), random]
     }
 
     /// The block in lanes gives the values of the block as `[Ray; 8]`, bit for

@@ -588,41 +588,16 @@ fn sin_cos_quarter(x: F8) -> (F8, F8) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::PointLight;
-    use crate::geometry::triangle::Triangle;
     use crate::integrators::path::{self, PathOptions, SamplerKind};
     use crate::sampling::sampler::Rng;
-    use crate::scene::{SceneParts, cornell};
+    use crate::scene::cornell;
 
     /// The lab box (one-sided); forty random triangles with a wall in a
     /// two-sided scene (the form of meshes), to hit from both sides; the
     /// same with mirrors, glass and emitting triangles; `cornell-area` with a
     /// mirror and a glass block, with and without the key light.
     fn scenes() -> Vec<Scene> {
-        let mut rng = Rng::new(5, 1);
-        let mut r = move || rng.next_f32() * 2.0 - 1.0;
-        let mut triangles: Vec<Triangle> = (0..40)
-            .map(|_| {
-                let c = Vec3A::new(r(), r(), r() * 0.5 + 0.5);
-                let e = |r: &mut dyn FnMut() -> f32| Vec3A::new(r(), r(), r()) * 0.4;
-                Triangle::new(c, c + e(&mut r), c + e(&mut r))
-            })
-            .collect();
-        triangles.push(Triangle::new(
-            Vec3A::new(-3.0, -3.0, 2.0),
-            Vec3A::new(3.0, -3.0, 2.0),
-            Vec3A::new(0.0, 4.0, 2.0),
-        ));
-        let rho = (0..triangles.len())
-            .map(|i| Vec3A::new(0.2 + 0.1 * (i % 5) as f32, 0.5, 0.9 - 0.1 * (i % 3) as f32))
-            .collect();
-        let light = PointLight {
-            position: Vec3A::new(0.3, -0.2, 0.4),
-            power: Vec3A::new(3.0, 5.0, 7.0),
-        };
-        let mut parts = SceneParts::lab(triangles, rho, light, Vec3A::ZERO).expect("valid");
-        parts.two_sided = true;
-        let random = Scene::from_parts(parts).expect("valid");
+        let random = super::super::random_two_sided_scene(1, Vec3A::ZERO);
         let mut mixed = random.clone();
         for prim in 0..40 {
             match prim % 5 {
