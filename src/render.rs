@@ -1042,24 +1042,29 @@ impl Tile<'_> {
                 let mut primary = [Ray::new(Vec3A::ZERO, Vec3A::Z); 8];
                 for (k, (slot, ray)) in ready.iter_mut().zip(&mut primary).take(n).enumerate() {
                     let px = x + k;
-                    // As `PathStart::new`.
-                    let pixel = ((y0 + y) * camera.width as usize + px) as u64;
-                    let mut sampler = path::SobolSampler::new(pixel, s, seed);
-                    let d = sampler.next_2d();
-                    *ray = camera.ray(px as f32 + d.x, (y0 + y) as f32 + d.y);
-                    *slot = Some((y * width + px, sampler, *ray, None));
+                    let start = PathStart::new(camera, &options, seed, (px, y0 + y), s);
+                    let AnySampler::Sobol(sampler) = start.sampler else {
+                        unreachable!("the lanes take Sobol' samples only");
+                    };
+                    *ray = start.ray;
+                    *slot = Some(path8::Start {
+                        tag: y * width + px,
+                        sampler,
+                        ray: start.ray,
+                        hit: None,
+                    });
                 }
                 if n == 8 {
                     let hits = scene.intersect8(&primary, f32::INFINITY);
                     for (slot, hit) in ready.iter_mut().zip(hits) {
                         if let Some(start) = slot {
-                            start.3 = hit;
+                            start.hit = hit;
                         }
                     }
                 } else {
                     for (slot, ray) in ready.iter_mut().zip(&primary).take(n) {
                         if let Some(start) = slot {
-                            start.3 = scene.intersect(ray, f32::INFINITY);
+                            start.hit = scene.intersect(ray, f32::INFINITY);
                         }
                     }
                 }

@@ -40,10 +40,18 @@ fn dot(a: &[F8; 3], b: &[F8; 3]) -> F8 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
-/// One path's start: its tag (the caller's, e.g. the pixel it adds to), its
-/// sampler after the camera's pair, its camera ray and that ray's closest hit
-/// (traced by the caller, which counts it).
-pub(crate) type Start = (usize, SobolSampler, Ray, Option<Hit>);
+/// One path's start, made by the caller.
+#[derive(Clone)]
+pub(crate) struct Start {
+    /// The caller's tag, given back with the value (e.g. the pixel it adds to).
+    pub(crate) tag: usize,
+    /// The path's sampler, after the camera's pair.
+    pub(crate) sampler: SobolSampler,
+    /// The camera ray.
+    pub(crate) ray: Ray,
+    /// Its closest hit (traced by the caller, which counts the ray).
+    pub(crate) hit: Option<Hit>,
+}
 
 /// The eight lanes' paths, lane `i` of every array path `i`.
 struct Paths {
@@ -171,7 +179,13 @@ pub(crate) fn trace(
                     continue;
                 }
                 loop {
-                    let Some((tag, sampler, ray, hit)) = next() else {
+                    let Some(Start {
+                        tag,
+                        sampler,
+                        ray,
+                        hit,
+                    }) = next()
+                    else {
                         exhausted = true;
                         break;
                     };
@@ -237,10 +251,11 @@ struct Vertex<'a> {
     max_depth: u32,
 }
 
-/// One vertex of every active path: shades its hit (emission, next-event
-/// estimation, a BSDF sample), and traces the ray that leaves it or ends the
-/// path. Returns the rays cast.
 impl Vertex<'_> {
+    /// One vertex of every active path: shades its hit (emission, next-event
+    /// estimation, a BSDF sample), and traces the ray that leaves it or ends
+    /// the path. Returns the rays cast. `LAB`: the scene is the lab's kind
+    /// (every surface diffuse, none emitting, the key light alone).
     #[target_feature(enable = "avx2")]
     #[inline]
     fn step<const LAB: bool>(&self, lanes: &mut Paths, emit: &mut impl FnMut(usize, Vec3A)) -> u64 {
@@ -675,7 +690,12 @@ mod tests {
                         let origin = lo + (hi - lo) * (Vec3A::new(r(), r(), r()) * 0.9 + 0.05);
                         let dir = (Vec3A::new(r(), r(), r()) * 2.0 - 1.0).normalize();
                         let ray = Ray::new(origin, dir);
-                        (tag, sampler, ray, scene.intersect(&ray, f32::INFINITY))
+                        Start {
+                            tag,
+                            sampler,
+                            ray,
+                            hit: scene.intersect(&ray, f32::INFINITY),
+                        }
                     })
                     .collect();
                 // SAFETY: the CPU has AVX2.
@@ -687,7 +707,13 @@ mod tests {
                     sampler: SamplerKind::Sobol,
                 };
                 let mut want_rays = 0;
-                for ((tag, sampler, ray, hit), (got_tag, v)) in starts.iter().zip(&got) {
+                for (start, (got_tag, v)) in starts.iter().zip(&got) {
+                    let Start {
+                        tag,
+                        sampler,
+                        ray,
+                        hit,
+                    } = start;
                     assert_eq!(tag, got_tag);
                     let mut sampler = sampler.clone();
                     let before = want_rays;
