@@ -26,7 +26,7 @@ use glam::{Vec2, Vec3A};
 
 use super::lab8::shadow_segments8;
 use super::path::{PathSampler, RR_DEPTH, RR_SCALE, SobolSampler, light_terms, power_heuristic};
-use crate::geometry::bvh::Closest8;
+use crate::geometry::bvh::{Closest8, Singles8};
 use crate::geometry::ray::{Hit, Ray};
 use crate::geometry::triangle::Lanes;
 use crate::materials::Material;
@@ -437,8 +437,8 @@ impl Vertex<'_> {
                 // `SurfacePoint::ray_to(target)`.
                 let origin = offset_origin!(&v);
                 let (shadow, t_max) = shadow_segments8(&origin, &target);
-                let start = shadow.origin.map(F8::to_array);
-                let sdir = shadow.dir.map(F8::to_array);
+                // Their constants made in the lanes, the rays traced one by one.
+                let shadow = Singles8::new(&shadow.origin, &shadow.dir);
                 let t_max = t_max.to_array();
                 let wi_z = wi_z.to_array();
                 let mut open = 0u32;
@@ -448,8 +448,7 @@ impl Vertex<'_> {
                         continue;
                     }
                     rays += 1;
-                    let ray = Ray::new(Paths::vec(&start, i), Paths::vec(&sdir, i));
-                    if !scene.occluded(&ray, t_max) {
+                    if !scene.occluded_single8(&shadow, i, t_max) {
                         open |= 1 << i;
                         if mis >> i & 1 != 0 {
                             // The diffuse BSDF's pdf (`Material::pdf`) against the light's.
@@ -540,6 +539,7 @@ impl Vertex<'_> {
         Paths::store(&mut lanes.beta, &beta);
         Paths::store(&mut lanes.origin, &origin);
         Paths::store(&mut lanes.dir, &wi_world);
+        let leaving = Singles8::new(&origin, &wi_world);
 
         // Each path's roulette and next hit, one by one.
         for i in 0..8 {
@@ -570,8 +570,7 @@ impl Vertex<'_> {
                 Paths::set(&mut lanes.beta, i, beta);
             }
             rays += 1;
-            let ray = Ray::new(Paths::vec(&lanes.origin, i), Paths::vec(&lanes.dir, i));
-            match scene.intersect(&ray, f32::INFINITY) {
+            match scene.intersect_single8(&leaving, i) {
                 Some(hit) => {
                     lanes.t[i] = hit.t;
                     lanes.prim[i] = hit.prim;

@@ -10,8 +10,8 @@ use std::arch::x86_64::*;
 use std::mem::{offset_of, size_of};
 
 use super::Scene;
-use crate::geometry::bvh::{Closest8, Rays8};
-use crate::geometry::ray::{Ray, gamma};
+use crate::geometry::bvh::{Closest8, Rays8, Singles8};
+use crate::geometry::ray::{Hit, Ray, gamma};
 use crate::geometry::triangle::{Lanes, Triangle};
 use crate::materials::surface::{MaterialKind, SurfaceMaterial};
 use crate::simd::F8;
@@ -85,6 +85,25 @@ impl Scene {
     pub(crate) fn intersect8_lanes(&self, rays: &Rays8) -> Option<Closest8> {
         debug_assert!(!self.has_alpha);
         self.bvh.intersect8_lanes(rays, f32::INFINITY)
+    }
+
+    /// [`Scene::intersect`] of ray `i` of `rays` (whose per-ray constants were
+    /// made in lanes): the same answer. Only for scenes without alpha masks
+    /// (where [`Scene::lab_lanes_apply`]).
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    pub(crate) fn intersect_single8(&self, rays: &Singles8, i: usize) -> Option<Hit> {
+        debug_assert!(!self.has_alpha);
+        self.bvh.intersect_single8(rays, i, f32::INFINITY)
+    }
+
+    /// [`Scene::occluded`] of ray `i` of `rays` within `t_max`: the same
+    /// answer. Only for scenes without alpha masks.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    pub(crate) fn occluded_single8(&self, rays: &Singles8, i: usize, t_max: f32) -> bool {
+        debug_assert!(!self.has_alpha);
+        self.bvh.occluded_single8(rays, i, t_max)
     }
 
     /// [`Scene::occluded8`] of rays in lanes: bit `i` set when lane `i` is

@@ -14,6 +14,7 @@ mod packet;
 mod ray4;
 mod ray8;
 mod sah;
+mod single8;
 mod stream;
 
 use std::mem::MaybeUninit;
@@ -26,6 +27,8 @@ use node::{BoxQuery, ChildRef, EMPTY, Isa, LEAF, NodeBoxes, WIDTH, leaf_parts};
 use packet::{Packet, PacketRay};
 #[cfg(target_arch = "x86_64")]
 pub(crate) use ray8::{Closest8, Rays8};
+#[cfg(target_arch = "x86_64")]
+pub(crate) use single8::Singles8;
 pub use stream::IN_FLIGHT;
 
 /// Traversal stack size: at most `WIDTH - 1` entries per level of the tree, whose
@@ -265,6 +268,19 @@ impl Bvh {
         // Made at once: kept in an `Option` until the first leaf, it was copied
         // there and back (most rays reach a leaf).
         let tri_ray = PacketRay::new(ray.origin, ray.dir);
+        self.closest_from(isa, root, &boxes, &tri_ray, t_max)
+    }
+
+    /// The closest-hit traversal from `root` of the ray of `boxes` and `tri_ray`.
+    #[inline(always)]
+    fn closest_from(
+        &self,
+        isa: Isa,
+        root: ChildRef,
+        boxes: &BoxQuery,
+        tri_ray: &PacketRay,
+        t_max: f32,
+    ) -> Option<Hit> {
         let mut best: Option<Hit> = None;
         let mut t_max = t_max;
         let mut stack = Stack::<(ChildRef, f32)>::new();
@@ -272,7 +288,7 @@ impl Bvh {
         let mut cur = root;
         loop {
             if cur & LEAF != 0 {
-                if let Some(h) = self.leaf_closest(isa, &tri_ray, cur, t_max) {
+                if let Some(h) = self.leaf_closest(isa, tri_ray, cur, t_max) {
                     t_max = h.t;
                     best = Some(h);
                 }
@@ -342,14 +358,30 @@ impl Bvh {
             return false;
         }
         let boxes = BoxQuery::new(ray.origin, ray.dir);
-        // Made at the first leaf: many shadow rays never reach one.
+        self.occluded_from(isa, root, &boxes, t_max, || {
+            PacketRay::new(ray.origin, ray.dir)
+        })
+    }
+
+    /// The any-hit traversal from `root` of the ray of `boxes`, whose
+    /// [`PacketRay`] `make_tri_ray` makes at the first leaf (many shadow rays
+    /// never reach one).
+    #[inline(always)]
+    fn occluded_from(
+        &self,
+        isa: Isa,
+        root: ChildRef,
+        boxes: &BoxQuery,
+        t_max: f32,
+        make_tri_ray: impl Fn() -> PacketRay,
+    ) -> bool {
         let mut tri_ray: Option<PacketRay> = None;
         let mut stack = Stack::<ChildRef>::new();
         let mut t_near = [0.0f32; WIDTH];
         let mut cur = root;
         loop {
             if cur & LEAF != 0 {
-                let tri_ray = tri_ray.get_or_insert_with(|| PacketRay::new(ray.origin, ray.dir));
+                let tri_ray = tri_ray.get_or_insert_with(&make_tri_ray);
                 if self.leaf_occluded(isa, tri_ray, cur, t_max) {
                     return true;
                 }

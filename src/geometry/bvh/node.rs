@@ -116,7 +116,7 @@ pub(super) fn safe_inverse(dir: Vec3A) -> Vec3A {
 /// `(1 ± u)^3` of the exact one and folding the factor into the inverse direction
 /// costs one more rounding: `(1 - u)^4 (1 + 4γ(3)) > (1 + u)^3`, so a computed
 /// exit never falls below a computed entry that the exact ones would order.
-const EXIT_SCALE: f32 = 1.0 + 4.0 * gamma(3);
+pub(super) const EXIT_SCALE: f32 = 1.0 + 4.0 * gamma(3);
 
 /// The rows of `Node::bounds` holding each axis's near and far plane, by the
 /// direction's sign bits (bit `a` set: negative along axis `a`). A table: the
@@ -148,6 +148,27 @@ impl BoxQuery {
             origin: origin.to_array(),
             inv_near: inv.to_array(),
             inv_far: (inv * EXIT_SCALE).to_array(),
+            near,
+            far,
+        }
+    }
+
+    /// The query of a ray whose inverse directions and their sign bits
+    /// (`negative`, bit `a` for axis `a`) are made elsewhere, as [`BoxQuery::new`]
+    /// makes them (`bvh::single8`, eight rays at a time).
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    pub(super) fn from_parts(
+        origin: [f32; 3],
+        inv_near: [f32; 3],
+        inv_far: [f32; 3],
+        negative: usize,
+    ) -> Self {
+        let (near, far) = PLANES[negative & 7];
+        Self {
+            origin,
+            inv_near,
+            inv_far,
             near,
             far,
         }

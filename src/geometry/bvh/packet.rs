@@ -96,6 +96,22 @@ impl PacketRay {
     }
 }
 
+impl PacketRay {
+    /// The constants of a ray whose axis order `k`, origin coordinates in that
+    /// order and shear are made elsewhere, as [`PacketRay::new`] makes them
+    /// (`bvh::single8`, eight rays at a time).
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    pub(super) fn from_parts(k: [usize; 3], origin: [Vec4; 3], shear: [Vec4; 3], ray: Ray) -> Self {
+        Self {
+            k,
+            origin,
+            shear,
+            ray,
+        }
+    }
+}
+
 /// Which lanes hit within `(0, t_max]`, with their `t`, edge functions and `det`.
 pub(super) struct Candidates {
     pub(super) valid: BVec4A,
