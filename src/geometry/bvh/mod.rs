@@ -615,14 +615,12 @@ pub fn brute_force(triangles: &[Triangle], ray: &Ray, t_max: f32) -> Option<Hit>
     best
 }
 
-/// Whether every coordinate of the ray is finite: `x − x` is 0 for finite `x`
+/// Whether every coordinate of the ray is finite: `x · 0` is 0 for finite `x`
 /// and NaN for an infinity or a NaN (one comparison of the sum, where
 /// `is_finite` on both vectors cost a dozen instructions more a ray).
 #[inline(always)]
 fn is_finite_ray(ray: &Ray) -> bool {
-    ((ray.origin - ray.origin) + (ray.dir - ray.dir))
-        .cmpeq(Vec3A::ZERO)
-        .all()
+    (ray.origin * 0.0 + ray.dir * 0.0).cmpeq(Vec3A::ZERO).all()
 }
 
 #[cfg(test)]

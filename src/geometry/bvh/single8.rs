@@ -51,10 +51,10 @@ impl Singles8 {
         let zero = F8::zero();
         let one = F8::splat(1.0);
         let [dx, dy, dz] = *dir;
-        // `is_finite_ray`: `x − x` is 0 for finite `x`, NaN otherwise.
-        let finite = ((origin[0] - origin[0]) + (dx - dx)).cmpeq(zero)
-            & ((origin[1] - origin[1]) + (dy - dy)).cmpeq(zero)
-            & ((origin[2] - origin[2]) + (dz - dz)).cmpeq(zero);
+        // `is_finite_ray`: `x · 0` is 0 for finite `x`, NaN otherwise.
+        let finite = (origin[0] * zero + dx * zero).cmpeq(zero)
+            & (origin[1] * zero + dy * zero).cmpeq(zero)
+            & (origin[2] * zero + dz * zero).cmpeq(zero);
         // `node::safe_inverse`: components below the smallest normal number
         // become it, with their sign; then `1 / d`.
         let tiny = F8::splat(f32::MIN_POSITIVE);
@@ -261,7 +261,7 @@ mod tests {
             return;
         }
         let mut rng = Rng::new(8, 1);
-        let mut p =
+        let p =
             |rng: &mut Rng| Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 2.0 - 1.0;
         let tris: Vec<Triangle> = (0..3000)
             .map(|_| {
