@@ -545,7 +545,7 @@ pub enum Ended {
 }
 
 /// Adds samples to `acc` in passes of whole samples per pixel, each pass sized
-/// to take about [`MAX_SPP_PASS`] (or [`MAX_PASS`] under a budget) by the time
+/// to take about half a second (or a quarter under a budget) by the time
 /// per sample so far, until `settings.spp` samples are taken, the budget is
 /// spent or `passes.stop` is set (checked before every pass). After each pass
 /// `after_pass` is given the sums and the time spent in all (with

@@ -5,7 +5,8 @@
 //!
 //! Each lane holds one path. The rays are traced one by one (a packet of
 //! bounce rays enters every leaf its rays do, and cost as much as the rays
-//! alone: docs/performance.md), but most of the work between two traces, the
+//! alone: docs/performance.md), their per-ray constants made in the lanes
+//! ([`Singles8`]); most of the work between two traces, the
 //! hit's surface point, frame, the key light's sample, the shadow ray, the
 //! diffuse BSDF's sample and the ray that leaves, is done for the eight paths
 //! together; what only some lanes need (emission, an area light's sample,
