@@ -61,8 +61,7 @@ struct Paths {
     tag: [usize; 8],
     sampler: [Option<SobolSampler>; 8],
     depth: [u32; 8],
-    /// The ray that found the current hit.
-    origin: [[f32; 8]; 3],
+    /// The direction of the ray that found the current hit.
     dir: [[f32; 8]; 3],
     /// The current hit.
     t: [f32; 8],
@@ -160,7 +159,6 @@ pub(crate) fn trace(
         tag: [0; 8],
         sampler: [const { None }; 8],
         depth: [0; 8],
-        origin: [[0.0; 8]; 3],
         dir: [[0.0; 8]; 3],
         t: [0.0; 8],
         prim: [0; 8],
@@ -199,7 +197,6 @@ pub(crate) fn trace(
                     lanes.tag[i] = tag;
                     lanes.sampler[i] = Some(sampler);
                     lanes.depth[i] = 0;
-                    Paths::set(&mut lanes.origin, i, ray.origin);
                     Paths::set(&mut lanes.dir, i, ray.dir);
                     lanes.t[i] = hit.t;
                     lanes.prim[i] = hit.prim;
@@ -538,7 +535,6 @@ impl Vertex<'_> {
             *b = *b * weight[c];
         }
         Paths::store(&mut lanes.beta, &beta);
-        Paths::store(&mut lanes.origin, &origin);
         Paths::store(&mut lanes.dir, &wi_world);
         let leaving = Singles8::new(&origin, &wi_world);
 
