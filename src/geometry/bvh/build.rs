@@ -268,6 +268,8 @@ impl Piece {
         let total = self.place(0, &mut placed) as usize;
         let mut boxes = Vec::with_capacity(total);
         let mut children = Vec::with_capacity(total);
+        crate::memory::advise_huge_pages(&mut boxes);
+        crate::memory::advise_huge_pages(&mut children);
         // Carve the destinations into each piece's run, in offset order.
         let mut rest_boxes = &mut boxes.spare_capacity_mut()[..total];
         let mut rest_children = &mut children.spare_capacity_mut()[..total];
@@ -346,7 +348,8 @@ fn gather_packets(
     prims: &[BuildPrim],
     chunks: &[(u32, u32)],
 ) -> Vec<Packet> {
-    let mut packets = Vec::new();
+    let mut packets = Vec::with_capacity(chunks.len());
+    crate::memory::advise_huge_pages(&mut packets);
     chunks
         .par_iter()
         .enumerate()

@@ -130,6 +130,7 @@ impl Bvh {
             return None;
         }
         let mut nodes = Vec::with_capacity(n_nodes);
+        crate::memory::advise_huge_pages(&mut nodes);
         for _ in 0..n_nodes {
             let mut bounds = [[0f32; WIDTH]; 6];
             for x in bounds.as_flattened_mut() {
@@ -138,6 +139,7 @@ impl Bvh {
             nodes.push(NodeBoxes { bounds });
         }
         let mut children = Vec::with_capacity(n_children);
+        crate::memory::advise_huge_pages(&mut children);
         for _ in 0..n_children {
             let mut c = [EMPTY; WIDTH];
             for x in &mut c {
@@ -146,6 +148,7 @@ impl Bvh {
             children.push(c);
         }
         let mut packets = Vec::with_capacity(n_packets);
+        crate::memory::advise_huge_pages(&mut packets);
         for _ in 0..n_packets {
             let mut v = [[glam::Vec4::ZERO; 3]; 3];
             for x in v.as_flattened_mut() {
@@ -160,21 +163,7 @@ impl Bvh {
             }
             packets.push(Packet { v, prim });
         }
-        // A reference below node `parent` (the root's: below none). Nodes come
-        // after their parents, so a sound tree has no cycle.
-        let sound = |c: ChildRef, parent: Option<usize>| {
-            if c & LEAF != 0 {
-                let (start, n) = leaf_parts(c);
-                n > 0 && start + n <= n_packets
-            } else {
-                (c as usize) < n_nodes && parent.is_none_or(|p| c as usize > p)
-            }
-        };
-        let children_sound = children
-            .iter()
-            .enumerate()
-            .all(|(parent, slots)| slots.iter().all(|&c| c == EMPTY || sound(c, Some(parent))));
-        if (has_root && !sound(root, None)) || !children_sound {
+        if !references_sound(has_root.then_some(root), &children, n_packets) {
             return None;
         }
         Some(Bvh {
@@ -191,14 +180,21 @@ impl Bvh {
     fn build_here(triangles: &[Triangle]) -> Self {
         let isa = Isa::detect();
         match build::build(triangles, isa) {
-            Some(built) => Bvh {
-                nodes: built.nodes,
-                children: built.children,
-                packets: built.packets,
-                root: Some(built.root),
-                triangles: built.triangles,
-                isa,
-            },
+            Some(built) => {
+                // Traversal relies on it (unchecked indexing; see `Bvh::node`).
+                debug_assert!(
+                    built.nodes.len() == built.children.len()
+                        && references_sound(Some(built.root), &built.children, built.packets.len())
+                );
+                Bvh {
+                    nodes: built.nodes,
+                    children: built.children,
+                    packets: built.packets,
+                    root: Some(built.root),
+                    triangles: built.triangles,
+                    isa,
+                }
+            }
             None => Bvh {
                 nodes: Vec::new(),
                 children: Vec::new(),
@@ -293,8 +289,7 @@ impl Bvh {
                     best = Some(h);
                 }
             } else {
-                let node = &self.nodes[cur as usize];
-                let kids = &self.children[cur as usize];
+                let (node, kids) = self.node(cur);
                 let mut mask = boxes.hit(isa, node, t_max, &mut t_near);
                 if mask != 0 {
                     let first = mask.trailing_zeros() as usize;
@@ -386,8 +381,7 @@ impl Bvh {
                     return true;
                 }
             } else {
-                let node = &self.nodes[cur as usize];
-                let kids = &self.children[cur as usize];
+                let (node, kids) = self.node(cur);
                 let mut mask = boxes.hit(isa, node, t_max, &mut t_near);
                 while mask != 0 {
                     let lane = mask.trailing_zeros() as usize;
@@ -501,10 +495,25 @@ impl Bvh {
         false
     }
 
+    /// The packets of leaf `r`, a reference found in this tree.
     #[inline]
     fn leaf(&self, r: ChildRef) -> &[Packet] {
         let (start, count) = leaf_parts(r);
-        &self.packets[start..start + count]
+        debug_assert!(start + count <= self.packets.len());
+        // SAFETY: every reference in a tree is in range: `build::build` makes
+        // them so (the tests walk whole trees) and `from_cache` checks each one
+        // before it returns a tree. Unchecked, as the node loop is short: two
+        // comparisons a node were about 4 % of a ray's instructions.
+        unsafe { self.packets.get_unchecked(start..start + count) }
+    }
+
+    /// The boxes and children of inner node `r`, a reference found in this tree.
+    #[inline(always)]
+    fn node(&self, r: ChildRef) -> (&NodeBoxes, &[ChildRef; WIDTH]) {
+        let i = r as usize;
+        debug_assert!(i < self.nodes.len() && i < self.children.len());
+        // SAFETY: as in `leaf`; `nodes` and `children` have one entry a node.
+        unsafe { (self.nodes.get_unchecked(i), self.children.get_unchecked(i)) }
     }
 
     /// Number of eight-wide nodes.
@@ -615,6 +624,32 @@ pub fn brute_force(triangles: &[Triangle], ray: &Ray, t_max: f32) -> Option<Hit>
     best
 }
 
+/// Whether every reference of a tree is in range, as traversal assumes: a
+/// leaf's packets lie in `0..n_packets`, an inner node is an index into
+/// `children` (one entry a node) and comes after its parent, so that the tree
+/// has no cycle. `Bvh::from_cache_bytes` checks it on every tree it reads; the
+/// builder's trees are checked by the tests.
+fn references_sound(
+    root: Option<ChildRef>,
+    children: &[[ChildRef; WIDTH]],
+    n_packets: usize,
+) -> bool {
+    let n_nodes = children.len();
+    let sound = |c: ChildRef, parent: Option<usize>| {
+        if c & LEAF != 0 {
+            let (start, n) = leaf_parts(c);
+            n > 0 && start + n <= n_packets
+        } else {
+            (c as usize) < n_nodes && parent.is_none_or(|p| c as usize > p)
+        }
+    };
+    root.is_none_or(|r| sound(r, None))
+        && children
+            .iter()
+            .enumerate()
+            .all(|(parent, slots)| slots.iter().all(|&c| c == EMPTY || sound(c, Some(parent))))
+}
+
 /// Whether every coordinate of the ray is finite: `x · 0` is 0 for finite `x`
 /// and NaN for an infinity or a NaN (one comparison of the sum, where
 /// `is_finite` on both vectors cost a dozen instructions more a ray).
@@ -625,6 +660,7 @@ fn is_finite_ray(ray: &Ray) -> bool {
 
 #[cfg(test)]
 mod tests {
+    use super::node::leaf_ref;
     use super::*;
     use crate::sampling::sampler::Rng;
     use glam::Vec3A;
@@ -643,6 +679,9 @@ mod tests {
     /// force (same hit or miss, `t` within 1e-5, the same triangle or a tie), and
     /// any-hit agrees with closest-hit with and without a `t_max` cut.
     fn check_against_brute_force(bvh: &Bvh, tris: &[Triangle], rng: &mut Rng, rays: usize) {
+        // Traversal indexes without bounds checks: the built tree must be sound.
+        assert!(references_sound(bvh.root, &bvh.children, bvh.packets.len()));
+        assert_eq!(bvh.nodes.len(), bvh.children.len());
         for _ in 0..rays {
             let o = Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 3.0 - 1.5;
             let d = (Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) - 0.5).normalize();
@@ -782,6 +821,32 @@ mod tests {
             let bvh = Bvh::build(&tris);
             check_against_brute_force(&bvh, &tris, &mut rng, 2000);
         }
+    }
+
+    /// The soundness check that guards unchecked traversal refuses each kind
+    /// of bad reference.
+    #[test]
+    fn unsound_references_are_refused() {
+        let mut rng = Rng::new(9, 4);
+        let bvh = Bvh::build(&random_triangles(&mut rng, 500));
+        let sound = |root, children: &[[ChildRef; WIDTH]]| {
+            references_sound(root, children, bvh.packets.len())
+        };
+        assert!(sound(bvh.root, &bvh.children));
+        assert!(bvh.children.len() > 2);
+        let bad_refs = [
+            bvh.children.len() as ChildRef,     // past the nodes
+            0,                                  // its own parent: a cycle
+            leaf_ref(bvh.packets.len(), 1),     // past the packets
+            leaf_ref(bvh.packets.len() - 1, 2), // running past them
+            leaf_ref(0, 0),                     // empty leaf
+        ];
+        for bad in bad_refs {
+            let mut children = bvh.children.clone();
+            children[0][0] = bad;
+            assert!(!sound(bvh.root, &children), "{bad:#x}");
+        }
+        assert!(!sound(Some(bvh.children.len() as ChildRef), &bvh.children));
     }
 
     /// A large soup takes the parallel paths of the build (children built as

@@ -97,7 +97,7 @@ pub(super) struct BoxQuery {
     /// `1 / dir` for the near planes, and enlarged by [`EXIT_SCALE`] for the far ones.
     inv_near: [f32; 3],
     inv_far: [f32; 3],
-    /// Index into `Node::bounds` of the near and far plane, per axis.
+    /// Offset in `f32`s into `Node::bounds` of the near and far plane, per axis.
     near: [usize; 3],
     far: [usize; 3],
 }
@@ -118,7 +118,8 @@ pub(super) fn safe_inverse(dir: Vec3A) -> Vec3A {
 /// exit never falls below a computed entry that the exact ones would order.
 pub(super) const EXIT_SCALE: f32 = 1.0 + 4.0 * gamma(3);
 
-/// The rows of `Node::bounds` holding each axis's near and far plane, by the
+/// Where in `Node::bounds` each axis's near and far plane start, as offsets in
+/// `f32`s (row × [`WIDTH`]: an address then needs no shift a plane), by the
 /// direction's sign bits (bit `a` set: negative along axis `a`). A table: the
 /// arithmetic version cost about 80 instructions a ray.
 const PLANES: [([usize; 3], [usize; 3]); 8] = {
@@ -128,8 +129,8 @@ const PLANES: [([usize; 3], [usize; 3]); 8] = {
         let mut a = 0;
         while a < 3 {
             let flip = (neg >> a) & 1;
-            table[neg].0[a] = a + 3 * flip;
-            table[neg].1[a] = a + 3 * (1 - flip);
+            table[neg].0[a] = (a + 3 * flip) * WIDTH;
+            table[neg].1[a] = (a + 3 * (1 - flip)) * WIDTH;
             a += 1;
         }
         neg += 1;
@@ -198,7 +199,7 @@ impl BoxQuery {
         for half in 0..2 {
             let lanes = half * 4..half * 4 + 4;
             let slab = |plane: usize, a: usize, inv: &[f32; 3]| {
-                let b = Vec4::from_slice(&node.bounds[plane][lanes.clone()]);
+                let b = Vec4::from_slice(&node.bounds[plane / WIDTH][lanes.clone()]);
                 (b - Vec4::splat(self.origin[a])) * Vec4::splat(inv[a])
             };
             let near = |a: usize| slab(self.near[a], a, &self.inv_near);
@@ -224,7 +225,7 @@ impl BoxQuery {
         // SAFETY: each row of `bounds` is eight f32 at a 32-byte aligned offset of a
         // 64-byte aligned node.
         let slab = |plane: usize, a: usize, inv: &[f32; 3]| unsafe {
-            let bound = _mm256_load_ps(b.add(plane * WIDTH));
+            let bound = _mm256_load_ps(b.add(plane));
             _mm256_mul_ps(
                 _mm256_sub_ps(bound, _mm256_set1_ps(self.origin[a])),
                 _mm256_set1_ps(inv[a]),

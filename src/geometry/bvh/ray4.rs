@@ -113,8 +113,7 @@ impl Bvh {
                 }
                 continue;
             }
-            let node = &self.nodes[cur as usize];
-            let kids = &self.children[cur as usize];
+            let (node, kids) = self.node(cur);
             // Visit the child whose box the packet enters first next.
             let mut next: Option<(ChildRef, Vec4, f32)> = None;
             for (c, &child) in kids.iter().enumerate() {
@@ -218,8 +217,7 @@ impl Bvh {
                 }
                 continue;
             }
-            let node = &self.nodes[cur as usize];
-            let kids = &self.children[cur as usize];
+            let (node, kids) = self.node(cur);
             for (c, &child) in kids.iter().enumerate() {
                 if child != EMPTY && (q.hit_box(&node.bounds, c, t_max).1 & open).any() {
                     stack.push(child);

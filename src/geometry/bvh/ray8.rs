@@ -569,8 +569,7 @@ impl Bvh {
                 closest_in_leaf!(self, q, cur, best_t, b1, b2, prim, found);
                 continue;
             }
-            let node = &self.nodes[cur as usize];
-            let kids = &self.children[cur as usize];
+            let (node, kids) = self.node(cur);
             // Visit next the child whose box the packet enters first.
             let mut next: Option<(ChildRef, F8, f32)> = None;
             for (c, &child) in kids.iter().enumerate() {
@@ -651,8 +650,7 @@ impl Bvh {
                 reach = best_t.max_element();
                 continue;
             }
-            let node = &self.nodes[cur as usize];
-            let kids = &self.children[cur as usize];
+            let (node, kids) = self.node(cur);
             // Per axis, the packet's entry and exit distances of every child's
             // two planes, at the inverse that makes each smallest or largest.
             let mut enter = F8::zero();
@@ -731,8 +729,7 @@ impl Bvh {
                 }
                 continue;
             }
-            let node = &self.nodes[cur as usize];
-            let kids = &self.children[cur as usize];
+            let (node, kids) = self.node(cur);
             for (c, &child) in kids.iter().enumerate() {
                 if child != EMPTY && (q.hit_box(&node.bounds, c, t_max).1 & open).any() {
                     stack.push(child);

@@ -194,8 +194,7 @@ impl Bvh {
                 ray.best = Some(h);
             }
         } else {
-            let node = &self.nodes[cur as usize];
-            let kids = &self.children[cur as usize];
+            let (node, kids) = self.node(cur);
             let mut mask = ray.boxes.hit(isa, node, ray.t_max, t_near);
             if mask != 0 {
                 let first = mask.trailing_zeros() as usize;
@@ -310,8 +309,7 @@ impl Bvh {
                 return Some(true);
             }
         } else {
-            let node = &self.nodes[cur as usize];
-            let kids = &self.children[cur as usize];
+            let (node, kids) = self.node(cur);
             let mut mask = ray.boxes.hit(isa, node, ray.t_max, t_near);
             while mask != 0 {
                 let lane = mask.trailing_zeros() as usize;
