@@ -326,10 +326,14 @@ pub fn advise_huge_pages<T>(v: &mut Vec<T>) {
     #[cfg(target_os = "linux")]
     {
         // madvise wants a page-aligned start; whole pages inside the buffer only.
-        const PAGE: usize = 4096;
+        // SAFETY: sysconf only reads a constant of the system.
+        let page = usize::try_from(unsafe { libc::sysconf(libc::_SC_PAGESIZE) })
+            .ok()
+            .filter(|&p| p.is_power_of_two())
+            .unwrap_or(4096);
         let start = v.as_mut_ptr() as usize;
-        let first = start.next_multiple_of(PAGE);
-        let end = (start + bytes) / PAGE * PAGE;
+        let first = start.next_multiple_of(page);
+        let end = (start + bytes) / page * page;
         if end > first {
             // SAFETY: `first..end` lies inside the vector's allocation, which it
             // owns; MADV_HUGEPAGE changes how pages are backed, never their
