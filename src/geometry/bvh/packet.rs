@@ -94,9 +94,7 @@ impl PacketRay {
             ray: Ray::new(origin, dir),
         }
     }
-}
 
-impl PacketRay {
     /// The constants of a ray whose axis order `k`, origin coordinates in that
     /// order and shear are made elsewhere, as [`PacketRay::new`] makes them
     /// (`bvh::single8`, eight rays at a time).
