@@ -45,6 +45,8 @@ pub enum Action {
     Use(Integrator),
     /// Save the current frame as a PNG.
     Screenshot,
+    /// Show the denoised frame once the view rests, or stop showing it.
+    ToggleDenoise,
     /// Close the viewer.
     Quit,
 }
@@ -105,7 +107,7 @@ impl ViewState {
             Action::LightDown => self.light_pos += step * level.y_axis,
             Action::Reset => *self = *initial,
             Action::Use(integrator) => self.integrator = integrator,
-            Action::Screenshot | Action::Quit => {}
+            Action::Screenshot | Action::Quit | Action::ToggleDenoise => {}
         }
         self.yaw_deg = wrap_degrees(self.yaw_deg);
         *self != before
@@ -209,6 +211,7 @@ mod tests {
         assert_eq!(s, init);
         assert!(!s.apply(Action::Screenshot, &init));
         assert!(!s.apply(Action::Quit, &init));
+        assert!(!s.apply(Action::ToggleDenoise, &init));
     }
 
     #[test]

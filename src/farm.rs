@@ -42,6 +42,12 @@ pub struct Render {
     pub display: Display,
     /// The animation frame, if the render is one.
     pub frame: Option<u32>,
+    /// The AOVs the image shows as layers (`--aov`): the gathered ones may
+    /// be more (the denoiser's guides).
+    pub layers: AovSet,
+    /// Whether the render was asked to be denoised (`--denoise`): its parts
+    /// carry the guides, and `raylab merge --denoise` denoises the merged image.
+    pub denoise: bool,
 }
 
 /// One part: what it is of, and its sums (which say which rows and samples).
@@ -78,22 +84,25 @@ fn part_err(path: &Path, message: impl Into<String>) -> FarmError {
 }
 
 /// The metadata `raylab render` writes into an image: `raylab.spp`, which EXR
-/// tools show as a number, and `raylab.render`, the settings as text. A merge
-/// writes the same, so that its EXR is the single render's byte for byte.
+/// tools show as a number, and `raylab.render`, the settings as text
+/// (`denoised=1` at the end for a denoised image). A merge writes the same,
+/// so that its EXR is the single render's byte for byte.
 pub fn image_metadata(
     spp: u32,
     requested: Option<u32>,
     seed: u64,
     integrator: &str,
     interrupted: bool,
+    denoised: bool,
 ) -> [(String, MetaValue); 2] {
     let requested = requested.map_or_else(String::new, |r| format!(" spp_requested={r}"));
+    let denoised = if denoised { " denoised=1" } else { "" };
     [
         ("raylab.spp".to_string(), MetaValue::Int(spp as i32)),
         (
             "raylab.render".to_string(),
             MetaValue::Text(format!(
-                "spp={spp}{requested} seed={seed} integrator={integrator} interrupted={}",
+                "spp={spp}{requested} seed={seed} integrator={integrator} interrupted={}{denoised}",
                 u8::from(interrupted)
             )),
         ),
@@ -154,10 +163,15 @@ pub fn write_part(path: &Path, part: &Part) -> Result<(), OutputError> {
     } else {
         acc.aov_set().to_string()
     };
+    let layers = if r.layers.is_empty() {
+        "-".to_string()
+    } else {
+        r.layers.to_string()
+    };
     let text = format!(
         "raylab-part 1 width={w} height={h} tile={} samples={}..{} spp={} seed={} integrator={} \
          aovs={aovs} build={:016x} scene={:016x} settings={:016x} rays={} dropped={} \
-         scale={:08x} tonemap={} frame={}",
+         scale={:08x} tonemap={} frame={} layers={layers} denoise={}",
         acc.split(),
         acc.first_sample(),
         acc.first_sample() + acc.spp(),
@@ -172,6 +186,7 @@ pub fn write_part(path: &Path, part: &Part) -> Result<(), OutputError> {
         r.display.scale.to_bits(),
         r.display.tonemap,
         r.frame.map_or_else(|| "-".to_string(), |f| f.to_string()),
+        u8::from(r.denoise),
     );
     let mut image = Image::from_channels((w, h), AnyChannels::sort(channels.into()));
     image.attributes.other.insert(
@@ -291,6 +306,23 @@ pub fn read_part_within(
             "-" => None,
             _ => Some(fields.num("frame")?),
         };
+        // (Parts written before the denoiser have neither: every AOV is a
+        // layer, and they were not denoised.)
+        let layers: AovSet = match fields.get("layers") {
+            Err(_) => aovs,
+            Ok("-") => AovSet::NONE,
+            Ok(s) => s.parse()?,
+        };
+        if !aovs.includes(layers) {
+            return Err(format!(
+                "layers={layers} that it has not gathered (aovs={aovs})"
+            ));
+        }
+        let denoise = match fields.get("denoise") {
+            Err(_) | Ok("0") => false,
+            Ok("1") => true,
+            Ok(v) => return Err(format!("its {PART_ATTRIBUTE} attribute has denoise={v}")),
+        };
         let render = Render {
             key: Key {
                 build: fields.hex("build")?,
@@ -305,6 +337,8 @@ pub fn read_part_within(
                 tonemap,
             },
             frame,
+            layers,
+            denoise,
         };
         let tally = Tally {
             rays: fields.num("rays")?,

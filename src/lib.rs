@@ -34,6 +34,7 @@ pub mod cache;
 pub mod camera;
 pub mod checkpoint;
 pub mod controls;
+pub mod denoise;
 pub mod farm;
 pub mod film;
 pub mod fixed;

@@ -9,7 +9,7 @@ use glam::{DVec3, Vec3A};
 use rayon::prelude::*;
 use thiserror::Error;
 
-use crate::aov::{AovImage, AovSet, AovSums, FirstHit, Layout};
+use crate::aov::{Aov, AovImage, AovSet, AovSums, FirstHit, Layout};
 use crate::camera::Camera;
 use crate::film::Film;
 use crate::fixed::{self, Fixed3};
@@ -486,6 +486,48 @@ impl Accumulator {
     /// to f32 and then averaged, as a render in one call always did, so that
     /// renders keep their values bit for bit.
     pub fn rendered(&self) -> Rendered {
+        let film = self.film();
+        let aovs = self.aovs.as_ref().map(|(set, wide)| {
+            let mut sums = AovSums::new(*set, self.width, self.height);
+            sums.sums
+                .par_iter_mut()
+                .zip(wide.par_iter())
+                .for_each(|(s, w)| *s = 0.0 + fixed::to_f64(*w) as f32);
+            if let Some(at) = Layout::new(*set).offset(Aov::Variance) {
+                // The estimate from the exact sums, in f64 (Σ L² − (Σ L)²/n
+                // cancels where a pixel's noise is small), kept in the record.
+                let stride = Layout::new(*set).stride;
+                let n = f64::from(self.spp);
+                sums.sums
+                    .par_chunks_mut(stride)
+                    .zip(wide.par_chunks(stride))
+                    .zip(self.image.par_iter())
+                    .for_each(|((record, exact), image)| {
+                        record[at] = if self.spp < 2 {
+                            f32::INFINITY
+                        } else {
+                            let sum = image.map(fixed::to_f64);
+                            let l = 0.2126 * sum[0] + 0.7152 * sum[1] + 0.0722 * sum[2];
+                            let squares = fixed::to_f64(exact[at]);
+                            ((squares - l * l / n).max(0.0) / (n * (n - 1.0))) as f32
+                        };
+                    });
+            }
+            sums.average(self.spp)
+        });
+        Rendered {
+            film,
+            rays: self.tally.rays,
+            dropped: self.tally.dropped,
+            aovs,
+        }
+    }
+}
+
+impl Accumulator {
+    /// The image averaged over the samples taken, as [`Accumulator::rendered`]
+    /// gives it (without the AOVs).
+    pub fn film(&self) -> Film {
         let mut film = Film::new(self.width, self.height);
         film.pixels
             .par_iter_mut()
@@ -495,20 +537,7 @@ impl Accumulator {
                 *p = Vec3A::ZERO + Vec3A::from_array(w.map(|c| fixed::to_f64(c) as f32))
             });
         film.average(self.spp);
-        let aovs = self.aovs.as_ref().map(|(set, wide)| {
-            let mut sums = AovSums::new(*set, self.width, self.height);
-            sums.sums
-                .par_iter_mut()
-                .zip(wide.par_iter())
-                .for_each(|(s, w)| *s = 0.0 + fixed::to_f64(*w) as f32);
-            sums.average(self.spp)
-        });
-        Rendered {
-            film,
-            rays: self.tally.rays,
-            dropped: self.tally.dropped,
-            aovs,
-        }
+        film
     }
 }
 
@@ -707,12 +736,13 @@ fn accumulate_into(
             let y0 = tile * TILE_ROWS;
             let mut dropped = 0u64;
             // The AOVs are summed exactly, into the accumulator's sums.
-            let mut gather = |i: usize, ray: &Ray, hit: Option<Hit>, shaded: Option<&FirstHit>| {
-                if let Some(layout) = &layout {
-                    let record = &mut aov_rows[i * layout.stride..(i + 1) * layout.stride];
-                    layout.gather(scene, camera, ray, hit, shaded, record);
-                }
-            };
+            let mut gather =
+                |i: usize, ray: &Ray, hit: Option<Hit>, shaded: Option<&FirstHit>, value: Vec3A| {
+                    if let Some(layout) = &layout {
+                        let record = &mut aov_rows[i * layout.stride..(i + 1) * layout.stride];
+                        layout.gather(scene, camera, ray, hit, shaded, value, record);
+                    }
+                };
             let n_rows = match &sums {
                 TileSums::Wide(w) => w.len(),
                 TileSums::Narrow(r) => r.len(),
@@ -880,7 +910,7 @@ impl Tile<'_> {
         &self,
         aovs: Option<&Layout>,
         add: &mut impl Sink,
-        gather: &mut impl FnMut(usize, &Ray, Option<Hit>, Option<&FirstHit>),
+        gather: &mut impl FnMut(usize, &Ray, Option<Hit>, Option<&FirstHit>, Vec3A),
     ) -> u64 {
         if let Integrator::Path(options) = self.integrator {
             return self.trace_path::<AOVS>(options, aovs, add, gather);
@@ -903,7 +933,7 @@ impl Tile<'_> {
         options: PathOptions,
         aovs: Option<&Layout>,
         add: &mut impl Sink,
-        gather: &mut impl FnMut(usize, &Ray, Option<Hit>, Option<&FirstHit>),
+        gather: &mut impl FnMut(usize, &Ray, Option<Hit>, Option<&FirstHit>, Vec3A),
     ) -> u64 {
         // Eight paths shaded at once where the scene allows (fixed materials,
         // no textures): the same values, a fifth to a quarter less time on the
@@ -936,8 +966,8 @@ impl Tile<'_> {
             let v = start.trace(scene, hit, &options, rays, &mut |s, b| {
                 seen = Some((*s, *b))
             });
-            let shaded = seen.map(|(s, b)| layout.first_hit(&start.ray, &s, || b));
-            gather(i, &start.ray, hit, shaded.as_ref());
+            let shaded = seen.map(|(s, b)| layout.first_hit(scene, &start.ray, &s, || b));
+            gather(i, &start.ray, hit, shaded.as_ref(), v);
             v
         };
         for s in samples.clone() {
@@ -1095,7 +1125,7 @@ impl Tile<'_> {
     fn trace_lab_avx2<const AOVS: bool>(
         &self,
         add: &mut impl Sink,
-        gather: &mut impl FnMut(usize, &Ray, Option<Hit>, Option<&FirstHit>),
+        gather: &mut impl FnMut(usize, &Ray, Option<Hit>, Option<&FirstHit>, Vec3A),
     ) -> u64 {
         self.trace_lab::<AOVS, true>(add, gather)
     }
@@ -1108,7 +1138,7 @@ impl Tile<'_> {
     fn trace_lab<const AOVS: bool, const LANES: bool>(
         &self,
         add: &mut impl Sink,
-        gather: &mut impl FnMut(usize, &Ray, Option<Hit>, Option<&FirstHit>),
+        gather: &mut impl FnMut(usize, &Ray, Option<Hit>, Option<&FirstHit>, Vec3A),
     ) -> u64 {
         let &Tile {
             scene,
@@ -1187,12 +1217,12 @@ impl Tile<'_> {
                     let primary: [Ray; 8] = [t[0], t[1], t[2], t[3], b[0], b[1], b[2], b[3]];
                     rays += 8;
                     let hits = scene.intersect8(&primary, f32::INFINITY);
+                    let values = integrator.radiance8_from(scene, &primary, hits, &mut rays);
                     if AOVS {
-                        for (((x, y), ray), hit) in block.into_iter().zip(&primary).zip(hits) {
-                            gather(y * width + x, ray, hit, None);
+                        for (k, ((x, y), ray)) in block.into_iter().zip(&primary).enumerate() {
+                            gather(y * width + x, ray, hits[k], None, values[k]);
                         }
                     }
-                    let values = integrator.radiance8_from(scene, &primary, hits, &mut rays);
                     add.add8(pixels, values);
                 }
                 for qx in (blocks_end..width).step_by(2) {
@@ -1208,10 +1238,12 @@ impl Tile<'_> {
                         } else {
                             rays += 4;
                             let hits = scene.intersect4(&primary, f32::INFINITY);
-                            for (((x, y), ray), hit) in quad.into_iter().zip(&primary).zip(hits) {
-                                gather(y * width + x, ray, hit, None);
+                            let values =
+                                integrator.radiance4_from(scene, &primary, hits, &mut rays);
+                            for (k, ((x, y), ray)) in quad.into_iter().zip(&primary).enumerate() {
+                                gather(y * width + x, ray, hits[k], None, values[k]);
                             }
-                            integrator.radiance4_from(scene, &primary, hits, &mut rays)
+                            values
                         };
                         for ((x, y), v) in quad.into_iter().zip(values) {
                             add.add(y * width + x, v);
@@ -1225,8 +1257,9 @@ impl Tile<'_> {
                                 } else {
                                     rays += 1;
                                     let hit = scene.intersect(&ray, f32::INFINITY);
-                                    gather(y * width + x, &ray, hit, None);
-                                    integrator.radiance_from(scene, &ray, hit, &mut rays)
+                                    let v = integrator.radiance_from(scene, &ray, hit, &mut rays);
+                                    gather(y * width + x, &ray, hit, None, v);
+                                    v
                                 };
                                 add.add(y * width + x, v);
                             }

@@ -256,6 +256,8 @@ fn misses_are_zero_albedo_and_normal_and_infinite_depth_and_position() {
         let want = match layer.aov {
             Aov::Albedo | Aov::Normal => 0.0,
             Aov::Depth | Aov::Position => f32::INFINITY,
+            // (Not gathered here.)
+            Aov::Variance => unreachable!(),
         };
         assert!(layer.values.iter().all(|&v| v == want), "{:?}", layer.aov);
     }

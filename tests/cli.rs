@@ -870,7 +870,7 @@ fn aov_errors_are_one_line_usage_errors() {
         ),
         (
             vec!["render", "--aov", "albedo,colour", "-o", "x.exr"],
-            "unknown AOV 'colour' (expected albedo, normal, depth, position)",
+            "unknown AOV 'colour' (expected albedo, normal, depth, position, variance)",
         ),
         (
             vec!["render", "--aov", "depth,depth", "-o", "x.exr"],

@@ -315,6 +315,8 @@ fn library_parts_with_aovs_add_up_to_the_whole_render() {
         integrator: "path".into(),
         display: Display::clamped(1.0),
         frame: None,
+        layers: aovs,
+        denoise: false,
     };
     let mut paths: Vec<PathBuf> = Vec::new();
     for (tile, samples) in [(0, 0..2), (1, 0..2), (0, 2..6), (1, 2..6)] {

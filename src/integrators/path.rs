@@ -359,19 +359,8 @@ pub fn radiance_traced(
             observe(&surface, &bsdf);
         }
         let wo_world = -ray.dir;
-        // The shading frame's normal. Two-sided BSDFs (glass, glTF) take the
-        // front normal and tell the sides apart themselves; one-sided ones face
-        // the ray in two-sided scenes and reflect nothing from behind in the
-        // lab box.
         let shading = surface.ns != ng;
-        let mut n = if shading {
-            consistent_normal(surface.ns, ng, wo_world)
-        } else {
-            ng
-        };
-        if scene.two_sided && !two_sided(&bsdf) && cos_out < 0.0 {
-            n = -n;
-        }
+        let n = shading_normal(scene, &surface, &bsdf, wo_world);
         let sp = surface.point;
         let frame = Frame::from_normal(n);
         let wo = frame.to_local(wo_world);
@@ -510,6 +499,32 @@ pub(crate) fn light_terms(p: Vec3A, light: LightSample) -> (Vec3A, Vec3A, Option
                 (position, Vec3A::ZERO, None)
             }
         }
+    }
+}
+
+/// The normal of the shading frame at `surface` for the BSDF `bsdf` seen from
+/// `wo` (pointing away from the surface): the shading normal made consistent
+/// with `wo` ([`consistent_normal`]), on the front side. Two-sided BSDFs
+/// (glass, glTF) take the front normal and tell the sides apart themselves;
+/// one-sided ones face `wo` in two-sided scenes and reflect nothing from
+/// behind in the lab box.
+#[inline(always)]
+pub(crate) fn shading_normal(
+    scene: &Scene,
+    surface: &SurfaceHit,
+    bsdf: &Material,
+    wo: Vec3A,
+) -> Vec3A {
+    let ng = surface.ng;
+    let n = if surface.ns != ng {
+        consistent_normal(surface.ns, ng, wo)
+    } else {
+        ng
+    };
+    if scene.two_sided && !two_sided(bsdf) && ng.dot(wo) < 0.0 {
+        -n
+    } else {
+        n
     }
 }
 

@@ -70,6 +70,58 @@ pub use pbr::PbrBsdf;
 /// lobe): GGX at such roughness is numerically a spike that f32 cannot resolve.
 pub const ALPHA_SMOOTH: f32 = 1e-3;
 
+/// The largest GGX `α` at which a lobe counts as specular for the denoiser's
+/// guides ([`Material::guide_lobes`]): Cycles' threshold for its denoising
+/// features (`α ≤ 0.075`, glTF roughness up to about 0.27). Below it a
+/// reflection is sharp enough that the denoiser should see what is reflected.
+pub const GUIDE_ALPHA: f32 = 0.075;
+
+/// A BSDF as the denoiser's guides see it from one direction
+/// ([`Material::guide_lobes`]): its specular lobes (delta, or GGX with
+/// `α ≤` [`GUIDE_ALPHA`]) as the one direction each sends light along, with
+/// their values, and the albedo of everything else. The three values add up
+/// to about [`Material::albedo`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GuideLobes {
+    /// Albedo of the lobes that are not specular (diffuse, rough), per
+    /// channel.
+    pub rough: Vec3A,
+    /// The specular reflection: its direction (local frame) and value.
+    pub reflect: Option<(Vec3A, Vec3A)>,
+    /// The specular transmission (refraction, or straight through a thin
+    /// wall): its direction (local frame) and value.
+    pub transmit: Option<(Vec3A, Vec3A)>,
+}
+
+impl GuideLobes {
+    /// Nothing scattered.
+    pub const NONE: GuideLobes = GuideLobes {
+        rough: Vec3A::ZERO,
+        reflect: None,
+        transmit: None,
+    };
+
+    /// Only a rough part of albedo `rough`.
+    pub fn rough(rough: Vec3A) -> GuideLobes {
+        GuideLobes {
+            rough: unit_range(rough),
+            ..GuideLobes::NONE
+        }
+    }
+
+    /// A lobe's direction and value if it carries anything.
+    fn lobe(wi: Vec3A, value: Vec3A) -> Option<(Vec3A, Vec3A)> {
+        let value = unit_range(value);
+        (wi.is_finite() && value.max_element() > 0.0).then_some((wi, value))
+    }
+}
+
+/// `v` clamped to `[0, 1]`, zero if not finite.
+#[inline]
+fn unit_range(v: Vec3A) -> Vec3A {
+    finite_or_zero(v).clamp(Vec3A::ZERO, Vec3A::ONE)
+}
+
 /// An orthonormal basis `(t, b, n)` with `n` as the local `+z` axis.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Frame {
@@ -413,6 +465,65 @@ impl Material {
         finite_or_zero(a).clamp(Vec3A::ZERO, Vec3A::ONE)
     }
 
+    /// What the denoiser's guides follow from `wo` (local frame, as for
+    /// [`Material::sample`]): the specular lobes (mirror, glass, smooth and
+    /// near-smooth metals, the glTF BSDF's specular and transmission lobes
+    /// when `α ≤` [`GUIDE_ALPHA`]) each as the single direction a perfectly
+    /// smooth surface would send light (mirror reflection, refraction) and
+    /// their values (Fresnel terms and tints at `wo`), and the albedo of the
+    /// other lobes. No random numbers: the guides are the same for every
+    /// sample through the same point.
+    pub fn guide_lobes(&self, wo: Vec3A) -> GuideLobes {
+        if !wo.is_finite() || wo.z == 0.0 {
+            return GuideLobes::NONE;
+        }
+        let specular = |alpha: f32| Self::is_smooth(alpha) || alpha <= GUIDE_ALPHA;
+        match *self {
+            Material::Diffuse { reflectance } if above(wo) => GuideLobes::rough(reflectance),
+            Material::Mirror { reflectance } if above(wo) => GuideLobes {
+                reflect: GuideLobes::lobe(reflect_z(wo), reflectance),
+                ..GuideLobes::NONE
+            },
+            Material::Diffuse { .. } | Material::Mirror { .. } => GuideLobes::NONE,
+            Material::Dielectric { ior } => {
+                if ior.is_nan() || ior <= 0.0 {
+                    return GuideLobes::NONE;
+                }
+                let (eta, cos_o) = if wo.z > 0.0 {
+                    (ior, wo.z)
+                } else {
+                    (1.0 / ior, -wo.z)
+                };
+                let cos_o = cos_o.min(1.0);
+                let sin2_t = (1.0 - cos_o * cos_o) / (eta * eta);
+                let f = fresnel_dielectric(cos_o, eta);
+                let transmit = (sin2_t < 1.0)
+                    .then(|| dielectric_refraction(wo, eta, sin2_t))
+                    .and_then(|wi| GuideLobes::lobe(wi, Vec3A::splat(1.0 - f)));
+                GuideLobes {
+                    rough: Vec3A::ZERO,
+                    reflect: GuideLobes::lobe(reflect_z(wo), Vec3A::splat(f)),
+                    transmit,
+                }
+            }
+            Material::RoughConductor { alpha, eta, k } => {
+                if !above(wo) {
+                    return GuideLobes::NONE;
+                }
+                let f = fresnel_conductor(wo.z, eta, k);
+                if specular(alpha) {
+                    GuideLobes {
+                        reflect: GuideLobes::lobe(reflect_z(wo), f),
+                        ..GuideLobes::NONE
+                    }
+                } else {
+                    GuideLobes::rough(f)
+                }
+            }
+            Material::Pbr(ref p) => p.guide_lobes(wo),
+        }
+    }
+
     /// NaN counts as smooth too: never a NaN in the microfacet code.
     #[inline]
     fn is_smooth(alpha: f32) -> bool {
@@ -587,17 +698,24 @@ impl Material {
                 specular: true,
             });
         }
-        let cos_t = (1.0 - sin2_t).max(0.0).sqrt();
-        // Snell: the tangential part shrinks by 1/eta, the normal part flips side.
-        let side = wo.z.signum();
-        let wi = Vec3A::new(-wo.x / eta, -wo.y / eta, -side * cos_t).normalize();
         Some(BsdfSample {
-            wi,
+            wi: dielectric_refraction(wo, eta, sin2_t),
             weight: Vec3A::ONE,
             pdf: 1.0 - f,
             specular: true,
         })
     }
+}
+
+/// The direction `wo` refracts to through a smooth dielectric interface (the
+/// local `z = 0` plane), `eta` the index across it as seen from `wo`'s side
+/// and `sin2_t < 1` the refracted sine squared.
+#[inline]
+fn dielectric_refraction(wo: Vec3A, eta: f32, sin2_t: f32) -> Vec3A {
+    let cos_t = (1.0 - sin2_t).max(0.0).sqrt();
+    // Snell: the tangential part shrinks by 1/eta, the normal part flips side.
+    let side = wo.z.signum();
+    Vec3A::new(-wo.x / eta, -wo.y / eta, -side * cos_t).normalize()
 }
 
 #[cfg(test)]

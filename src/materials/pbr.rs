@@ -76,8 +76,8 @@
 //! Nothing here allocates.
 
 use super::{
-    BsdfSample, Material, concentric_disk, finite_or_zero, ggx_d, ggx_lambda,
-    ggx_sample_visible_normal, reflect_z,
+    BsdfSample, GUIDE_ALPHA, GuideLobes, Material, concentric_disk, finite_or_zero, ggx_d,
+    ggx_lambda, ggx_sample_visible_normal, reflect_z,
 };
 use glam::{Vec2, Vec3A};
 use std::f32::consts::FRAC_1_PI;
@@ -265,6 +265,43 @@ impl PbrBsdf {
             a.clamp(Vec3A::ZERO, Vec3A::ONE)
         } else {
             Vec3A::ZERO
+        }
+    }
+
+    /// [`Material::guide_lobes`] of this BSDF: with `α ≤` [`GUIDE_ALPHA`],
+    /// the metal's and the dielectric's specular reflection (their Fresnel
+    /// terms at `cos θo`, as the smooth lobes of [`PbrBsdf::sample`]) along
+    /// the mirror direction, the transmission (refracted through a volume,
+    /// straight through a thin wall; none under total internal reflection)
+    /// and the diffuse part as the rough albedo; rougher, the whole
+    /// [`PbrBsdf::albedo`] is rough.
+    pub fn guide_lobes(&self, wo: Vec3A) -> GuideLobes {
+        let Some(l) = self.local(wo) else {
+            return GuideLobes::NONE;
+        };
+        if self.alpha > GUIDE_ALPHA {
+            return GuideLobes::rough(self.albedo(wo.z));
+        }
+        let wo_l = l.wo;
+        let cos_o = wo_l.z.min(1.0);
+        let (m, s, c) = (self.metallic, self.specular, self.base_color);
+        let fd = self.fresnel_d(l.f0, cos_o, l.inside);
+        let kd = 1.0 - s * fd.max_element();
+        let reflect = m * schlick(c, cos_o) + (1.0 - m) * s * fd;
+        let transmit = if self.transmission_scale() > 0.0 {
+            let wi = if l.volume {
+                refract(wo_l, Vec3A::Z, self.eta(&l))
+            } else {
+                Some(-wo_l)
+            };
+            wi.and_then(|wi| GuideLobes::lobe(l.map(wi), c * (self.transmission_scale() * kd)))
+        } else {
+            None
+        };
+        GuideLobes {
+            rough: super::unit_range(c * (self.diffuse_scale() * kd)),
+            reflect: GuideLobes::lobe(l.map(reflect_z(wo_l)), reflect),
+            transmit,
         }
     }
 

@@ -102,6 +102,8 @@ pub struct RenderSection {
     pub exposure: Option<f32>,
     /// Longest path in segments (`path`).
     pub max_depth: Option<u32>,
+    /// Denoise the image (Open Image Denoise; see `raylab::denoise`).
+    pub denoise: Option<bool>,
 }
 
 /// `[camera]`: a look-at camera, or a glTF model's camera.
@@ -269,6 +271,8 @@ pub struct ShotSettings {
     pub tonemap: Option<ToneMap>,
     /// Exposure in stops.
     pub exposure: Option<f32>,
+    /// Denoise the image.
+    pub denoise: Option<bool>,
 }
 
 /// The camera a scene file asks for, resolved.
@@ -447,6 +451,7 @@ fn settings(path: &Path, r: &RenderSection) -> Result<ShotSettings, ShotError> {
         max_depth: r.max_depth,
         tonemap,
         exposure: r.exposure,
+        denoise: r.denoise,
     })
 }
 

@@ -181,6 +181,13 @@ pub struct SceneArgs {
     /// go stale.
     #[arg(long, value_name = "DIR")]
     pub cache: Option<PathBuf>,
+    /// Denoise with Intel Open Image Denoise, guided by the render's albedo
+    /// and normal (loaded at run time: `pip install pyoidn`, or set
+    /// RAYLAB_OIDN to the library); `--denoise=false` turns a scene file's
+    /// `denoise = true` off. The viewer shows the denoised frame once the
+    /// camera rests (key N toggles it).
+    #[arg(long, value_name = "BOOL", num_args = 0..=1, default_missing_value = "true", require_equals = true)]
+    pub denoise: Option<bool>,
 }
 
 #[derive(Debug, Clone, Args)]
@@ -264,6 +271,11 @@ pub struct MergeArgs {
     /// Most memory the merge may take (e.g. 4G; 0 or none: no limit) [default: 3/4 of physical memory, or of a lower cgroup limit].
     #[arg(long, value_name = "SIZE", allow_hyphen_values = true, value_parser = raylab::memory::parse_budget)]
     pub max_memory: Option<raylab::memory::MemoryBudget>,
+    /// Denoise the merged image (never the parts apart: seams), as
+    /// `raylab render --denoise` denoises the whole; the parts must have been
+    /// rendered with --denoise, which gathers the guides.
+    #[arg(long)]
+    pub denoise: bool,
     /// No summary line.
     #[arg(short, long)]
     pub quiet: bool,
@@ -506,6 +518,7 @@ impl SceneArgs {
             max_depth: self.max_depth.or(s.max_depth),
             tonemap: self.tonemap.or(s.tonemap),
             exposure: self.exposure.or(s.exposure),
+            denoise: self.denoise.or(s.denoise),
             ..self.clone()
         }
     }

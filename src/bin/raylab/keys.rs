@@ -22,6 +22,7 @@ pub fn action_for_key(key: KeyCode) -> Option<Action> {
         KeyCode::Digit2 | KeyCode::Numpad2 => Action::Use(Integrator::Direct),
         KeyCode::Digit3 | KeyCode::Numpad3 => Action::Use(Integrator::path()),
         KeyCode::KeyP => Action::Screenshot,
+        KeyCode::KeyN => Action::ToggleDenoise,
         KeyCode::Escape => Action::Quit,
         _ => return None,
     })
@@ -50,6 +51,7 @@ mod tests {
             (KeyCode::Digit3, Action::Use(Integrator::path())),
             (KeyCode::Numpad3, Action::Use(Integrator::path())),
             (KeyCode::KeyP, Action::Screenshot),
+            (KeyCode::KeyN, Action::ToggleDenoise),
             (KeyCode::Escape, Action::Quit),
         ];
         for (key, action) in expect {

@@ -2,6 +2,7 @@
 
 mod args;
 mod bench;
+mod denoise_worker;
 mod keys;
 mod render_cmd;
 mod signals;
@@ -9,6 +10,7 @@ mod viewer;
 
 use std::process::ExitCode;
 
+use anyhow::Context;
 use clap::Parser;
 use clap::error::ErrorKind;
 
@@ -102,22 +104,54 @@ fn run(cli: Cli) -> anyhow::Result<()> {
 fn merge_command(args: &args::MergeArgs) -> anyhow::Result<()> {
     let start = std::time::Instant::now();
     raylab::film::Format::from_path(&args.output)?;
+    // As `raylab render --denoise`: the library first, before the work.
+    let mut denoiser = if args.denoise {
+        let options = raylab::denoise::DenoiseOptions::default();
+        Some(raylab::denoise::Denoiser::new(&options).context("--denoise")?)
+    } else {
+        None
+    };
     let budget = args
         .max_memory
         .unwrap_or_else(raylab::memory::MemoryBudget::machine_default);
     let merged = raylab::farm::merge_within(&args.parts, &budget)?;
     let r = &merged.render;
-    let mut rendered = merged.acc.rendered();
-    let channels = rendered
-        .aovs
-        .take()
-        .map(|a| a.into_channels())
-        .unwrap_or_default();
-    let metadata = raylab::farm::image_metadata(r.spp, Some(r.spp), r.seed, &r.integrator, false);
-    raylab::film::write_image_meta(&rendered.film, channels, &args.output, r.display, &metadata)?;
-    if !args.quiet {
+    if args.denoise && !merged.acc.aov_set().includes(raylab::denoise::GUIDES) {
+        anyhow::bail!(
+            "--denoise: the parts carry no denoising guides (they gathered {}): render them with --denoise",
+            match merged.acc.aov_set() {
+                s if s.is_empty() => "no AOVs".to_string(),
+                s => format!("the AOVs {s}"),
+            }
+        );
+    }
+    if r.denoise && !args.denoise && !args.quiet {
         eprintln!(
-            "merged {} parts into {}: {}x{}, {} spp, {} rays, {} NaN/Inf samples dropped, {:.1} ms",
+            "note: the parts were rendered with --denoise: `raylab merge --denoise` denoises the merged image"
+        );
+    }
+    let metadata = |denoised| {
+        raylab::farm::image_metadata(r.spp, Some(r.spp), r.seed, &r.integrator, false, denoised)
+    };
+    let denoised = render_cmd::write_result(
+        &merged.acc,
+        &args.output,
+        r.display,
+        r.layers,
+        denoiser.as_mut(),
+        metadata,
+    )?;
+    if !args.quiet {
+        let denoised = match (denoised, &denoiser) {
+            (Some(t), Some(d)) => format!(
+                "; denoised in {:.1} ms by {}",
+                t.as_secs_f64() * 1e3,
+                d.describe()
+            ),
+            _ => String::new(),
+        };
+        eprintln!(
+            "merged {} parts into {}: {}x{}, {} spp, {} rays, {} NaN/Inf samples dropped, {:.1} ms{denoised}",
             args.parts.len(),
             args.output.display(),
             merged.acc.width(),

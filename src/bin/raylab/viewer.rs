@@ -8,19 +8,20 @@ use std::time::{Duration, Instant};
 use anyhow::{Context, anyhow};
 use raylab::controls::{Action, ViewState};
 use raylab::film::{Display, Film, ToneMap, write_image_with};
-use raylab::render::accumulate;
+use raylab::render::{Accumulator, accumulate};
 use raylab::scene::load::SceneKind;
 use raylab::{Integrator, Scene};
 use rayon::prelude::*;
 use winit::application::ApplicationHandler;
 use winit::dpi::PhysicalSize;
-use winit::event::{ElementState, MouseButton, WindowEvent};
+use winit::event::{ElementState, MouseButton, StartCause, WindowEvent};
 use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
 use winit::keyboard::PhysicalKey;
 use winit::window::{Window, WindowId};
 
 use crate::Session;
 use crate::args::SceneArgs;
+use crate::denoise_worker::Worker;
 use crate::keys::action_for_key;
 
 /// Samples per pixel after which a still view stops refining and the viewer idles
@@ -30,6 +31,13 @@ const MAX_SAMPLES: u32 = 64;
 const MAX_PATH_SAMPLES: u32 = 1 << 16;
 /// How often the title's timing figures are refreshed.
 const TITLE_INTERVAL: Duration = Duration::from_millis(250);
+/// How long the view rests before its first denoised frame is made: long
+/// enough that a held key or a drag does not denoise every step, short
+/// enough to feel immediate.
+const DENOISE_AFTER: Duration = Duration::from_millis(200);
+/// The first denoised frame needs two samples (the variance that weighs it
+/// needs two); later ones come when the samples have doubled.
+const DENOISE_FIRST_SPP: u32 = 2;
 
 /// Connects to the X display: the viewer's event loop, or why there is none.
 pub fn open_display() -> anyhow::Result<EventLoop<()>> {
@@ -55,7 +63,22 @@ pub fn run(args: &SceneArgs) -> anyhow::Result<()> {
 /// Runs the viewer on an event loop already connected to a display.
 pub fn run_on(event_loop: EventLoop<()>, session: Session, args: &SceneArgs) -> anyhow::Result<()> {
     let (w, h) = session.size;
+    let proxy = event_loop.create_proxy();
+    let wake: std::sync::Arc<dyn Fn() + Send + Sync> = std::sync::Arc::new(move || {
+        let _ = proxy.send_event(());
+    });
+    // --denoise: OIDN is loaded before the window opens (a missing library is
+    // one line and exit 1, as for `raylab render`).
+    let worker = match args.denoise {
+        Some(true) => {
+            let wake = wake.clone();
+            Some(Worker::start(move || wake())?)
+        }
+        _ => None,
+    };
     let mut app = Viewer {
+        wake,
+        denoise: worker.map(|worker| Denoising::new(worker, w, h)),
         path: args.integrator_for_path(),
         exposure: args.exposure.unwrap_or(0.0),
         kind: session.kind,
@@ -88,6 +111,10 @@ struct Graphics {
 }
 
 struct Viewer {
+    /// Wakes the event loop from the denoising thread.
+    wake: std::sync::Arc<dyn Fn() + Send + Sync>,
+    /// The denoiser, while denoised frames are shown (--denoise, key N).
+    denoise: Option<Denoising>,
     /// The `path` integrator with the command line's options (key 3).
     path: Integrator,
     /// PNG exposure in stops, also applied on screen.
@@ -110,6 +137,82 @@ struct Viewer {
     cursor: Option<(f64, f64)>,
     timing: Timing,
     error: Option<anyhow::Error>,
+}
+
+/// The viewer's state while it denoises: exact sums with the denoiser's
+/// guides (instead of the f32 film), and the denoised frames of this view.
+struct Denoising {
+    worker: Worker,
+    /// Samples of the current view, with the guides and variance.
+    acc: Accumulator,
+    /// Which view the sums are of (bumped by every change).
+    generation: u64,
+    /// When the view last changed.
+    since: Instant,
+    /// Samples at which the next frame is denoised.
+    next_spp: u32,
+    /// The newest denoised frame of this view and its samples.
+    shown: Option<(Film, u32)>,
+    /// How long the last denoising took.
+    took: Duration,
+}
+
+impl Denoising {
+    fn new(worker: Worker, w: u32, h: u32) -> Self {
+        Self {
+            worker,
+            acc: Accumulator::new(w, h, raylab::denoise::GUIDES),
+            generation: 0,
+            since: Instant::now(),
+            next_spp: DENOISE_FIRST_SPP,
+            shown: None,
+            took: Duration::ZERO,
+        }
+    }
+
+    /// When the next frame is due to be denoised, if it waits only for the
+    /// view to rest.
+    fn due_at(&self) -> Option<Instant> {
+        let ready = !self.worker.busy() && self.acc.spp() >= self.next_spp;
+        let at = self.since + DENOISE_AFTER;
+        (ready && Instant::now() < at).then_some(at)
+    }
+
+    /// Starts over for a changed view.
+    fn restart(&mut self, w: u32, h: u32) {
+        self.acc = Accumulator::new(w, h, raylab::denoise::GUIDES);
+        self.generation += 1;
+        self.since = Instant::now();
+        self.next_spp = DENOISE_FIRST_SPP;
+        self.shown = None;
+    }
+
+    /// Takes a finished frame (if it is of this view), and hands the worker
+    /// the next one when it is due: the view has rested a moment and the
+    /// samples have doubled since the last.
+    fn step(&mut self) {
+        while let Some(done) = self.worker.poll() {
+            if done.generation != self.generation {
+                continue; // of a view left behind
+            }
+            match done.film {
+                Ok(film) => {
+                    self.shown = Some((film, done.spp));
+                    self.took = done.took;
+                }
+                Err(e) => eprintln!("error: {}", raylab::guard::one_line(&e)),
+            }
+        }
+        let spp = self.acc.spp();
+        if !self.worker.busy() && spp >= self.next_spp && self.since.elapsed() >= DENOISE_AFTER {
+            let rendered = self.acc.rendered();
+            if let Some(aovs) = rendered.aovs {
+                self.worker
+                    .submit(self.generation, spp, rendered.film, aovs);
+                self.next_spp = spp.saturating_mul(2);
+            }
+        }
+    }
 }
 
 /// Frame time and rate for the title bar.
@@ -153,15 +256,30 @@ impl Viewer {
 
     fn restart(&mut self) {
         self.samples = 0;
+        if let Some(d) = &mut self.denoise {
+            d.restart(self.size.0, self.size.1);
+        }
         if let Some(g) = &self.gfx {
             g.window.request_redraw();
         }
     }
 
     fn set_title(&self) {
+        let denoised = match &self.denoise {
+            Some(Denoising {
+                shown: Some((_, spp)),
+                took,
+                ..
+            }) => format!(
+                " · denoised at {spp} spp in {:.0} ms",
+                took.as_secs_f64() * 1e3
+            ),
+            Some(_) => " · denoising".to_string(),
+            None => String::new(),
+        };
         if let Some(g) = &self.gfx {
             g.window.set_title(&format!(
-                "raylab · {} · {}×{} · {:.1} ms ({:.0} fps) · {} spp",
+                "raylab · {} · {}×{} · {:.1} ms ({:.0} fps) · {} spp{denoised}",
                 self.state.integrator,
                 self.size.0,
                 self.size.1,
@@ -199,6 +317,22 @@ impl Viewer {
         };
         match action {
             Action::Quit => event_loop.exit(),
+            Action::ToggleDenoise => {
+                if self.denoise.take().is_none() {
+                    // A library that cannot be loaded is said, not fatal.
+                    let wake = self.wake_fn();
+                    match Worker::start(wake) {
+                        Ok(worker) => {
+                            eprintln!("denoising with {}", worker.describe());
+                            self.denoise = Some(Denoising::new(worker, self.size.0, self.size.1));
+                        }
+                        Err(e) => {
+                            eprintln!("error: {}", raylab::guard::one_line(&format!("{e:#}")))
+                        }
+                    }
+                }
+                self.restart();
+            }
             Action::Screenshot => {
                 // After a change the sums are stale until the next frame: draw it now.
                 if self.samples == 0 {
@@ -225,10 +359,31 @@ impl Viewer {
             .map(|i| PathBuf::from(format!("raylab-{i:04}.png")))
             .find(|p| !p.exists())
             .expect("a free name");
-        let mut frame = self.sums.clone();
-        frame.average(self.samples);
-        write_image_with(&frame, Path::new(&path), self.display())?;
+        write_image_with(&self.frame(), Path::new(&path), self.display())?;
         Ok(path)
+    }
+
+    /// The frame to show: the denoised one of this view when there is one,
+    /// else the average of the samples so far.
+    fn frame(&self) -> Film {
+        match &self.denoise {
+            Some(Denoising {
+                shown: Some((film, _)),
+                ..
+            }) => film.clone(),
+            Some(d) => d.acc.film(),
+            None => {
+                let mut frame = self.sums.clone();
+                frame.average(self.samples);
+                frame
+            }
+        }
+    }
+
+    /// A function that wakes the event loop (for the denoising thread).
+    fn wake_fn(&self) -> impl Fn() + Send + 'static {
+        let wake = self.wake.clone();
+        move || wake()
     }
 
     /// Adds one sample per pixel and shows the average.
@@ -245,23 +400,38 @@ impl Viewer {
             self.scene.light.position = self.state.light_pos;
             let camera = self.state.camera(w, h);
             let k = self.samples;
-            accumulate(
-                &self.scene,
-                &camera,
-                self.state.integrator,
-                0,
-                k..k + 1,
-                &mut self.sums,
-                &|_| {},
-            );
+            match &mut self.denoise {
+                // Exact sums with the guides, for the denoiser.
+                Some(d) => {
+                    d.acc
+                        .add(&self.scene, &camera, self.state.integrator, 0, 1, &|_| {});
+                }
+                None => {
+                    accumulate(
+                        &self.scene,
+                        &camera,
+                        self.state.integrator,
+                        0,
+                        k..k + 1,
+                        &mut self.sums,
+                        &|_| {},
+                    );
+                }
+            }
             self.samples += 1;
+        }
+        let mut new_frame = false;
+        if let Some(d) = &mut self.denoise {
+            let before = d.shown.as_ref().map(|s| s.1);
+            d.step();
+            new_frame = d.shown.as_ref().map(|s| s.1) != before;
         }
         self.present()?;
         let refining = self.samples < self.max_samples();
         // Refresh the title a few times a second, and at once after a change (the
         // integrator may be new) or when refinement ends.
         let due = self.timing.frame(start.elapsed().as_secs_f64() * 1e3);
-        if due || self.samples == 1 || !refining {
+        if due || self.samples == 1 || !refining || new_frame {
             self.set_title();
         }
         if let (true, Some(gfx)) = (refining, &self.gfx) {
@@ -270,10 +440,21 @@ impl Viewer {
         Ok(())
     }
 
-    /// Shows the average of the samples so far, sRGB-encoded.
+    /// Shows the average of the samples so far, sRGB-encoded (or, while
+    /// denoising, the newest denoised frame of this view).
     fn present(&mut self) -> anyhow::Result<()> {
         let mut display = self.display();
-        display.scale /= self.samples.max(1) as f32;
+        let averaged;
+        let pixels = match &self.denoise {
+            Some(_) => {
+                averaged = self.frame();
+                &averaged.pixels
+            }
+            None => {
+                display.scale /= self.samples.max(1) as f32;
+                &self.sums.pixels
+            }
+        };
         let Some(gfx) = self.gfx.as_mut() else {
             return Ok(());
         };
@@ -283,7 +464,7 @@ impl Viewer {
             .map_err(|e| anyhow!("cannot draw: {e}"))?;
         buffer
             .par_chunks_mut(4096)
-            .zip(self.sums.pixels.par_chunks(4096))
+            .zip(pixels.par_chunks(4096))
             .for_each(|(out, sums)| {
                 for (o, s) in out.iter_mut().zip(sums) {
                     let [r, g, b] = display.srgb8(*s);
@@ -387,6 +568,25 @@ impl ApplicationHandler for Viewer {
     }
 
     fn about_to_wait(&mut self, event_loop: &ActiveEventLoop) {
-        event_loop.set_control_flow(ControlFlow::Wait);
+        // A denoised frame due once the view has rested: wake up for it even
+        // if refinement has ended.
+        let flow = match self.denoise.as_ref().and_then(Denoising::due_at) {
+            Some(t) => ControlFlow::WaitUntil(t),
+            None => ControlFlow::Wait,
+        };
+        event_loop.set_control_flow(flow);
+    }
+
+    fn new_events(&mut self, _: &ActiveEventLoop, cause: StartCause) {
+        if let (StartCause::ResumeTimeReached { .. }, Some(g)) = (cause, &self.gfx) {
+            g.window.request_redraw();
+        }
+    }
+
+    fn user_event(&mut self, _: &ActiveEventLoop, (): ()) {
+        // The denoising thread finished a frame.
+        if let Some(g) = &self.gfx {
+            g.window.request_redraw();
+        }
     }
 }

@@ -1,31 +1,42 @@
-//! Arbitrary output variables (AOVs): per-pixel data about the first surface
-//! each camera ray hits, written next to the image as extra EXR channels. They
-//! are what a denoiser (e.g. Open Image Denoise) takes as its guides, and what
-//! compositors use for relighting, depth effects and masks.
+//! Arbitrary output variables (AOVs): per-pixel data gathered with the image,
+//! written next to it as extra EXR channels: the guides a denoiser takes
+//! (`albedo`, `normal`; [`crate::denoise`] uses them with Open Image
+//! Denoise), what compositors use for depth effects and masks (`depth`,
+//! `position`), and the pixels' noise (`variance`).
 //!
 //! Every AOV is gathered from the camera rays of the beauty pass itself (the
 //! same sample positions, hence the same antialiased edges), from the hit the
-//! render already found: no extra rays are cast. `path` also hands over the
-//! hit's shading (surface and BSDF), so its textures are not looked up twice;
-//! for `flat` and `direct` the AOVs shade the hit themselves. Per pixel sample:
+//! render already found. `path` also hands over the hit's shading (surface
+//! and BSDF), so its textures are not looked up twice; for `flat` and
+//! `direct` the AOVs shade the hit themselves. Per pixel sample:
 //!
-//! * `albedo`: the directional albedo of the first hit's BSDF as seen from the
-//!   camera, [`Material::albedo`](crate::materials::Material::albedo) (diffuse:
-//!   the reflectance; glTF: an estimate from the lobe weights; mirrors and
-//!   conductors: their specular tint; glass: 1), in `[0, 1]`; zero on a miss
-//!   (the environment is not an albedo). It does not depend on the integrator:
-//!   `flat` and `direct` get the albedo of the BSDF that `path` would use.
-//! * `normal`: the world-space shading normal (interpolated, normal-mapped),
-//!   turned to the side of the surface the camera sees; zero on a miss.
-//! * `depth`: camera-space depth, the distance of the hit point from the
-//!   camera along its viewing axis (not along the ray), for perspective and
-//!   orthographic cameras alike.
-//! * `position`: the world-space hit point.
+//! * `albedo` and `normal`: the denoiser's guides ([`guides`]): the albedo
+//!   and the world-space shading normal (interpolated, normal-mapped, turned
+//!   to the side the ray sees) of the first surface that is not specular,
+//!   found by following mirrors, glass and smooth metals from the camera
+//!   ray's hit (the only AOVs that cast rays of their own, and only there),
+//!   with emitters and the environment seen along the way squashed into the
+//!   albedo. The albedo is a surface's directional albedo as seen by the ray,
+//!   [`Material::albedo`](crate::materials::Material::albedo) (diffuse: the
+//!   reflectance; glTF: an estimate from the lobe weights; conductors: their
+//!   tint), in `[0, 1]`; on a miss it is the environment's squashed radiance
+//!   and the normal zero. They do not depend on the integrator: `flat` and
+//!   `direct` get the guides of the BSDFs that `path` uses.
+//! * `depth`: camera-space depth of the camera ray's hit, the distance of the
+//!   hit point from the camera along its viewing axis (not along the ray),
+//!   for perspective and orthographic cameras alike.
+//! * `position`: the world-space hit point of the camera ray.
+//! * `variance`: the estimated variance of the pixel's value, of its
+//!   luminance (Rec. 709): the samples' variance over their number,
+//!   `(Σ L² − (Σ L)²/n) / (n (n − 1))`, from the same exact sums as the image
+//!   (each sample's `L` clamped to 2²⁰ in `Σ L²`); `+∞` below two samples.
+//!   It is what a pixel's noise is, and what [`crate::denoise`] weighs the
+//!   noisy image against the denoised one by.
 //!
 //! A pixel's value is the mean over its samples, so that noise-free geometry
 //! gives noise-free AOVs and edges are antialiased as in the image: `albedo`
-//! and `normal` over all samples (a miss counts as zero, so an edge pixel
-//! blends towards zero and its normal is shorter than 1, as OIDN expects);
+//! and `normal` over all samples (a miss counts, so an edge pixel
+//! blends towards the background and its normal is shorter than 1, as OIDN expects);
 //! `depth` and `position` over the samples that hit (a mean with a miss's
 //! infinity would be infinite, one with zero meaningless), and `+∞` (every
 //! component) where no sample hits. Sums are kept per pixel in sample order, so
@@ -43,6 +54,21 @@ use crate::geometry::ray::{Hit, Ray};
 use crate::materials::Material;
 use crate::scene::{Scene, SurfaceHit};
 
+pub mod guides;
+
+pub use guides::Guides;
+
+/// Each sample's luminance is clamped to this in the sums of squares of
+/// [`Aov::Variance`], so that 2²⁰ samples (the most a render takes) cannot
+/// overflow them: `2⁴⁰ · 2²⁰ < 2⁶³`, the fixed-point range.
+pub const VARIANCE_CLAMP: f32 = (1u32 << 20) as f32;
+
+/// Rec. 709 luminance of a linear RGB value.
+#[inline]
+pub fn luminance(c: Vec3A) -> f32 {
+    c.dot(Vec3A::new(0.2126, 0.7152, 0.0722))
+}
+
 /// One output variable.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Aov {
@@ -54,11 +80,19 @@ pub enum Aov {
     Depth,
     /// World-space hit position.
     Position,
+    /// Variance of the pixel's luminance estimate.
+    Variance,
 }
 
 impl Aov {
     /// Every AOV, in the order the README lists them.
-    pub const ALL: [Aov; 4] = [Aov::Albedo, Aov::Normal, Aov::Depth, Aov::Position];
+    pub const ALL: [Aov; 5] = [
+        Aov::Albedo,
+        Aov::Normal,
+        Aov::Depth,
+        Aov::Position,
+        Aov::Variance,
+    ];
 
     /// The name on the command line and of the EXR layer.
     pub fn name(self) -> &'static str {
@@ -67,16 +101,19 @@ impl Aov {
             Aov::Normal => "normal",
             Aov::Depth => "depth",
             Aov::Position => "position",
+            Aov::Variance => "variance",
         }
     }
 
     /// The channels' suffixes, as compositors read them: colours `R, G, B`,
-    /// vectors `X, Y, Z`, depth `Z` (Nuke's `depth.Z`).
+    /// vectors `X, Y, Z`, depth `Z` (Nuke's `depth.Z`), variance `Y` (of
+    /// the luminance).
     pub fn channels(self) -> &'static [&'static str] {
         match self {
             Aov::Albedo => &["R", "G", "B"],
             Aov::Normal | Aov::Position => &["X", "Y", "Z"],
             Aov::Depth => &["Z"],
+            Aov::Variance => &["Y"],
         }
     }
 
@@ -119,7 +156,7 @@ impl FromStr for Aov {
 /// A set of AOVs in the order given, each at most once (possibly empty).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct AovSet {
-    list: [Aov; 4],
+    list: [Aov; 5],
     len: u8,
 }
 
@@ -135,6 +172,24 @@ impl AovSet {
         list: Aov::ALL,
         len: 0,
     };
+
+    /// The set of `aovs` in their order, for constants (given twice, or
+    /// more than there are, fails to compile).
+    pub const fn of(aovs: &[Aov]) -> AovSet {
+        let mut set = AovSet::NONE;
+        let mut i = 0;
+        while i < aovs.len() {
+            let mut j = 0;
+            while j < i {
+                assert!(aovs[j] as u8 != aovs[i] as u8, "an AOV given twice");
+                j += 1;
+            }
+            set.list[i] = aovs[i];
+            i += 1;
+        }
+        set.len = aovs.len() as u8;
+        set
+    }
 
     /// The set of `aovs` in their order; an error if one is given twice.
     pub fn new(aovs: &[Aov]) -> Result<Self, String> {
@@ -157,6 +212,21 @@ impl AovSet {
     /// Whether the set holds `aov`.
     pub fn contains(&self, aov: Aov) -> bool {
         self.iter().any(|a| a == aov)
+    }
+
+    /// This set and then those of `more` it lacks, in their order.
+    pub fn with(&self, more: AovSet) -> AovSet {
+        let mut set = *self;
+        for a in more.iter().filter(|&a| !self.contains(a)) {
+            set.list[set.len as usize] = a;
+            set.len += 1;
+        }
+        set
+    }
+
+    /// Whether every AOV of `other` is in this set.
+    pub fn includes(&self, other: AovSet) -> bool {
+        other.iter().all(|a| self.contains(a))
     }
 
     /// Whether the set is empty.
@@ -200,14 +270,14 @@ impl fmt::Display for AovSet {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) struct Layout {
     /// Offset of each AOV (indexed as [`Aov::ALL`]) if gathered.
-    offset: [Option<usize>; 4],
+    offset: [Option<usize>; 5],
     /// Values per pixel.
     pub(crate) stride: usize,
 }
 
 impl Layout {
     pub(crate) fn new(set: AovSet) -> Self {
-        let mut offset = [None; 4];
+        let mut offset = [None; 5];
         let mut next = 0;
         for a in set.iter() {
             offset[a as usize] = Some(next);
@@ -219,40 +289,46 @@ impl Layout {
         }
     }
 
+    /// Where `aov`'s values lie in a record, if it is gathered.
+    pub(crate) fn offset(&self, aov: Aov) -> Option<usize> {
+        self.offset[aov as usize]
+    }
+
     /// What the AOVs need of a camera ray's hit, from its shading: the surface
-    /// `s` and (if the albedo is wanted) its BSDF, which `bsdf` gives. `path`
+    /// `s` and (if the guides are wanted) its BSDF, which `bsdf` gives. `path`
     /// passes the ones it shades the hit with, so that the textures are not
     /// looked up twice.
     #[inline]
     pub(crate) fn first_hit(
         &self,
+        scene: &Scene,
         ray: &Ray,
         s: &SurfaceHit,
         bsdf: impl FnOnce() -> Material,
     ) -> FirstHit {
-        // The side the camera sees, decided by the geometric normal (a shading
-        // normal may tilt past the view direction).
-        let normal = if s.ng.dot(ray.dir) > 0.0 { -s.ns } else { s.ns };
-        let albedo = if self.offset[Aov::Albedo as usize].is_some() {
-            bsdf().albedo(normal.dot(ray.dir))
+        let [albedo, normal, ..] = self.offset;
+        let guides = if albedo.is_some() || normal.is_some() {
+            guides::guides(scene, ray, s, &bsdf())
         } else {
-            Vec3A::ZERO
+            Guides::default()
         };
         FirstHit {
             point: s.point.p,
-            normal,
-            albedo,
+            guides,
         }
     }
 
-    /// Adds the AOVs of one camera ray `ray` with closest hit `hit` to a pixel's
-    /// record `out` (a miss adds nothing: its albedo and normal are zero, and
-    /// depth and position only count hits). `shaded` is what
+    /// Adds the AOVs of one camera ray `ray` with closest hit `hit` and
+    /// sample value `value` to a pixel's record `out` (a miss adds the
+    /// environment to the albedo and nothing to the normal, and depth and
+    /// position only count hits; a value that is not finite, which the image
+    /// drops, adds nothing to the variance). `shaded` is what
     /// [`Layout::first_hit`] made of the hit if the integrator shaded it;
     /// otherwise the hit is shaded here, as far as the AOVs need. Out of line:
     /// a call per sample costs nothing measurable, while inlined it changed
     /// what the compiler inlined in the render loop (renders without AOVs
     /// included, 1 % of `flat`).
+    #[allow(clippy::too_many_arguments)]
     #[inline(never)]
     pub(crate) fn gather(
         &self,
@@ -261,28 +337,47 @@ impl Layout {
         ray: &Ray,
         hit: Option<Hit>,
         shaded: Option<&FirstHit>,
+        value: Vec3A,
         out: &mut [i128],
     ) {
-        let Some(hit) = hit else { return };
-        let [albedo, normal, depth, position] = self.offset;
+        let [albedo, normal, depth, position, variance] = self.offset;
+        if let Some(at) = variance
+            && value.is_finite()
+        {
+            let l = luminance(value).clamp(0.0, VARIANCE_CLAMP);
+            out[at] += crate::fixed::fixed(l * l);
+        }
+        let Some(hit) = hit else {
+            if let Some(at) = albedo
+                && !scene.environment().is_black()
+            {
+                let sky = guides::squash(scene.environment_radiance(ray.dir));
+                if sky.is_finite() {
+                    for (o, c) in out[at..at + 3].iter_mut().zip(sky.to_array()) {
+                        *o += crate::fixed::fixed(c);
+                    }
+                }
+            }
+            return;
+        };
         let first = match shaded {
             Some(&f) => f,
             // Depth and position need just the point.
             None if albedo.is_none() && normal.is_none() => FirstHit {
                 point: scene.surface_point(&hit, ray.dir).p,
-                normal: Vec3A::ZERO,
-                albedo: Vec3A::ZERO,
+                guides: Guides::default(),
             },
             None => {
                 let s = scene.surface(&hit);
-                self.first_hit(ray, &s, || {
+                self.first_hit(scene, ray, &s, || {
                     let material = &scene.materials()[s.material as usize];
                     material.bsdf(&s.attrs, scene.textures())
                 })
             }
         };
         let p = first.point;
-        if !(p.is_finite() && first.normal.is_finite() && first.albedo.is_finite()) {
+        let g = first.guides;
+        if !(p.is_finite() && g.normal.is_finite() && g.albedo.is_finite()) {
             return;
         }
         let mut add = |at: Option<usize>, v: Vec3A, n: usize| {
@@ -292,8 +387,8 @@ impl Layout {
                 }
             }
         };
-        add(albedo, first.albedo, 3);
-        add(normal, first.normal, 3);
+        add(albedo, g.albedo, 3);
+        add(normal, g.normal, 3);
         // Along the viewing axis: (p − eye)·forward, the same for an orthographic
         // camera, whose rays start on the plane through the eye.
         let d = (p - camera.position).dot(camera.forward());
@@ -307,8 +402,7 @@ impl Layout {
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct FirstHit {
     point: Vec3A,
-    normal: Vec3A,
-    albedo: Vec3A,
+    guides: Guides,
 }
 
 /// Per-pixel sums of AOVs over the samples taken so far (a record of
@@ -321,7 +415,9 @@ pub struct AovSums {
     pub width: u32,
     /// Image height in pixels.
     pub height: u32,
-    /// `width * height` records, row-major.
+    /// `width * height` records, row-major: sums over the samples, but for
+    /// [`Aov::Variance`], whose estimate needs the image's sums too, the
+    /// finished estimate ([`crate::render::Accumulator::rendered`] makes it).
     pub(crate) sums: Vec<f32>,
 }
 
@@ -376,7 +472,13 @@ impl AovSums {
                             pixels.chunks_exact_mut(k).zip(records.chunks_exact(stride))
                         {
                             let hits = f64::from(record[stride - 1]);
-                            let count = if aov.over_hits() { hits } else { n };
+                            let count = match aov {
+                                // The record holds the finished estimate
+                                // (see `AovSums::sums`).
+                                Aov::Variance => 1.0,
+                                a if a.over_hits() => hits,
+                                _ => n,
+                            };
                             for (v, &sum) in pixel.iter_mut().zip(&record[at..at + k]) {
                                 *v = if count > 0.0 {
                                     (f64::from(sum) / count) as f32
@@ -389,10 +491,16 @@ impl AovSums {
                 AovLayer { aov, values }
             })
             .collect();
+        let coverage = self
+            .sums
+            .par_chunks(stride)
+            .map(|record| (f64::from(record[stride - 1]) / n).min(1.0) as f32)
+            .collect();
         AovImage {
             width: self.width,
             height: self.height,
             layers,
+            coverage,
         }
     }
 }
@@ -416,6 +524,9 @@ pub struct AovImage {
     pub height: u32,
     /// One layer per AOV.
     pub layers: Vec<AovLayer>,
+    /// Per pixel, the share of its samples whose camera ray hit a surface
+    /// (the others saw the environment, or nothing).
+    pub coverage: Vec<f32>,
 }
 
 impl AovImage {
@@ -461,7 +572,7 @@ mod tests {
         let err = "albedo,colour".parse::<AovSet>().unwrap_err();
         assert_eq!(
             err,
-            "unknown AOV 'colour' (expected albedo, normal, depth, position)"
+            "unknown AOV 'colour' (expected albedo, normal, depth, position, variance)"
         );
         assert!(
             "normal,normal"
