@@ -573,21 +573,39 @@ fn merge_denoise_equals_render_denoise_bit_for_bit() {
         bytes("whole.exr") == bytes("whole1.exr"),
         "--threads 1 differs"
     );
-    // Merged without --denoise: the noisy image, and a note.
+    // The parts remember that they are of a --denoise render: a plain merge
+    // (a farm's) denoises too, and --denoise=false does not.
     let out = common::raylab(
-        &["merge", "a.exr", "b.exr", "c.exr", "-o", "noisy.exr"],
+        &["merge", "a.exr", "b.exr", "c.exr", "-o", "plain.exr"],
         dir.path(),
     );
-    assert!(stderr(&out).contains("merge --denoise"), "{}", stderr(&out));
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(
+        bytes("whole.exr") == bytes("plain.exr"),
+        "a plain merge differs"
+    );
+    let out = common::raylab(
+        &[
+            "merge",
+            "--denoise=false",
+            "a.exr",
+            "b.exr",
+            "c.exr",
+            "-o",
+            "noisy.exr",
+        ],
+        dir.path(),
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
     let noisy = read_exr(&dir.path().join("noisy.exr")).unwrap();
     let whole = read_exr_channels(&dir.path().join("whole.exr")).unwrap();
     let red: Vec<f32> = noisy.pixels.iter().map(|p| p.x).collect();
     assert_eq!(whole.get("noisy.R").unwrap(), red.as_slice());
     // Parts without the guides cannot be denoised: one line.
-    let plain = [&BOX[..], &["--tile", "0/1", "-o", "plain.exr"]].concat();
+    let plain = [&BOX[..], &["--tile", "0/1", "-o", "part.exr"]].concat();
     assert!(common::raylab(&plain, dir.path()).status.success());
     let out = common::raylab(
-        &["merge", "--denoise", "plain.exr", "-o", "p.exr"],
+        &["merge", "--denoise", "part.exr", "-o", "p.exr"],
         dir.path(),
     );
     let err = stderr(&out);

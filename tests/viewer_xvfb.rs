@@ -100,16 +100,22 @@ impl Session {
         }
     }
 
-    /// Presses P and loads the screenshot it saves.
+    /// Presses P and loads the screenshot it saves (the newest, should the
+    /// press arrive twice, as xdotool's first key to a freshly focused
+    /// window sometimes does).
     fn screenshot(&mut self) -> RgbImage {
-        self.shots += 1;
-        let path = self.dir.join(format!("raylab-{:04}.png", self.shots));
+        let shot = |n: usize| self.dir.join(format!("raylab-{n:04}.png"));
+        let next = shot(self.shots + 1);
         self.keys(&["p"]);
         // The file appears by rename, complete.
-        wait_for(&path.display().to_string(), Duration::from_secs(20), || {
-            path.exists()
+        wait_for(&next.display().to_string(), Duration::from_secs(20), || {
+            next.exists()
         });
-        image::open(&path).unwrap().to_rgb8()
+        std::thread::sleep(Duration::from_millis(100));
+        while shot(self.shots + 1).exists() {
+            self.shots += 1;
+        }
+        image::open(shot(self.shots)).unwrap().to_rgb8()
     }
 }
 
@@ -395,4 +401,103 @@ fn viewer_opens_a_gltf_scene_through_its_camera() {
         );
         std::thread::sleep(Duration::from_millis(50));
     }
+}
+
+/// Mean absolute difference between horizontally adjacent pixels of one
+/// channel over a rectangle: grain.
+fn grain(img: &RgbImage, x0: u32, x1: u32, y0: u32, y1: u32) -> f64 {
+    let mut sum = 0.0;
+    for y in y0..y1 {
+        for x in x0..x1 - 1 {
+            sum += img.get_pixel(x, y).0[1].abs_diff(img.get_pixel(x + 1, y).0[1]) as f64;
+        }
+    }
+    sum / ((x1 - x0 - 1) * (y1 - y0)) as f64
+}
+
+#[test]
+fn viewer_shows_the_denoised_frame_once_the_view_rests() {
+    if !viewer_test_enabled() {
+        return;
+    }
+    // Open Image Denoise as `raylab render --denoise` finds it.
+    if let Err(e) = raylab::denoise::Denoiser::new(&Default::default()) {
+        assert!(
+            std::env::var_os("RAYLAB_REQUIRE_OIDN").is_none_or(|v| v != "1"),
+            "RAYLAB_REQUIRE_OIDN=1 but {e}"
+        );
+        eprintln!("skipped: {e}");
+        return;
+    }
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    // The showcase: noisy for long enough (spot, sun and glass) that the
+    // denoised frames are far smoother than the raw ones.
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/showcase/showcase.gltf");
+    let (_xvfb, mut viewer, mut s, dir) = open_viewer(&[
+        "view",
+        scene.to_str().unwrap(),
+        "--width",
+        "120",
+        "--height",
+        "80",
+        "--denoise",
+    ]);
+    let title = |s: &Session| s.xdotool(&["getwindowname", &s.window]);
+    wait_for("a denoised frame", Duration::from_secs(30), || {
+        title(&s).contains("denoised at")
+    });
+    let denoised = s.screenshot();
+    // N: the raw progressive image again, at about as many samples.
+    s.keys(&["n"]);
+    wait_for("the raw image", Duration::from_secs(10), || {
+        !title(&s).contains("denois")
+    });
+    std::thread::sleep(Duration::from_millis(300));
+    let raw = s.screenshot();
+    // The back wall, above the spheres: far less grain denoised.
+    let (g_denoised, g_raw) = (grain(&denoised, 10, 60, 5, 25), grain(&raw, 10, 60, 5, 25));
+    assert!(
+        g_denoised < 0.5 * g_raw,
+        "grain {g_denoised:.2} denoised against {g_raw:.2} raw (screenshots in {})",
+        dir.keep().display()
+    );
+    // The same picture: the wall as bright either way.
+    let (m_denoised, m_raw) = (
+        mean(&denoised, 10, 60, 5, 25, 1),
+        mean(&raw, 10, 60, 5, 25, 1),
+    );
+    assert!(
+        (m_denoised - m_raw).abs() < 0.1 * m_raw,
+        "{m_denoised} against {m_raw}"
+    );
+    // N again, then a move: the denoised frame goes, and comes back once the
+    // view rests.
+    s.keys(&["n"]);
+    wait_for("a denoised frame again", Duration::from_secs(30), || {
+        title(&s).contains("denoised at")
+    });
+    s.keys(&["Left"]);
+    wait_for("the move to drop it", Duration::from_secs(10), || {
+        !title(&s).contains("denoised at")
+    });
+    wait_for(
+        "a denoised frame of the new view",
+        Duration::from_secs(30),
+        || title(&s).contains("denoised at"),
+    );
+    s.xdotool(&["keydown", "--window", &s.window, "Escape"]);
+    let start = Instant::now();
+    let status = loop {
+        if let Some(status) = viewer.0.try_wait().unwrap() {
+            break status;
+        }
+        assert!(
+            start.elapsed() < Duration::from_secs(10),
+            "viewer did not quit on Esc"
+        );
+        std::thread::sleep(Duration::from_millis(50));
+    };
+    let log = std::fs::read_to_string(dir.path().join("viewer.log")).unwrap();
+    assert!(status.success(), "viewer exited with {status}: {log}");
+    assert!(log.contains("denoising with OIDN"), "{log}");
 }

@@ -272,10 +272,11 @@ pub struct MergeArgs {
     #[arg(long, value_name = "SIZE", allow_hyphen_values = true, value_parser = raylab::memory::parse_budget)]
     pub max_memory: Option<raylab::memory::MemoryBudget>,
     /// Denoise the merged image (never the parts apart: seams), as
-    /// `raylab render --denoise` denoises the whole; the parts must have been
-    /// rendered with --denoise, which gathers the guides.
-    #[arg(long)]
-    pub denoise: bool,
+    /// `raylab render --denoise` denoises the whole [default: as the parts
+    /// were rendered: parts of a `--denoise` render are denoised once
+    /// merged]; the parts must carry the guides, which `--denoise` gathers.
+    #[arg(long, value_name = "BOOL", num_args = 0..=1, default_missing_value = "true", require_equals = true)]
+    pub denoise: Option<bool>,
     /// No summary line.
     #[arg(short, long)]
     pub quiet: bool,

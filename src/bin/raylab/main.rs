@@ -104,19 +104,23 @@ fn run(cli: Cli) -> anyhow::Result<()> {
 fn merge_command(args: &args::MergeArgs) -> anyhow::Result<()> {
     let start = std::time::Instant::now();
     raylab::film::Format::from_path(&args.output)?;
-    // As `raylab render --denoise`: the library first, before the work.
-    let mut denoiser = if args.denoise {
+    // As `raylab render --denoise`: the library first, before the work
+    // (when the parts ask for it, once they are read).
+    let load = || {
         let options = raylab::denoise::DenoiseOptions::default();
-        Some(raylab::denoise::Denoiser::new(&options).context("--denoise")?)
-    } else {
-        None
+        raylab::denoise::Denoiser::new(&options).context("--denoise")
+    };
+    let mut denoiser = match args.denoise {
+        Some(true) => Some(load()?),
+        _ => None,
     };
     let budget = args
         .max_memory
         .unwrap_or_else(raylab::memory::MemoryBudget::machine_default);
     let merged = raylab::farm::merge_within(&args.parts, &budget)?;
     let r = &merged.render;
-    if args.denoise && !merged.acc.aov_set().includes(raylab::denoise::GUIDES) {
+    let denoise = args.denoise.unwrap_or(r.denoise);
+    if denoise && !merged.acc.aov_set().includes(raylab::denoise::GUIDES) {
         anyhow::bail!(
             "--denoise: the parts carry no denoising guides (they gathered {}): render them with --denoise",
             match merged.acc.aov_set() {
@@ -125,10 +129,8 @@ fn merge_command(args: &args::MergeArgs) -> anyhow::Result<()> {
             }
         );
     }
-    if r.denoise && !args.denoise && !args.quiet {
-        eprintln!(
-            "note: the parts were rendered with --denoise: `raylab merge --denoise` denoises the merged image"
-        );
+    if denoise && denoiser.is_none() {
+        denoiser = Some(load()?);
     }
     let metadata = |denoised| {
         raylab::farm::image_metadata(r.spp, Some(r.spp), r.seed, &r.integrator, false, denoised)
