@@ -88,7 +88,6 @@ every render has a time limit (--timeout, default 3600 s). Errors are one line a
 import argparse
 import hashlib
 import json
-import math
 import os
 import re
 import shutil
@@ -609,6 +608,8 @@ def fmt_r(x):
 
 
 def compare(args, tmp):
+    import numpy as np
+
     scenes = [Scene(s, args) for s in args.scenes]
     raylab = Raylab(args.raylab, args.threads, tmp, args.timeout)
     cycles = Cycles(args.venv, args.shared, args.threads, tmp, args.timeout)
@@ -620,6 +621,8 @@ def compare(args, tmp):
     for sc in scenes:
         for r in renderers:
             refs[(sc.name, r.name)], ref_meta[(sc.name, r.name)] = reference(r, sc, args.ref_spp, args)
+            if r is cycles and not cycles.blender:
+                cycles.blender = ref_meta[(sc.name, r.name)].get("blender")
         cross[sc.name] = compare_refs(refs[(sc.name, "raylab")], refs[(sc.name, "Cycles")])
         c = cross[sc.name]
         log(f"{sc.name}: converged raylab / Cycles mean R G B "
@@ -652,7 +655,6 @@ def compare(args, tmp):
                             # run's (same seed).
                             prev = previews.get((sc.name, spp, r.name, "noisy", rnd))
                             if prev is not None:
-                                import numpy as np
                                 rec["noisy_layer_max_abs_diff_vs_noisy_run"] = float(
                                     np.abs(res.noisy - prev).max())
                         runs.append(rec)
@@ -720,6 +722,7 @@ def compare(args, tmp):
     print()
     print("| scene | spp | mode | renderer | seconds | relMSE | relMSE × s | FLIP | FLIP × s |")
     print("| --- | ---: | --- | --- | ---: | ---: | ---: | ---: | ---: |")
+    marked = False
     for row in summary:
         head = [row["scene"], str(row["spp"]), row["mode"]]
         for r in renderers:
@@ -729,7 +732,11 @@ def compare(args, tmp):
                        else "n/a")
                 print("| " + " | ".join(head + [r.name, why, "", "", "", ""]) + " |")
             else:
-                print("| " + " | ".join(head + [r.name, fmt_s(v["seconds"]), fmt_e(v["relmse"]),
+                # † : the reference's own noise is over a quarter of this error (it is inflated).
+                own = ref_meta[(row["scene"], r.name)]["own_relmse"]
+                mark = "†" if own > 0.25 * v["relmse"] else ""
+                marked = marked or bool(mark)
+                print("| " + " | ".join(head + [r.name, fmt_s(v["seconds"]), fmt_e(v["relmse"]) + mark,
                                               fmt_e(v["relmse_x_s"]), fmt_f(v["flip"]),
                                               fmt_e(v["flip_x_s"])]) + " |")
             head = ["", "", ""]
@@ -742,6 +749,11 @@ def compare(args, tmp):
                 "**raylab ÷ Cycles**", fmt_r(q["seconds"]), fmt_r(div(a["relmse"], b["relmse"])),
                 f"**{fmt_r(q['relmse_x_s'])}**", fmt_r(div(a["flip"], b["flip"])),
                 f"**{fmt_r(q['flip_x_s'])}**"]) + " |")
+    if marked:
+        print()
+        print("† the reference's own noise (below) is more than a quarter of this relMSE, which it "
+              "inflates (relMSE against a reference ≈ the image's own + the reference's): raise "
+              "--ref-spp for denoised errors.")
     print()
     print("Converged references (each renderer's own; `own noise` = relMSE between its two halves "
           "/ 4) and how they differ from each other:")
@@ -766,7 +778,8 @@ def compare(args, tmp):
             bits.append(f"Cycles' denoise ≈ {sorted(d)[len(d) // 2]:.2f} s (median of denoised − "
                         "noisy cycles_path_trace_s at equal seeds)")
         if rd:
-            bits.append(f"raylab's denoise {min(rd) * 1e3:.0f}–{max(rd) * 1e3:.0f} ms")
+            span = f"{min(rd) * 1e3:.0f}" + (f"–{max(rd) * 1e3:.0f}" if max(rd) > min(rd) else "")
+            bits.append(f"raylab's denoise {span} ms")
         if bits:
             print(f"* {sc.name}: " + "; ".join(bits))
     print(f"* previews: {args.previews} (SCENE-refs.png: raylab | Cycles | luminance ratio; "
