@@ -1,0 +1,1018 @@
+#!/usr/bin/env python3
+"""raylab against Blender Cycles (CPU) on glTF scenes: error, time and error × time, noisy and
+denoised, each renderer judged against its own converged image.
+
+Usage (from the project folder; the raylab binary must be built, ../shared beside the project):
+
+    python3 tools/compare_cycles.py [--scenes helmet-venice,showcase,cornell-glass] [--spp 16,64]
+                                    [--rounds 1] [--threads 2] [--ref-spp 1024]
+                                    [--size 320x240] [--box-size 256x256] [--json PATH]
+                                    [--raylab PATH] [--venv DIR] [--shared DIR] [--cache DIR]
+                                    [--previews DIR] [--fresh-refs] [--timeout S]
+    python3 tools/compare_cycles.py --curve [--curve-spp 1,2,4,...,1024] [--curve-ref-spp 4096]
+                                    [--csv PATH] [--plot docs/denoise-curve.png] [--scenes ...]
+
+Scenes (glTF 2.0, read by both renderers under ../shared/specs/scene-conventions.md):
+  helmet-venice  scenes/helmet-venice/helmet-venice.gltf (the DamagedHelmet, helmet-hdri.toml's
+                 camera) under ../shared/envmaps/venice_sunset_1k.hdr turned 200° (both renderers
+                 get `--env FILE --env-rotate 200`), --size (default 320×240);
+  showcase       scenes/showcase/showcase.gltf (spot, sun, point and emissive lights, metals, glass,
+                 textures), --size;
+  cornell-glass  scenes/cornell-glass/cornell-glass.gltf (the lab box under its ceiling patch with a
+                 mirror and a glass block, tools/make_cornell_glass.py), --box-size (default 256×256).
+
+Renderers, same size, same threads (--threads, default 2), same seeds:
+  raylab  `raylab render SCENE --spp N --threads T --seed S --width W --height H
+          --default-light off [--env F --env-rotate D] [--denoise] -o out.exr`, from a copy of the
+          binary made at the start (a rebuild during the run changes nothing). Time: the render time
+          of its summary line on stderr (`wrote out.exr: WxH, path, N spp, T ms, ...`: path tracing
+          only, without loading the scene, building the BVH or writing the file). Denoised
+          (`--denoise`: the EXR's RGB is the denoised image, layers noisy.R/G/B the noisy one, and
+          the summary line ends in `; denoised in D ms by OIDN ...`): time T + D. Until
+          `raylab render --help` lists --denoise, the denoised rows say "n/a (raylab has no
+          --denoise)" and everything else runs.
+  Cycles  ../shared/cycles/render_gltf.py (Blender 5.2.3 Cycles, CPU, threads FIXED, COMPAT light
+          units, single-scatter GGX, box filter 1 px, adaptive sampling, clamping and denoising off,
+          Blender's default blue-noise sampling pattern kept) in the CPython 3.13 venv of
+          ../shared/cycles/setup.sh. Time: `cycles_path_trace_s` of its JSON line (Cycles' own
+          render time from the EXR header, 10 ms resolution; without scene synchronization: BVH,
+          shaders, textures, environment map). Denoised (`--denoise`: OIDN on the CPU, albedo +
+          normal, prefilter accurate, quality high): a second render with the same seed; its
+          `cycles_path_trace_s` includes the denoising (checked: the same render with --denoise
+          takes longer by the OIDN time, e.g. 1.53 s → 1.93 s at 256×256, 16 spp; the table's
+          footnote gives that difference, measured in the run, as "Cycles' denoise ≈").
+  With equal spp the blue-noise pattern favours Cycles at low spp; raylab's `sobol` sampler is
+  Owen-scrambled Sobol' for the pixel and the first two bounces.
+
+Errors, each renderer against its own converged render (their BSDFs and samplers differ in detail,
+so neither is the other's truth): rendered once per scene and renderer at --ref-spp (default 1024,
+as two independent halves with different seeds, averaged; their difference gives the reference's
+own noise, printed beside the table: it adds to every error) and cached in --cache under a key
+hashed from the scene's files, the map, the size, the spp and the renderer (raylab: not the
+binary, so that rebuilding does not re-render; the binary's hash is recorded and a warning printed
+when it differs; --fresh-refs re-renders).
+  relMSE  per pixel the mean over channels of (c − r)² / (r² + ε), ε = 0.01 · mean(r)² (mean over
+          all pixels and channels), then the per-pixel values clamped at their 99.9th percentile
+          (the worst 0.1 % of the pixels count as that quantile: fireflies do not dominate), mean.
+  FLIP    mean LDR FLIP (PyPI flip-evaluator, default 67 pixels per degree) between the two images
+          after one fixed display transform for every image: exposure 0, the Khronos PBR Neutral
+          tone mapper (as raylab's `--tonemap khronos-pbr-neutral`), clamp to [0, 1], sRGB encoding.
+  Figure of merit: error × seconds (lower is better; for relMSE it does not depend on spp while
+  the error falls as 1/spp), and the ratio raylab ÷ Cycles (below 1: raylab is more efficient).
+
+Measurements: --rounds rounds (default 1); in round k every scene, spp and mode (noisy, denoised)
+is rendered by both renderers with seed k, alternating which renderer goes first. The table gives
+the best (smallest) time and the worst (largest) error of the rounds. All runs go into the JSON file
+(--json, default CACHE/compare_cycles-last.json). The two renderers' converged images are also
+compared with each other (mean ratio, 8×8-block mean |relative difference|), and PNG previews are
+written to --previews (default CACHE/previews): `SCENE-refs.png` = raylab | Cycles | their
+luminance ratio (blue: raylab darker, red: brighter, ±20 % full scale), and `SCENE-SPPspp.png` =
+raylab noisy | raylab denoised | Cycles noisy | Cycles denoised of round 1.
+
+--curve: raylab only. For each scene, renders at --curve-spp (default 1, 2, 4, ..., 1024), noisy and
+denoised (one `--denoise` run gives both, from the same samples; without --denoise only the noisy
+curve), measures both errors against raylab's own --curve-ref-spp render (default 4096, cached),
+writes a CSV (--csv, default CACHE/denoise_curve.csv) and a plot (--plot, default
+CACHE/denoise_curve.png; e.g. docs/denoise-curve.png): relMSE and FLIP against spp, noisy solid,
+denoised dashed. It lists every point where the denoised image is worse than the noisy one and
+then exits with status 3.
+
+Set-up: the tool needs numpy, OpenEXR, flip-evaluator and matplotlib, and Cycles needs bpy in a
+CPython 3.13 venv. If this Python cannot import them, the tool re-runs itself with --venv's Python
+(default ~/.cache/raylab-cycles-venv), creating that venv first with ../shared/cycles/setup.sh
+(downloads ~400 MB of bpy from PyPI) and adding flip-evaluator and matplotlib with pip.
+Temporary files go to a temporary folder that is removed at the end (also on Ctrl-C or SIGTERM);
+every render has a time limit (--timeout, default 3600 s). Errors are one line and exit status 1.
+"""
+
+import argparse
+import hashlib
+import json
+import os
+import re
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+DEFAULT_SHARED = os.path.normpath(os.path.join(ROOT, "..", "shared"))
+DEFAULT_VENV = os.path.join(os.path.expanduser("~"), ".cache", "raylab-cycles-venv")
+DEFAULT_CACHE = os.path.normpath(os.path.join(ROOT, "..", "bench-data", "cycles"))
+MODULES = ("numpy", "OpenEXR", "flip_evaluator", "matplotlib")
+EXTRA_PIP = ("flip-evaluator", "matplotlib")
+REEXEC = "COMPARE_CYCLES_REEXEC"
+PROG = "compare_cycles"
+
+# name: (glTF file in the project, environment map under shared/ or None, rotation, box?)
+SCENES = {
+    "helmet-venice": ("scenes/helmet-venice/helmet-venice.gltf",
+                      "envmaps/venice_sunset_1k.hdr", 200.0, False),
+    "showcase": ("scenes/showcase/showcase.gltf", None, 0.0, False),
+    "cornell-glass": ("scenes/cornell-glass/cornell-glass.gltf", None, 0.0, True),
+}
+REF_SEED = 1 << 20
+
+
+class Fail(Exception):
+    """A failure to report as one line."""
+
+
+def log(msg):
+    print("# " + msg, file=sys.stderr, flush=True)
+
+
+def one_line(text, limit=400):
+    lines = [x.strip() for x in (text or "").strip().splitlines() if x.strip()]
+    s = lines[-1] if lines else ""
+    return s if len(s) <= limit else s[:limit] + " ..."
+
+
+# ----------------------------------------------------------------------------------------------
+# Set-up: find or make the venv, then run inside it.
+
+
+def default_raylab():
+    here = os.path.join(ROOT, "target", "release", "raylab")
+    main = os.path.join(ROOT, "..", "main", "target", "release", "raylab")
+    return here if os.path.exists(here) or not os.path.exists(main) else main
+
+
+def missing_modules():
+    import importlib.util
+    return [m for m in MODULES if importlib.util.find_spec(m) is None]
+
+
+def ensure_venv(args):
+    shared = os.path.abspath(args.shared)
+    script = os.path.join(shared, "cycles", "render_gltf.py")
+    setup = os.path.join(shared, "cycles", "setup.sh")
+    if not os.path.isfile(script):
+        raise Fail(f"{script} not found: ../shared (the shared assets) must sit beside the project "
+                   "folder, or pass --shared DIR")
+    venv = os.path.abspath(args.venv)
+    py = os.path.join(venv, "bin", "python")
+    inside = os.path.realpath(sys.prefix) == os.path.realpath(venv)
+    if inside:
+        missing = missing_modules()
+        if missing and not os.environ.get(REEXEC + "_PIP"):
+            log(f"installing {' '.join(EXTRA_PIP)} into {venv} (pip)")
+            r = subprocess.run([py, "-m", "pip", "install", "-q", *EXTRA_PIP])
+            if r.returncode != 0:
+                raise Fail(f"could not install {' '.join(EXTRA_PIP)} into {venv}; try "
+                           f"{py} -m pip install {' '.join(EXTRA_PIP)}")
+            os.environ[REEXEC + "_PIP"] = "1"
+            os.execv(py, [py, os.path.abspath(__file__)] + sys.argv[1:])
+        if missing:
+            raise Fail(f"{py} cannot import {', '.join(missing)}")
+        import importlib.util
+        if importlib.util.find_spec("bpy") is None:
+            raise Fail(f"the venv {venv} has no bpy: make it with {setup} {venv}")
+        return
+    if os.environ.get(REEXEC):
+        raise Fail(f"re-ran with {sys.executable} but it is not the venv {venv}")
+    if not os.path.exists(py):
+        if args.no_setup:
+            raise Fail(f"no venv at {venv}: make it with {setup} {venv} (or drop --no-setup)")
+        log(f"creating the Cycles venv {venv} with {setup} (CPython 3.13, ~400 MB of bpy from "
+            "PyPI, once)")
+        r = subprocess.run(["bash", setup, venv])
+        if r.returncode != 0 or not os.path.exists(py):
+            raise Fail(f"{setup} {venv} failed (exit {r.returncode}); see its messages above")
+    os.environ[REEXEC] = "1"
+    os.execv(py, [py, os.path.abspath(__file__)] + sys.argv[1:])
+
+
+# ----------------------------------------------------------------------------------------------
+# Images and errors (numpy, inside the venv).
+
+
+def read_exr(path):
+    """{'rgb': HxWx3, 'noisy': HxWx3 if the file has noisy.R/G/B} as float64."""
+    import numpy as np
+    import OpenEXR
+
+    try:
+        with OpenEXR.File(path, separate_channels=True) as f:
+            ch = f.channels()
+            out = {}
+            for key, prefix in (("rgb", ""), ("noisy", "noisy.")):
+                names = [prefix + c for c in "RGB"]
+                if all(n in ch for n in names):
+                    out[key] = np.stack([np.asarray(ch[n].pixels, dtype=np.float64)
+                                         for n in names], -1)
+    except Exception as e:  # noqa: BLE001 - one line for any reader failure
+        raise Fail(f"cannot read {path}: {e}")
+    if "rgb" not in out:
+        raise Fail(f"{path} has no R, G, B channels (has {', '.join(sorted(ch))})")
+    return out
+
+
+def write_exr(path, img):
+    import numpy as np
+    import OpenEXR
+
+    img = np.asarray(img, dtype=np.float32)
+    chans = {c: np.ascontiguousarray(img[:, :, i]) for i, c in enumerate("RGB")}
+    header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+    tmp = path + f".{os.getpid()}.tmp"
+    with OpenEXR.File(header, chans) as f:
+        f.write(tmp)
+    os.replace(tmp, path)
+
+
+def finite(img, what, notes):
+    import numpy as np
+
+    bad = ~np.isfinite(img)
+    if bad.any():
+        notes.append(f"{what}: {int(bad.sum())} non-finite values set to 0")
+        img = np.where(bad, 0.0, img)
+    return img
+
+
+def rel_mse_clamped(img, ref, quantile=99.9):
+    """Per pixel mean over channels of (c − r)²/(r² + ε), ε = 0.01·mean(r)²; the per-pixel values
+    clamped at their 99.9th percentile; mean."""
+    import numpy as np
+
+    eps = 0.01 * float(ref.mean()) ** 2
+    e = (((img - ref) ** 2) / (ref * ref + eps)).mean(axis=2)
+    cap = np.percentile(e, quantile)
+    return float(np.minimum(e, cap).mean())
+
+
+def pbr_neutral(c):
+    """Khronos PBR Neutral, as src/film/tonemap.rs (and its specification) give it."""
+    import numpy as np
+
+    f90, ks, kd = 0.04, 0.8 - 0.04, 0.15
+    c = np.maximum(c, 0.0)
+    x = c.min(axis=2, keepdims=True)
+    f = np.where(x <= 2 * f90, x - x * x / (4 * f90), f90)
+    c = c - f
+    p = c.max(axis=2, keepdims=True)
+    pn = 1 - (1 - ks) ** 2 / (p + 1 - 2 * ks)
+    g = 1 / (kd * (p - pn) + 1)
+    safe_p = np.where(p > 0, p, 1.0)
+    high = c * (pn / safe_p * g) + pn * (1 - g)
+    return np.clip(np.where(p <= ks, c, high), 0.0, 1.0)
+
+
+def display(img):
+    """The one display transform of every image: exposure 0, PBR Neutral, clamp, sRGB encoding."""
+    import numpy as np
+
+    x = pbr_neutral(img)
+    return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1 / 2.4) - 0.055)
+
+
+def flip_mean(img, ref):
+    import flip_evaluator
+    import numpy as np
+
+    r = np.ascontiguousarray(display(ref), dtype=np.float32)
+    t = np.ascontiguousarray(display(img), dtype=np.float32)
+    _, mean, _ = flip_evaluator.evaluate(r, t, "LDR", inputsRGB=True, applyMagma=False)
+    return float(mean)
+
+
+def errors(img, ref):
+    return {"relmse": rel_mse_clamped(img, ref), "flip": flip_mean(img, ref)}
+
+
+def luminance(img):
+    return img[:, :, 0] * 0.2126 + img[:, :, 1] * 0.7152 + img[:, :, 2] * 0.0722
+
+
+def save_png(path, rows_of_images, gap=4):
+    """Images (HxWx3 display values in [0, 1]) side by side, rows stacked, white gaps."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.image as mimg
+    import numpy as np
+
+    strips = []
+    for row in rows_of_images:
+        h = max(i.shape[0] for i in row)
+        parts = []
+        for k, i in enumerate(row):
+            if k:
+                parts.append(np.ones((h, gap, 3)))
+            pad = np.ones((h, i.shape[1], 3))
+            pad[: i.shape[0]] = i
+            parts.append(pad)
+        strips.append(np.concatenate(parts, axis=1))
+    w = max(s.shape[1] for s in strips)
+    out = []
+    for k, s in enumerate(strips):
+        if k:
+            out.append(np.ones((gap, w, 3)))
+        pad = np.ones((s.shape[0], w, 3))
+        pad[:, : s.shape[1]] = s
+        out.append(pad)
+    os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
+    mimg.imsave(path, np.clip(np.concatenate(out, axis=0), 0, 1))
+
+
+def ratio_map(a, b, span=0.2, block=8):
+    """Luminance ratio a/b per block×block block as colours: white 1, red > 1, blue < 1."""
+    import matplotlib
+    import numpy as np
+
+    h, w = a.shape[:2]
+    hb, wb = h // block * block, w // block * block
+    la = luminance(a)[:hb, :wb].reshape(hb // block, block, wb // block, block).mean((1, 3))
+    lb = luminance(b)[:hb, :wb].reshape(hb // block, block, wb // block, block).mean((1, 3))
+    floor = 1e-3 * max(float(lb.mean()), 1e-12)
+    r = (la + floor) / (lb + floor)
+    x = np.clip((r - 1) / span, -1, 1) * 0.5 + 0.5
+    rgb = matplotlib.colormaps["RdBu_r"](x)[:, :, :3]
+    return np.repeat(np.repeat(rgb, block, 0), block, 1)
+
+
+def compare_refs(a, b):
+    """How raylab's converged image (a) differs from Cycles' (b)."""
+    import numpy as np
+
+    h, w = a.shape[:2]
+    hb, wb = h // 8 * 8, w // 8 * 8
+    la = luminance(a)[:hb, :wb].reshape(hb // 8, 8, wb // 8, 8).mean((1, 3))
+    lb = luminance(b)[:hb, :wb].reshape(hb // 8, 8, wb // 8, 8).mean((1, 3))
+    floor = 0.01 * float(lb.mean())
+    block = np.abs(la - lb) / (lb + floor)
+    return {"mean_ratio_rgb": [float(x) for x in a.mean((0, 1)) / np.maximum(b.mean((0, 1)), 1e-30)],
+            "block8_mean_abs_rel_diff": float(block.mean()),
+            "relmse_raylab_vs_cycles": rel_mse_clamped(a, b),
+            "flip_raylab_vs_cycles": flip_mean(a, b)}
+
+
+# ----------------------------------------------------------------------------------------------
+# Renderers.
+
+
+def run(cmd, timeout, what):
+    """Runs cmd; (stdout, stderr, wall seconds). A failure or a timeout is one line."""
+    t0 = time.perf_counter()
+    try:
+        p = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout,
+                           stdin=subprocess.DEVNULL)
+    except subprocess.TimeoutExpired:
+        raise Fail(f"{what} took longer than --timeout {timeout:g} s (killed)")
+    except OSError as e:
+        raise Fail(f"{what}: cannot run {cmd[0]}: {e}")
+    wall = time.perf_counter() - t0
+    if p.returncode != 0:
+        why = one_line(p.stderr) or one_line(p.stdout) or "no message"
+        raise Fail(f"{what} failed (exit {p.returncode}): {why}")
+    return p.stdout, p.stderr, wall
+
+
+class Scene:
+    def __init__(self, name, args):
+        rel, env, rotate, box = SCENES[name]
+        self.name, self.box = name, box
+        self.file = os.path.join(ROOT, rel)
+        if not os.path.isfile(self.file):
+            hint = {"cornell-glass": " (python3 tools/make_cornell_glass.py makes it)",
+                    "helmet-venice": " (python3 tools/make_helmet_venice.py makes it)",
+                    "showcase": " (python3 tools/make_showcase.py makes it)"}[name]
+            raise Fail(f"scene file {rel} not found{hint}")
+        self.env = os.path.join(os.path.abspath(args.shared), env) if env else None
+        if self.env and not os.path.isfile(self.env):
+            raise Fail(f"environment map {self.env} not found")
+        self.rotate = rotate
+        self.width, self.height = args.box_size if box else args.size
+
+    def files(self):
+        """The glTF file and every file it references (and the map), for the cache key."""
+        with open(self.file) as f:
+            doc = json.load(f)
+        base = os.path.dirname(self.file)
+        out = [self.file]
+        for coll in ("buffers", "images"):
+            for item in doc.get(coll, []):
+                uri = item.get("uri")
+                if uri and not uri.startswith("data:"):
+                    from urllib.parse import unquote
+                    out.append(os.path.normpath(os.path.join(base, unquote(uri))))
+        if self.env:
+            out.append(self.env)
+        return out
+
+    def key(self, renderer_id, spp):
+        h = hashlib.sha256()
+        for p in self.files():
+            with open(p, "rb") as f:
+                h.update(hashlib.sha256(f.read()).digest())
+        h.update(json.dumps([renderer_id, self.rotate, self.width, self.height, spp,
+                             REF_SEED]).encode())
+        return h.hexdigest()[:12]
+
+    def env_args(self):
+        return ["--env", self.env, "--env-rotate", f"{self.rotate:g}"] if self.env else []
+
+
+class Result:
+    def __init__(self, img, seconds, info, noisy=None, noisy_seconds=None):
+        self.img, self.seconds, self.info = img, seconds, info
+        self.noisy, self.noisy_seconds = noisy, noisy_seconds
+
+
+SUMMARY = re.compile(r"^wrote .*?: (\d+)x(\d+), (\S+), (\d+) spp, ([0-9.]+) ms.*$", re.M)
+DENOISED = re.compile(r"denoised in ([0-9.]+) ms([^;\n]*)")
+
+
+class Raylab:
+    name = "raylab"
+    ref_id = "raylab render --default-light off (sobol)"
+
+    def __init__(self, path, threads, tmp, timeout):
+        if not os.path.isfile(path):
+            raise Fail(f"raylab binary {path} not found: build it with `cargo build --release` "
+                       "(or pass --raylab PATH)")
+        self.source = path
+        self.binary = os.path.join(tmp, "raylab")
+        shutil.copy2(path, self.binary)
+        with open(self.binary, "rb") as f:
+            self.sha = hashlib.sha256(f.read()).hexdigest()[:12]
+        self.mtime = time.strftime("%Y-%m-%d %H:%M", time.localtime(os.path.getmtime(path)))
+        self.threads, self.tmp, self.timeout = threads, tmp, timeout
+        out, _, _ = run([self.binary, "render", "--help"], 60, "raylab render --help")
+        self.has_denoise = "--denoise" in out
+        self.version = one_line(run([self.binary, "--version"], 60, "raylab --version")[0])
+
+    def describe(self):
+        return (f"{self.version} {self.source} (built {self.mtime}, sha256 {self.sha}; "
+                f"--denoise {'yes' if self.has_denoise else 'not yet'})")
+
+    def render(self, scene, spp, seed, denoise=False, out=None):
+        out = out or os.path.join(self.tmp, "raylab.exr")
+        cmd = [self.binary, "render", scene.file, "--spp", str(spp), "--threads", str(self.threads),
+               "--seed", str(seed), "--width", str(scene.width), "--height", str(scene.height),
+               "--default-light", "off", *scene.env_args(), "-o", out]
+        if denoise:
+            cmd.append("--denoise")
+        what = f"raylab {scene.name} {spp} spp{' --denoise' if denoise else ''}"
+        _, err, wall = run(cmd, self.timeout, what)
+        m = SUMMARY.search(err)
+        if not m:
+            raise Fail(f"{what}: no summary line (`wrote ...: WxH, path, N spp, T ms, ...`) on "
+                       f"stderr: {one_line(err)}")
+        w, h, integrator, done, ms = m.groups()
+        if (int(w), int(h), int(done)) != (scene.width, scene.height, spp) or integrator != "path":
+            raise Fail(f"{what}: unexpected summary: {m.group(0)}")
+        render_s = float(ms) / 1e3
+        info = {"render_s": render_s, "wall_s": wall, "summary": m.group(0)}
+        layers = read_exr(out)
+        notes = []
+        img = finite(layers["rgb"], what, notes)
+        if denoise:
+            d = DENOISED.search(m.group(0))
+            if not d:
+                raise Fail(f"{what}: the summary line has no `denoised in D ms` clause: {m.group(0)}")
+            if "noisy" not in layers:
+                raise Fail(f"{what}: {out} has no noisy.R/G/B layers")
+            info["denoise_s"] = float(d.group(1)) / 1e3
+            info["denoiser"] = d.group(2).strip()
+            info["notes"] = notes
+            noisy = finite(layers["noisy"], what + " (noisy layers)", notes)
+            return Result(img, render_s + info["denoise_s"], info, noisy=noisy, noisy_seconds=render_s)
+        info["notes"] = notes
+        return Result(img, render_s, info)
+
+
+class Cycles:
+    name = "Cycles"
+
+    def __init__(self, venv, shared, threads, tmp, timeout):
+        self.py = os.path.join(os.path.abspath(venv), "bin", "python")
+        self.script = os.path.join(os.path.abspath(shared), "cycles", "render_gltf.py")
+        with open(self.script, "rb") as f:
+            self.sha = hashlib.sha256(f.read()).hexdigest()[:12]
+        req = os.path.join(os.path.dirname(self.script), "requirements.txt")
+        self.bpy = "?"
+        if os.path.exists(req):
+            with open(req) as f:
+                m = re.search(r"^bpy==(\S+)", f.read(), re.M)
+                self.bpy = m.group(1) if m else "?"
+        self.ref_id = f"cycles render_gltf.py {self.sha} bpy {self.bpy}"
+        self.threads, self.tmp, self.timeout = threads, tmp, timeout
+        self.blender = None
+
+    def describe(self):
+        return (f"Blender {self.blender or 'bpy ' + self.bpy} Cycles CPU via {self.script} "
+                f"(sha256 {self.sha}), {self.py}")
+
+    def render(self, scene, spp, seed, denoise=False, out=None):
+        out = out or os.path.join(self.tmp, "cycles.exr")
+        cmd = [self.py, self.script, scene.file, "-o", out, "--width", str(scene.width),
+               "--height", str(scene.height), "--spp", str(spp), "--threads", str(self.threads),
+               "--seed", str(seed), "--quiet", *scene.env_args()]
+        if denoise:
+            cmd.append("--denoise")
+        what = f"Cycles {scene.name} {spp} spp{' --denoise' if denoise else ''}"
+        stdout, _, wall = run(cmd, self.timeout, what)
+        info = None
+        for line in reversed(stdout.splitlines()):
+            if line.startswith("{"):
+                try:
+                    info = json.loads(line)
+                    break
+                except ValueError:
+                    continue
+        if info is None:
+            raise Fail(f"{what}: no JSON line on stdout from render_gltf.py: {one_line(stdout)}")
+        if info.get("spp_done") not in (None, spp):
+            raise Fail(f"{what}: Cycles did {info['spp_done']} of {spp} spp")
+        secs = info.get("cycles_path_trace_s")
+        if secs is None:
+            raise Fail(f"{what}: no cycles_path_trace_s in its JSON line (OpenEXR header unread?)")
+        self.blender = info.get("blender", self.blender)
+        info["wall_s"] = wall
+        notes = []
+        img = finite(read_exr(out)["rgb"], what, notes)
+        info["notes_tool"] = notes
+        return Result(img, float(secs), info)
+
+
+# ----------------------------------------------------------------------------------------------
+# Converged references (cached).
+
+
+def reference(renderer, scene, spp, args):
+    """(image, meta): the renderer's own converged image of the scene, in two halves."""
+    os.makedirs(args.cache, exist_ok=True)
+    key = scene.key(renderer.ref_id, spp)
+    base = os.path.join(args.cache, f"{scene.name}-{renderer.name.lower()}-{scene.width}x"
+                        f"{scene.height}-{spp}spp-{key}")
+    if args.fresh_refs or not (os.path.exists(base + ".exr") and os.path.exists(base + ".json")):
+        half = max(1, spp // 2)
+        log(f"rendering the {scene.name} reference with {renderer.name}: 2 × {half} spp "
+            f"(once; cached in {args.cache})")
+        halves, secs = [], 0.0
+        for k in range(2):
+            r = renderer.render(scene, half, REF_SEED + k)
+            halves.append(r.img)
+            secs += r.seconds
+        full = 0.5 * (halves[0] + halves[1])
+        write_exr(base + ".exr", full)
+        meta = {"scene": scene.name, "renderer": renderer.name, "spp": 2 * half,
+                "size": [scene.width, scene.height], "seeds": [REF_SEED, REF_SEED + 1],
+                # relMSE(h0, h1) ≈ 2 × a half's own ≈ 4 × the average's own noise.
+                "own_relmse": rel_mse_clamped(halves[0], halves[1]) / 4,
+                "halves_flip": flip_mean(halves[0], halves[1]),
+                "seconds": secs, "key": key, "made": time.strftime("%Y-%m-%d %H:%M:%S"),
+                "renderer_id": renderer.ref_id}
+        if isinstance(renderer, Raylab):
+            meta["raylab_sha256"] = renderer.sha
+        else:
+            meta["blender"] = renderer.blender
+        tmp = base + f".json.{os.getpid()}.tmp"
+        with open(tmp, "w") as f:
+            json.dump(meta, f, indent=1)
+        os.replace(tmp, base + ".json")
+    with open(base + ".json") as f:
+        meta = json.load(f)
+    if isinstance(renderer, Raylab) and meta.get("raylab_sha256") != renderer.sha:
+        log(f"note: the cached {scene.name} raylab reference was made by another raylab binary "
+            f"(sha256 {meta.get('raylab_sha256')}); --fresh-refs re-renders it")
+    meta["path"] = base + ".exr"
+    return read_exr(base + ".exr")["rgb"], meta
+
+
+# ----------------------------------------------------------------------------------------------
+# Comparison mode.
+
+
+def div(a, b):
+    return a / b if b else None
+
+
+def fmt_e(x):
+    return "n/a" if x is None else f"{x:.2e}"
+
+
+def fmt_f(x):
+    return "n/a" if x is None else f"{x:.4f}"
+
+
+def fmt_s(x):
+    return "n/a" if x is None else (f"{x:.3f}" if x < 10 else f"{x:.1f}")
+
+
+def fmt_r(x):
+    return "n/a" if x is None else f"{x:.2f}"
+
+
+def compare(args, tmp):
+    import numpy as np
+
+    scenes = [Scene(s, args) for s in args.scenes]
+    raylab = Raylab(args.raylab, args.threads, tmp, args.timeout)
+    cycles = Cycles(args.venv, args.shared, args.threads, tmp, args.timeout)
+    renderers = (raylab, cycles)
+    log(f"raylab: {raylab.describe()}")
+    start = time.perf_counter()
+
+    refs, ref_meta, cross = {}, {}, {}
+    for sc in scenes:
+        for r in renderers:
+            refs[(sc.name, r.name)], ref_meta[(sc.name, r.name)] = reference(r, sc, args.ref_spp, args)
+            if r is cycles and not cycles.blender:
+                cycles.blender = ref_meta[(sc.name, r.name)].get("blender")
+        cross[sc.name] = compare_refs(refs[(sc.name, "raylab")], refs[(sc.name, "Cycles")])
+        c = cross[sc.name]
+        log(f"{sc.name}: converged raylab / Cycles mean R G B "
+            + " ".join(f"{x:.4f}" for x in c["mean_ratio_rgb"])
+            + f"; 8×8-block mean |rel. diff| {100 * c['block8_mean_abs_rel_diff']:.1f} %")
+        disp = [display(refs[(sc.name, "raylab")]), display(refs[(sc.name, "Cycles")]),
+                ratio_map(refs[(sc.name, "raylab")], refs[(sc.name, "Cycles")])]
+        save_png(os.path.join(args.previews, f"{sc.name}-refs.png"), [disp])
+    log(f"Cycles: {cycles.describe()}")
+
+    runs = []
+    modes = ("noisy", "denoised")
+    previews = {}
+    for rnd in range(args.rounds):
+        seed = rnd + 1
+        for si, sc in enumerate(scenes):
+            for pi, spp in enumerate(args.spp):
+                order = renderers if (rnd + si + pi) % 2 == 0 else renderers[::-1]
+                for mode in modes:
+                    for r in order:
+                        if mode == "denoised" and r is raylab and not raylab.has_denoise:
+                            continue
+                        res = r.render(sc, spp, seed, denoise=(mode == "denoised"))
+                        e = errors(res.img, refs[(sc.name, r.name)])
+                        rec = {"round": rnd + 1, "seed": seed, "scene": sc.name, "renderer": r.name,
+                               "mode": mode, "spp": spp, "seconds": res.seconds, **e,
+                               "info": res.info}
+                        if res.noisy is not None:
+                            # raylab --denoise also wrote the noisy image: it must be the noisy
+                            # run's (same seed).
+                            prev = previews.get((sc.name, spp, r.name, "noisy", rnd))
+                            if prev is not None:
+                                rec["noisy_layer_max_abs_diff_vs_noisy_run"] = float(
+                                    np.abs(res.noisy - prev).max())
+                        runs.append(rec)
+                        previews[(sc.name, spp, r.name, mode, rnd)] = res.img
+                        log(f"round {rnd + 1}: {r.name:6} {sc.name} {spp:4} spp {mode:8} "
+                            f"{res.seconds:7.3f} s  relMSE {e['relmse']:.3e}  FLIP {e['flip']:.4f}")
+                # previews of round 1, then free memory of the images
+                if rnd == 0:
+                    row = []
+                    for r in renderers:
+                        for mode in modes:
+                            img = previews.get((sc.name, spp, r.name, mode, rnd))
+                            row.append(display(img) if img is not None
+                                       else 0.5 * np.ones_like(display(refs[(sc.name, r.name)])))
+                    save_png(os.path.join(args.previews, f"{sc.name}-{spp}spp.png"), [row])
+                for k in [k for k in previews if k[0] == sc.name and k[1] == spp]:
+                    del previews[k]
+
+    # Summary: best time, worst errors over the rounds.
+    summary = []
+    for sc in scenes:
+        for spp in args.spp:
+            for mode in modes:
+                row = {"scene": sc.name, "spp": spp, "mode": mode}
+                for r in renderers:
+                    rs = [x for x in runs if (x["scene"], x["spp"], x["mode"], x["renderer"])
+                          == (sc.name, spp, mode, r.name)]
+                    if not rs:
+                        row[r.name] = None
+                        continue
+                    s = min(x["seconds"] for x in rs)
+                    rel = max(x["relmse"] for x in rs)
+                    fl = max(x["flip"] for x in rs)
+                    row[r.name] = {"seconds": s, "relmse": rel, "flip": fl,
+                                   "relmse_x_s": rel * s, "flip_x_s": fl * s, "runs": len(rs)}
+                a, b = row["raylab"], row["Cycles"]
+                row["ratio"] = None if not (a and b) else {
+                    "seconds": a["seconds"] / b["seconds"] if b["seconds"] > 0 else None,
+                    "relmse_x_s": (a["relmse_x_s"] / b["relmse_x_s"]) if b["relmse_x_s"] > 0 else None,
+                    "flip_x_s": (a["flip_x_s"] / b["flip_x_s"]) if b["flip_x_s"] > 0 else None}
+                summary.append(row)
+
+    # Cycles' denoise time: denoised − noisy path-trace time, same seed and spp.
+    cyc_dn = {}
+    for x in runs:
+        if x["renderer"] == "Cycles" and x["mode"] == "denoised":
+            for y in runs:
+                if (y["renderer"], y["mode"], y["scene"], y["spp"], y["seed"]) == (
+                        "Cycles", "noisy", x["scene"], x["spp"], x["seed"]):
+                    cyc_dn.setdefault(x["scene"], []).append(x["seconds"] - y["seconds"])
+    ray_dn = {}
+    for x in runs:
+        if x["renderer"] == "raylab" and x["mode"] == "denoised":
+            ray_dn.setdefault(x["scene"], []).append(x["info"].get("denoise_s"))
+
+    took = time.perf_counter() - start
+    print()
+    print(f"raylab ÷ Cycles, {args.threads} threads each, seeds 1..{args.rounds} "
+          f"({args.rounds} round{'s' if args.rounds > 1 else ''}); seconds: the best of the rounds "
+          "(raylab: render time of its summary line, + denoise; Cycles: cycles_path_trace_s, "
+          "denoising included); errors: the worst of the rounds, against the renderer's own "
+          f"{args.ref_spp}-spp render; relMSE: per-pixel values clamped at their 99.9th "
+          "percentile; FLIP: mean LDR FLIP after PBR Neutral + sRGB at exposure 0. "
+          f"Run took {took:.0f} s.")
+    print()
+    print("| scene | spp | mode | renderer | seconds | relMSE | relMSE × s | FLIP | FLIP × s |")
+    print("| --- | ---: | --- | --- | ---: | ---: | ---: | ---: | ---: |")
+    marked = False
+    for row in summary:
+        head = [row["scene"], str(row["spp"]), row["mode"]]
+        for r in renderers:
+            v = row[r.name]
+            if v is None:
+                why = ("n/a (raylab has no --denoise)" if r is raylab and row["mode"] == "denoised"
+                       else "n/a")
+                print("| " + " | ".join(head + [r.name, why, "", "", "", ""]) + " |")
+            else:
+                # † : the reference's own noise is over a quarter of this error (it is inflated).
+                own = ref_meta[(row["scene"], r.name)]["own_relmse"]
+                mark = "†" if own > 0.25 * v["relmse"] else ""
+                marked = marked or bool(mark)
+                print("| " + " | ".join(head + [r.name, fmt_s(v["seconds"]), fmt_e(v["relmse"]) + mark,
+                                              fmt_e(v["relmse_x_s"]), fmt_f(v["flip"]),
+                                              fmt_e(v["flip_x_s"])]) + " |")
+            head = ["", "", ""]
+        q = row["ratio"]
+        if q is None:
+            print("| " + " | ".join(head + ["raylab ÷ Cycles", "n/a", "", "n/a", "", "n/a"]) + " |")
+        else:
+            a, b = row["raylab"], row["Cycles"]
+            print("| " + " | ".join(head + [
+                "**raylab ÷ Cycles**", fmt_r(q["seconds"]), fmt_r(div(a["relmse"], b["relmse"])),
+                f"**{fmt_r(q['relmse_x_s'])}**", fmt_r(div(a["flip"], b["flip"])),
+                f"**{fmt_r(q['flip_x_s'])}**"]) + " |")
+    if marked:
+        print()
+        print("† the reference's own noise (below) is more than a quarter of this relMSE, which it "
+              "inflates (relMSE against a reference ≈ the image's own + the reference's): raise "
+              "--ref-spp for denoised errors.")
+    print()
+    print("Converged references (each renderer's own; `own noise` = relMSE between its two halves "
+          "/ 4) and how they differ from each other:")
+    print()
+    print("| scene | size | raylab ref s | raylab own noise | Cycles ref s | Cycles own noise "
+          "| raylab / Cycles mean R, G, B | 8×8-block mean abs rel. diff | relMSE (raylab vs Cycles) "
+          "| FLIP (raylab vs Cycles) |")
+    print("| --- | --- | ---: | ---: | ---: | ---: | --- | ---: | ---: | ---: |")
+    for sc in scenes:
+        a, b, c = ref_meta[(sc.name, "raylab")], ref_meta[(sc.name, "Cycles")], cross[sc.name]
+        print(f"| {sc.name} | {sc.width}×{sc.height} | {fmt_s(a['seconds'])} | "
+              f"{a['own_relmse']:.1e} | {fmt_s(b['seconds'])} | {b['own_relmse']:.1e} | "
+              + ", ".join(f"{x:.3f}" for x in c["mean_ratio_rgb"])
+              + f" | {100 * c['block8_mean_abs_rel_diff']:.1f} % | "
+              f"{c['relmse_raylab_vs_cycles']:.2e} | {c['flip_raylab_vs_cycles']:.4f} |")
+    print()
+    for sc in scenes:
+        d = cyc_dn.get(sc.name)
+        rd = [x for x in ray_dn.get(sc.name, []) if x is not None]
+        bits = []
+        if d:
+            bits.append(f"Cycles' denoise ≈ {sorted(d)[len(d) // 2]:.2f} s (median of denoised − "
+                        "noisy cycles_path_trace_s at equal seeds)")
+        if rd:
+            span = f"{min(rd) * 1e3:.0f}" + (f"–{max(rd) * 1e3:.0f}" if max(rd) > min(rd) else "")
+            bits.append(f"raylab's denoise {span} ms")
+        if bits:
+            print(f"* {sc.name}: " + "; ".join(bits))
+    print(f"* previews: {args.previews} (SCENE-refs.png: raylab | Cycles | luminance ratio; "
+          "SCENE-Nspp.png: raylab noisy | denoised | Cycles noisy | denoised)")
+    bad = [x for x in runs if x.get("noisy_layer_max_abs_diff_vs_noisy_run", 0) > 0]
+    if bad:
+        print(f"* warning: raylab --denoise's noisy layers differ from the noisy run at the same "
+              f"seed in {len(bad)} run(s) (largest {max(x['noisy_layer_max_abs_diff_vs_noisy_run'] for x in bad):.3g})")
+
+    out = {"tool": "tools/compare_cycles.py", "date": time.strftime("%Y-%m-%d %H:%M:%S"),
+           "argv": sys.argv[1:], "threads": args.threads, "rounds": args.rounds,
+           "spp": args.spp, "ref_spp": args.ref_spp,
+           "aggregation": "seconds: best of the rounds; errors: worst of the rounds",
+           "error_measures": {
+               "relmse": "per pixel mean_c (c-r)^2/(r^2+eps), eps = 0.01 mean(r)^2, clamped at "
+                         "the 99.9th percentile of the per-pixel values, mean",
+               "flip": "mean LDR FLIP (flip-evaluator, 67 ppd) of PBR Neutral + sRGB at exposure 0"},
+           "raylab": {"binary": raylab.source, "sha256": raylab.sha, "version": raylab.version,
+                      "has_denoise": raylab.has_denoise},
+           "cycles": {"blender": cycles.blender, "render_gltf_sha256": cycles.sha,
+                      "python": cycles.py},
+           "scenes": {sc.name: {"file": os.path.relpath(sc.file, ROOT), "size": [sc.width, sc.height],
+                                "env": sc.env, "env_rotate": sc.rotate} for sc in scenes},
+           "references": {f"{k[0]}/{k[1]}": v for k, v in ref_meta.items()},
+           "raylab_vs_cycles_references": cross,
+           "cycles_denoise_s": cyc_dn, "raylab_denoise_s": ray_dn,
+           "summary": summary, "runs": runs, "seconds": took}
+    write_json(args.json, out)
+    print(f"* all numbers: {args.json}")
+
+
+def write_json(path, obj):
+    os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
+    tmp = path + f".{os.getpid()}.tmp"
+    with open(tmp, "w") as f:
+        json.dump(obj, f, indent=1)
+    os.replace(tmp, path)
+
+
+# ----------------------------------------------------------------------------------------------
+# Curve mode (raylab only).
+
+
+def curve(args, tmp):
+    scenes = [Scene(s, args) for s in args.scenes]
+    raylab = Raylab(args.raylab, args.threads, tmp, args.timeout)
+    log(f"raylab: {raylab.describe()}")
+    if not raylab.has_denoise:
+        log("raylab has no --denoise yet: the noisy curve only")
+    rows, metas = [], {}
+    seed = 1
+    for sc in scenes:
+        ref, metas[sc.name] = reference(raylab, sc, args.curve_ref_spp, args)
+        log(f"{sc.name}: reference {metas[sc.name]['path']} (own relMSE ≈ "
+            f"{metas[sc.name]['own_relmse']:.1e})")
+        for spp in args.curve_spp:
+            res = raylab.render(sc, spp, seed, denoise=raylab.has_denoise)
+            pairs = [("noisy", res.noisy if res.noisy is not None else res.img,
+                      res.noisy_seconds if res.noisy is not None else res.seconds)]
+            if raylab.has_denoise:
+                pairs.append(("denoised", res.img, res.seconds))
+            for mode, img, secs in pairs:
+                e = errors(img, ref)
+                rows.append({"scene": sc.name, "spp": spp, "mode": mode, "seconds": secs, **e})
+                log(f"{sc.name} {spp:5} spp {mode:8} {secs:8.3f} s  relMSE {e['relmse']:.3e}  "
+                    f"FLIP {e['flip']:.4f}")
+
+    os.makedirs(os.path.dirname(os.path.abspath(args.csv)), exist_ok=True)
+    with open(args.csv, "w") as f:
+        f.write("scene,spp,mode,seconds,relmse,flip\n")
+        for r in rows:
+            f.write(f"{r['scene']},{r['spp']},{r['mode']},{r['seconds']:.6f},{r['relmse']:.6e},"
+                    f"{r['flip']:.6f}\n")
+    plot_curve(args, scenes, rows, raylab)
+
+    worse = []
+    for r in rows:
+        if r["mode"] != "denoised":
+            continue
+        n = next(x for x in rows if (x["scene"], x["spp"], x["mode"]) == (r["scene"], r["spp"], "noisy"))
+        for m in ("relmse", "flip"):
+            if r[m] > n[m]:
+                worse.append(f"{r['scene']} {r['spp']} spp {m}: denoised {r[m]:.3g} > noisy {n[m]:.3g}")
+    print()
+    print(f"raylab noisy{' and denoised' if raylab.has_denoise else ''} against its own "
+          f"{args.curve_ref_spp}-spp render ({args.threads} threads; relMSE clamped at the 99.9th "
+          "percentile; FLIP after PBR Neutral + sRGB):")
+    print()
+    print("| scene | spp | noisy relMSE | denoised relMSE | noisy FLIP | denoised FLIP | noisy s | denoised s |")
+    print("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
+    for sc in scenes:
+        for spp in args.curve_spp:
+            n = next(x for x in rows if (x["scene"], x["spp"], x["mode"]) == (sc.name, spp, "noisy"))
+            d = next((x for x in rows if (x["scene"], x["spp"], x["mode"]) == (sc.name, spp, "denoised")), None)
+            g = (lambda k: d[k]) if d else (lambda k: None)
+            print(f"| {sc.name} | {spp} | {fmt_e(n['relmse'])} | {fmt_e(g('relmse'))} | "
+                  f"{fmt_f(n['flip'])} | {fmt_f(g('flip'))} | {fmt_s(n['seconds'])} | {fmt_s(g('seconds'))} |")
+    print()
+    print(f"* CSV: {args.csv}; plot: {args.plot}")
+    if worse:
+        print("* DENOISED WORSE THAN NOISY at " + "; ".join(worse))
+        return 3
+    if raylab.has_denoise:
+        print("* denoised is never worse than noisy (both measures, every scene and spp)")
+    return 0
+
+
+def plot_curve(args, scenes, rows, raylab):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import matplotlib.ticker  # noqa: F401
+
+    n = len(scenes)
+    fig, axes = plt.subplots(2, n, figsize=(4.2 * n, 6.4), squeeze=False)
+    for j, sc in enumerate(scenes):
+        for i, (m, label) in enumerate((("relmse", "relMSE (99.9 % clamped)"), ("flip", "mean FLIP"))):
+            ax = axes[i][j]
+            for mode, style in (("noisy", "-o"), ("denoised", "--s")):
+                pts = [(r["spp"], r[m]) for r in rows if r["scene"] == sc.name and r["mode"] == mode]
+                if pts:
+                    ax.plot([p[0] for p in pts], [p[1] for p in pts], style, ms=3.5, label=mode)
+            ax.set_xscale("log", base=2)
+            ax.xaxis.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda v, _: f"{v:g}"))
+            ax.set_yscale("log")
+            ax.grid(True, which="both", alpha=0.3)
+            ax.set_xlabel("samples per pixel")
+            if j == 0:
+                ax.set_ylabel(label)
+            if i == 0:
+                ax.set_title(f"{sc.name} ({sc.width}×{sc.height})")
+            ax.legend(fontsize=8)
+    fig.suptitle(f"raylab against its own {args.curve_ref_spp}-spp render"
+                 + ("" if raylab.has_denoise else " (no --denoise yet: noisy only)"), fontsize=11)
+    fig.tight_layout()
+    os.makedirs(os.path.dirname(os.path.abspath(args.plot)), exist_ok=True)
+    fig.savefig(args.plot, dpi=100)
+    plt.close(fig)
+
+
+# ----------------------------------------------------------------------------------------------
+
+
+def parse_size(text):
+    m = re.fullmatch(r"(\d+)[x×](\d+)", text.strip())
+    if not m or int(m.group(1)) < 1 or int(m.group(2)) < 1:
+        raise argparse.ArgumentTypeError(f"expected WxH, got {text!r}")
+    return int(m.group(1)), int(m.group(2))
+
+
+def parse_list(text):
+    try:
+        out = [int(x) for x in text.split(",") if x.strip()]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected numbers separated by commas, got {text!r}")
+    if not out or min(out) < 1:
+        raise argparse.ArgumentTypeError(f"expected positive numbers, got {text!r}")
+    return out
+
+
+def parse_scenes(text):
+    out = [x.strip() for x in text.split(",") if x.strip()]
+    for s in out:
+        if s not in SCENES:
+            raise argparse.ArgumentTypeError(f"unknown scene {s!r} (known: {', '.join(SCENES)})")
+    return out
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0],
+                                 formatter_class=argparse.RawDescriptionHelpFormatter,
+                                 epilog="See the module docstring (the top of this file) for details.")
+    ap.add_argument("--scenes", type=parse_scenes, default=list(SCENES),
+                    help=f"comma-separated, from {', '.join(SCENES)} (default all)")
+    ap.add_argument("--spp", type=parse_list, default=[16, 64], help="default 16,64")
+    ap.add_argument("--rounds", type=int, default=1, help="interleaved rounds, seeds 1..N (default 1)")
+    ap.add_argument("--threads", type=int, default=2, help="threads of each renderer (default 2)")
+    ap.add_argument("--ref-spp", type=int, default=1024,
+                    help="spp of each renderer's own converged render (default 1024)")
+    ap.add_argument("--size", type=parse_size, default=(320, 240),
+                    help="WxH of helmet-venice and showcase (default 320x240)")
+    ap.add_argument("--box-size", type=parse_size, default=(256, 256),
+                    help="WxH of cornell-glass (default 256x256)")
+    ap.add_argument("--raylab", default=default_raylab(),
+                    help="raylab binary (default target/release/raylab, else ../main's)")
+    ap.add_argument("--venv", default=DEFAULT_VENV,
+                    help="CPython 3.13 venv with bpy (../shared/cycles/setup.sh), created if "
+                         "missing (default ~/.cache/raylab-cycles-venv)")
+    ap.add_argument("--no-setup", action="store_true", help="fail instead of creating the venv")
+    ap.add_argument("--shared", default=DEFAULT_SHARED, help="the shared assets (default ../shared)")
+    ap.add_argument("--cache", default=DEFAULT_CACHE,
+                    help="converged references and outputs (default ../bench-data/cycles)")
+    ap.add_argument("--fresh-refs", action="store_true", help="re-render the references")
+    ap.add_argument("--json", help="all numbers (default CACHE/compare_cycles-last.json)")
+    ap.add_argument("--previews", help="PNG previews folder (default CACHE/previews)")
+    ap.add_argument("--timeout", type=float, default=3600.0,
+                    help="seconds any one render may take (default 3600)")
+    ap.add_argument("--curve", action="store_true",
+                    help="raylab only: error against spp, noisy and denoised, CSV + plot")
+    ap.add_argument("--curve-spp", type=parse_list,
+                    default=[1 << k for k in range(11)], help="default 1,2,4,...,1024")
+    ap.add_argument("--curve-ref-spp", type=int, default=4096, help="default 4096")
+    ap.add_argument("--csv", help="curve CSV (default CACHE/denoise_curve.csv)")
+    ap.add_argument("--plot", help="curve plot PNG (default CACHE/denoise_curve.png)")
+    args = ap.parse_args()
+    if args.rounds < 1 or args.threads < 1 or args.ref_spp < 2 or args.curve_ref_spp < 2:
+        ap.error("--rounds and --threads must be at least 1, the reference spp at least 2")
+    args.cache = os.path.abspath(args.cache)
+    args.json = args.json or os.path.join(args.cache, "compare_cycles-last.json")
+    args.previews = args.previews or os.path.join(args.cache, "previews")
+    args.csv = args.csv or os.path.join(args.cache, "denoise_curve.csv")
+    args.plot = args.plot or os.path.join(args.cache, "denoise_curve.png")
+
+    # SIGTERM ends like Ctrl-C: the children are killed and the temporary folder removed.
+    def on_term(signum, frame):
+        raise KeyboardInterrupt
+
+    signal.signal(signal.SIGTERM, on_term)
+    try:
+        if not args.curve:
+            ensure_venv(args)
+        elif missing_modules():
+            ensure_venv(args)
+        with tempfile.TemporaryDirectory(prefix="compare_cycles.") as tmp:
+            status = curve(args, tmp) if args.curve else compare(args, tmp)
+    except Fail as e:
+        print(f"{PROG}: error: {e}", file=sys.stderr)
+        sys.exit(1)
+    except KeyboardInterrupt:
+        print(f"{PROG}: interrupted", file=sys.stderr)
+        sys.exit(130)
+    sys.exit(status or 0)
+
+
+if __name__ == "__main__":
+    main()
