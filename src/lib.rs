@@ -20,8 +20,10 @@
 //! * [`sampling`]: PCG32 streams keyed by (seed, pixel, sample), and
 //!   Owen-scrambled Sobol' points;
 //! * [`render`]: tiles on rayon, deterministic per-pixel sampling;
-//! * [`aov`]: first-hit albedo, normal, depth and position per pixel (a
-//!   denoiser's guides), gathered by the render;
+//! * [`aov`]: albedo and normal guides (through specular chains), depth,
+//!   position and variance per pixel, gathered by the render;
+//! * [`denoise`]: Open Image Denoise, loaded at run time, on an image and its
+//!   guides, blended back towards the noisy image where it is good enough;
 //! * [`film`]: the image buffer, tone mapping and atomic PNG/EXR output;
 //! * [`checkpoint`]: a render's sums saved to resume it after a stop or a kill;
 //! * [`controls`]: the viewer's camera/light state and how input changes it;

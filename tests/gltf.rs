@@ -17,7 +17,7 @@ use raylab::camera::{Lens, Y_UP_TOWARDS_MINUS_Z};
 use raylab::integrators::path::PathOptions;
 use raylab::lights::Incident;
 use raylab::render::sample_pixel;
-use raylab::scene::{LoadOptions, Loaded};
+use raylab::scene::{Facing, LoadOptions, Loaded};
 use raylab::{Camera, Hit, Integrator, LightSample, Ray, Scene};
 use serde_json::{Value, json};
 
@@ -1235,7 +1235,7 @@ fn spot_light_samples_follow_the_cone_falloff() {
         // A floor point at angle θ from the axis, at azimuth 1 rad.
         let rho = 2.0 * theta.tan();
         let p = Vec3A::new(rho * 1f32.cos(), 0.0, rho * 1f32.sin());
-        let sample = scene.sample_light(p, Vec2::new(0.5, 0.5), Vec2::new(0.25, 0.75));
+        let sample = scene.sample_light(p, Facing::Any, Vec2::new(0.5, 0.5), Vec2::new(0.25, 0.75));
         let incident = scene.lights()[0].incident(p);
         if factor == 0.0 {
             assert_eq!(sample, None, "θ = {theta}");
@@ -1280,7 +1280,7 @@ fn directional_light_samples_carry_the_irradiance() {
         Vec3A::new(9.0, 0.0, -9.0),
         Vec3A::new(-9.9, 0.0, 9.9),
     ] {
-        let sample = scene.sample_light(p, Vec2::new(0.3, 0.5), Vec2::new(0.5, 0.5));
+        let sample = scene.sample_light(p, Facing::Any, Vec2::new(0.3, 0.5), Vec2::new(0.5, 0.5));
         let Some(LightSample::Directional {
             to_light,
             irradiance,
@@ -1342,31 +1342,42 @@ fn light_samples_are_unbiased_over_the_light_choice() {
         + Vec3A::new(2.5, 2.0, 1.5) * (-Vec3A::from(travel)).dot(n);
     // The mean over a fine grid of light choices: each light's share of the
     // grid is its selection probability, which its sample divides out.
-    // The points are 2D (the second number settles the alias table's coin, and
-    // a light with a small share needs it finely resolved): Roberts' R2
-    // sequence, whose error falls almost as 1/k.
-    let k = 4_000_000;
-    let mut sum = glam::DVec3::ZERO;
-    for j in 0..k {
-        let r2 = |a: f64| ((0.5 + j as f64 * a).fract()) as f32;
-        let u = Vec2::new(r2(0.754_877_666_246_692_7), r2(0.569_840_290_998_053_3));
-        let e = match scene.sample_light(p, u, Vec2::new(0.5, 0.5)) {
-            None => Vec3A::ZERO,
-            Some(LightSample::Point {
-                position,
-                intensity,
-            }) => from_point(position, intensity),
-            Some(LightSample::Directional {
-                to_light,
-                irradiance,
-                ..
-            }) => irradiance * to_light.dot(n).max(0.0),
-            Some(other) => panic!("{other:?}"),
-        };
-        sum += e.as_dvec3();
+    // The points are 3D (the second number settles the alias table's coin,
+    // and a light with a small share needs it finely resolved; the third
+    // picks among the punctual lights by what they send to `p`): Roberts' R3
+    // sequence, whose error falls almost as 1/k. With the floor's normal
+    // (the weighing by cosine) and without.
+    for facing in [Facing::Side(n), Facing::Any] {
+        let k = 4_000_000;
+        let mut sum = glam::DVec3::ZERO;
+        for j in 0..k {
+            let r3 = |a: f64| ((0.5 + j as f64 * a).fract()) as f32;
+            let u = Vec2::new(r3(0.819_172_513_396_164_4), r3(0.671_043_606_703_789_2));
+            let e =
+                match scene.sample_light(p, facing, u, Vec2::new(r3(0.549_700_477_901_970_4), 0.5))
+                {
+                    None => Vec3A::ZERO,
+                    Some(LightSample::Point {
+                        position,
+                        intensity,
+                    }) => from_point(position, intensity),
+                    Some(LightSample::Directional {
+                        to_light,
+                        irradiance,
+                        ..
+                    }) => irradiance * to_light.dot(n).max(0.0),
+                    Some(other) => panic!("{other:?}"),
+                };
+            sum += e.as_dvec3();
+        }
+        let mean = (sum / k as f64).as_vec3a();
+        assert_near(
+            mean,
+            want,
+            1e-3 * want.max_element(),
+            &format!("mean light sample, {facing:?}"),
+        );
     }
-    let mean = (sum / k as f64).as_vec3a();
-    assert_near(mean, want, 1e-3 * want.max_element(), "mean light sample");
 }
 
 // ---------------------------------------------------------------------------
@@ -1424,7 +1435,7 @@ fn emitters_light_their_front_face_or_both() {
         }
         // A light sample seen from below the square.
         let p = Vec3A::new(0.1, 0.0, 0.2);
-        let sample = scene.sample_light(p, Vec2::new(0.3, 0.5), Vec2::new(0.4, 0.7));
+        let sample = scene.sample_light(p, Facing::Any, Vec2::new(0.3, 0.5), Vec2::new(0.4, 0.7));
         let Some(LightSample::Area {
             position,
             normal,

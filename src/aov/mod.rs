@@ -501,6 +501,7 @@ impl AovSums {
             height: self.height,
             layers,
             coverage,
+            samples,
         }
     }
 }
@@ -527,6 +528,8 @@ pub struct AovImage {
     /// Per pixel, the share of its samples whose camera ray hit a surface
     /// (the others saw the environment, or nothing).
     pub coverage: Vec<f32>,
+    /// Samples per pixel averaged.
+    pub samples: u32,
 }
 
 impl AovImage {

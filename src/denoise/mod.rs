@@ -39,9 +39,12 @@
 //! OIDN's `RT` filter on the HDR radiance (float32, OIDN's automatic input
 //! scale), with the albedo and normal guides. The guides are noise-free
 //! ([`crate::aov::guides`]: no random numbers, antialiased over the same
-//! samples as the colour), so by default the filter is told so (`cleanAux`)
-//! and they are not prefiltered; [`DenoiseOptions::prefilter`] denoises them
-//! first (OIDN's recipe for noisy guides, e.g. from depth of field).
+//! samples as the colour), so the filter is told so (`cleanAux`). Below
+//! [`PREFILTER_BELOW_SPP`] samples they are denoised first all the same
+//! (OIDN's recipe for noisy guides, [`Prefilter::Auto`]): one or two samples
+//! alias a texture or an edge much as noise would, and prefiltering them
+//! lowered both errors on all three scenes of `tools/compare_cycles.py` at 1
+//! and 2 spp and changed nothing measurable from 4 on (docs/denoising.md).
 //!
 //! # Determinism
 //!
@@ -70,6 +73,21 @@ pub use oidn::{OidnError, Quality};
 /// The AOVs the denoiser needs: the guides and each pixel's variance.
 pub const GUIDES: AovSet = AovSet::of(&[Aov::Albedo, Aov::Normal, Aov::Variance]);
 
+/// Samples per pixel below which [`Prefilter::Auto`] prefilters the guides.
+pub const PREFILTER_BELOW_SPP: u32 = 4;
+
+/// Whether the guides are denoised before they guide (OIDN's prefiltering).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Prefilter {
+    /// Below [`PREFILTER_BELOW_SPP`] samples per pixel.
+    #[default]
+    Auto,
+    /// Always (for guides with real noise, e.g. from depth of field).
+    On,
+    /// Never.
+    Off,
+}
+
 /// How to denoise.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DenoiseOptions {
@@ -77,9 +95,9 @@ pub struct DenoiseOptions {
     pub threads: usize,
     /// OIDN's quality mode ([`Quality::High`] for final images).
     pub quality: Quality,
-    /// Denoise the guides first and tell OIDN they are clean; without it,
-    /// the guides are taken as clean as they are (raylab's are).
-    pub prefilter: bool,
+    /// Whether the guides are denoised first (they are then clean);
+    /// otherwise they are taken as clean as they are (raylab's are).
+    pub prefilter: Prefilter,
     /// Blend the denoised image back towards the noisy one where the noisy
     /// pixels are already as good ([`blend`]).
     pub blend: bool,
@@ -90,7 +108,7 @@ impl Default for DenoiseOptions {
         Self {
             threads: 0,
             quality: Quality::High,
-            prefilter: false,
+            prefilter: Prefilter::Auto,
             blend: true,
         }
     }
@@ -220,7 +238,12 @@ impl Denoiser {
             quality: self.options.quality,
         };
         let mut out = vec![0.0f32; color.len()];
-        let prefiltered = if self.options.prefilter {
+        let prefilter = match self.options.prefilter {
+            Prefilter::Auto => aovs.samples < PREFILTER_BELOW_SPP,
+            Prefilter::On => true,
+            Prefilter::Off => false,
+        };
+        let prefiltered = if prefilter {
             let guide = take_filter(&mut self.guide, &self.device)?;
             let mut clean = [vec![0.0f32; color.len()], vec![0.0f32; color.len()]];
             for ((name, values), clean) in [("albedo", albedo), ("normal", normal)]

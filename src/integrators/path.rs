@@ -18,7 +18,7 @@ use crate::geometry::ray::{Hit, Ray};
 use crate::materials::{Frame, Material};
 use crate::sampling::sampler::Rng;
 use crate::sampling::sobol;
-use crate::scene::{LightSample, Scene, SurfaceHit};
+use crate::scene::{Facing, LightSample, Scene, SurfaceHit};
 
 /// Bounces after which Russian roulette may end a path.
 pub const RR_DEPTH: u32 = 3;
@@ -388,7 +388,18 @@ pub fn radiance_traced(
         };
         let u_lobe = u_choice.y;
 
-        if light_sampled && let Some(light) = scene.sample_light(sp.p, u_choice, u_light_pos) {
+        // Which side of the surface light counts on, for choosing among
+        // punctual lights by what they send here.
+        let facing = if bsdf.transmits() {
+            Facing::Both(n)
+        } else if n.dot(wo_world) < 0.0 {
+            Facing::Side(-n)
+        } else {
+            Facing::Side(n)
+        };
+        if light_sampled
+            && let Some(light) = scene.sample_light(sp.p, facing, u_choice, u_light_pos)
+        {
             let (target, li, light_pdf) = light_terms(sp.p, light);
             if li != Vec3A::ZERO {
                 let wi_world = (target - sp.p).normalize();

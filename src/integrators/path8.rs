@@ -32,7 +32,7 @@ use crate::geometry::ray::{Hit, Ray};
 use crate::geometry::triangle::Lanes;
 use crate::materials::Material;
 use crate::materials::surface::HitAttributes;
-use crate::scene::{LightSample, Scene};
+use crate::scene::{Facing, LightSample, Scene};
 use crate::simd::F8;
 
 /// `(x·x' + y·y') + z·z'` lane by lane, in glam's order.
@@ -136,7 +136,7 @@ pub(crate) fn trace(
     // (`Scene::sample_light` draws nothing): the lanes then compute it
     // themselves.
     let key = (!scene.light_needs_samples()).then(|| {
-        match scene.sample_light(Vec3A::ZERO, Vec2::ZERO, Vec2::ZERO) {
+        match scene.sample_light(Vec3A::ZERO, Facing::Any, Vec2::ZERO, Vec2::ZERO) {
             Some(LightSample::Point {
                 position,
                 intensity,
@@ -336,7 +336,7 @@ impl Vertex<'_> {
                 continue;
             }
             let at = Paths::vec(&p_at, i);
-            if let Some(light) = scene.sample_light(at, u_choice, u_light) {
+            if let Some(light) = scene.sample_light(at, Facing::Any, u_choice, u_light) {
                 let (to, radiance, pdf) = light_terms(at, light);
                 if radiance != Vec3A::ZERO {
                     lights |= 1 << i;

@@ -465,6 +465,17 @@ impl Material {
         finite_or_zero(a).clamp(Vec3A::ZERO, Vec3A::ONE)
     }
 
+    /// Whether light may pass through the surface (glass, glTF transmission):
+    /// it is then lit from both sides.
+    #[inline]
+    pub fn transmits(&self) -> bool {
+        match *self {
+            Material::Dielectric { .. } => true,
+            Material::Pbr(ref p) => p.transmission > 0.0 && p.metallic < 1.0,
+            _ => false,
+        }
+    }
+
     /// What the denoiser's guides follow from `wo` (local frame, as for
     /// [`Material::sample`]): the specular lobes (mirror, glass, smooth and
     /// near-smooth metals, the glTF BSDF's specular and transmission lobes
