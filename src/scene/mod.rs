@@ -935,7 +935,7 @@ impl Scene {
             }) => {
                 let d = position - p;
                 let r2 = d.length_squared();
-                if !(r2 > 0.0) {
+                if r2.is_nan() || r2 <= 0.0 {
                     return 0.0;
                 }
                 (d * r2.sqrt().recip(), mean(intensity) / r2)
