@@ -9,6 +9,7 @@ Usage (from the project folder; the raylab binary must be built, ../shared besid
                                     [--size 320x240] [--box-size 256x256] [--json PATH]
                                     [--raylab PATH] [--venv DIR] [--shared DIR] [--cache DIR]
                                     [--previews DIR] [--fresh-refs] [--timeout S]
+                                    [--ladder 8,12,16,...] [--target-spp 16]
     python3 tools/compare_cycles.py --curve [--curve-spp 1,2,4,...,1024] [--curve-ref-spp 4096]
                                     [--csv PATH] [--plot docs/denoise-curve.png] [--scenes ...]
 
@@ -68,6 +69,11 @@ compared with each other (mean ratio, 8×8-block mean |relative difference|), an
 written to --previews (default CACHE/previews): `SCENE-refs.png` = raylab | Cycles | their
 luminance ratio (blue: raylab darker, red: brighter, ±20 % full scale), and `SCENE-SPPspp.png` =
 raylab noisy | raylab denoised | Cycles noisy | Cycles denoised of round 1.
+
+--ladder A,B,...: raylab --denoise is also rendered at these spp in every round (right after the
+scene's other runs), and a table gives, per scene, the fewest of them whose worst errors (both
+measures) are at most Cycles+OIDN's worst at --target-spp (default 16), with its best time over
+Cycles+OIDN's best time: how soon raylab's denoised image is as good as Cycles'.
 
 --curve: raylab only. For each scene, renders at --curve-spp (default 1, 2, 4, ..., 1024), noisy and
 denoised (one `--denoise` run gives both, from the same samples; without --denoise only the noisy

@@ -1,7 +1,8 @@
 //! The `path` integrator: a unidirectional path tracer in physical units.
 //!
 //! Radiance is estimated along paths from the camera. At every non-specular
-//! vertex one light is picked in proportion to its power and sampled (next-event
+//! vertex one light is picked in proportion to its power (among punctual lights,
+//! by what each sends there: [`Scene::sample_light`]) and sampled (next-event
 //! estimation); emission found by following the BSDF sample is weighted against
 //! it with the power heuristic (multiple importance sampling), so area lights get
 //! the better of both strategies. The point light can only be reached by
