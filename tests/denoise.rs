@@ -115,38 +115,12 @@ const WALL_COLOUR: Vec3A = Vec3A::new(0.8, 0.3, 0.1);
 #[test]
 fn a_mirror_gives_the_albedo_and_normal_of_the_wall_it_shows() {
     let dir = tempfile::tempdir().unwrap();
-    let mut g = Gltf::new();
     // A polished white metal in the plane z = x, facing (−1, 0, 1): the
     // camera's rays (−z) leave it along −x, towards a matte wall in the
     // plane x = −3 that faces +x and that the camera does not see.
-    let mirror = g.material(json!({ "pbrMetallicRoughness": {
-        "baseColorFactor": [1.0, 1.0, 1.0, 1.0], "metallicFactor": 1.0, "roughnessFactor": 0.0 } }));
-    let wall = matte(&mut g, WALL_COLOUR);
-    let prims = vec![
-        quad(
-            &mut g,
-            [
-                [-1.0, -1.0, -1.0],
-                [1.0, -1.0, 1.0],
-                [1.0, 1.0, 1.0],
-                [-1.0, 1.0, -1.0],
-            ],
-            mirror,
-        ),
-        quad(
-            &mut g,
-            [
-                [-3.0, -2.0, 3.0],
-                [-3.0, -2.0, -3.0],
-                [-3.0, 2.0, -3.0],
-                [-3.0, 2.0, 3.0],
-            ],
-            wall,
-        ),
-    ];
-    let mesh = g.mesh(prims);
-    g.root(json!({ "mesh": mesh }));
-    let scene = load(&mut g, dir.path(), &["KHR_materials_specular"]);
+    let polished = json!({ "pbrMetallicRoughness": {
+        "baseColorFactor": [1.0, 1.0, 1.0, 1.0], "metallicFactor": 1.0, "roughnessFactor": 0.0 } });
+    let scene = metal_and_wall(dir.path(), polished);
     let aovs = render(&scene, &front_camera(), 4, GUIDES, 1).aovs.unwrap();
     for (x, y) in [(0, 0), (4, 3), (7, 5)] {
         let what = format!("pixel ({x}, {y})");
@@ -167,35 +141,9 @@ fn a_mirror_gives_the_albedo_and_normal_of_the_wall_it_shows() {
     }
     // Through a rough metal (roughness 0.6, α = 0.36 > 0.075) the guides
     // stop at the metal itself: its own tint and normal.
-    let mut g = Gltf::new();
-    let rough = g.material(json!({ "pbrMetallicRoughness": {
-        "baseColorFactor": [0.9, 0.9, 0.9, 1.0], "metallicFactor": 1.0, "roughnessFactor": 0.6 } }));
-    let wall = matte(&mut g, WALL_COLOUR);
-    let prims = vec![
-        quad(
-            &mut g,
-            [
-                [-1.0, -1.0, -1.0],
-                [1.0, -1.0, 1.0],
-                [1.0, 1.0, 1.0],
-                [-1.0, 1.0, -1.0],
-            ],
-            rough,
-        ),
-        quad(
-            &mut g,
-            [
-                [-3.0, -2.0, 3.0],
-                [-3.0, -2.0, -3.0],
-                [-3.0, 2.0, -3.0],
-                [-3.0, 2.0, 3.0],
-            ],
-            wall,
-        ),
-    ];
-    let mesh = g.mesh(prims);
-    g.root(json!({ "mesh": mesh }));
-    let scene = load(&mut g, dir.path(), &["KHR_materials_specular"]);
+    let rough = json!({ "pbrMetallicRoughness": {
+        "baseColorFactor": [0.9, 0.9, 0.9, 1.0], "metallicFactor": 1.0, "roughnessFactor": 0.6 } });
+    let scene = metal_and_wall(dir.path(), rough);
     let aovs = render(&scene, &front_camera(), 4, GUIDES, 1).aovs.unwrap();
     // Schlick at 45°: 0.9 + 0.1 (1 − cos 45°)⁵.
     let tint = 0.9 + 0.1 * (1.0 - std::f32::consts::FRAC_1_SQRT_2).powi(5);
@@ -212,6 +160,40 @@ fn a_mirror_gives_the_albedo_and_normal_of_the_wall_it_shows() {
         1e-5,
         "rough normal",
     );
+}
+
+/// A square of the metal `metal` (a glTF material) in the plane z = x,
+/// facing (−1, 0, 1), and a matte wall of [`WALL_COLOUR`] in the plane
+/// x = −3, facing +x.
+fn metal_and_wall(dir: &Path, metal: serde_json::Value) -> Scene {
+    let mut g = Gltf::new();
+    let metal = g.material(metal);
+    let wall = matte(&mut g, WALL_COLOUR);
+    let prims = vec![
+        quad(
+            &mut g,
+            [
+                [-1.0, -1.0, -1.0],
+                [1.0, -1.0, 1.0],
+                [1.0, 1.0, 1.0],
+                [-1.0, 1.0, -1.0],
+            ],
+            metal,
+        ),
+        quad(
+            &mut g,
+            [
+                [-3.0, -2.0, 3.0],
+                [-3.0, -2.0, -3.0],
+                [-3.0, 2.0, -3.0],
+                [-3.0, 2.0, 3.0],
+            ],
+            wall,
+        ),
+    ];
+    let mesh = g.mesh(prims);
+    g.root(json!({ "mesh": mesh }));
+    load(&mut g, dir, &["KHR_materials_specular"])
 }
 
 #[test]

@@ -308,22 +308,28 @@ fn viewer_under_xvfb_responds_to_keys_and_mouse() {
     let resized = s.screenshot();
     assert_eq!(resized.dimensions(), (240, 160));
 
-    // Esc quits cleanly (on the press: a release would find no window left).
+    // Esc quits cleanly.
+    let status = quit_on_esc(&s, &mut viewer);
+    let log = std::fs::read_to_string(dir.path().join("viewer.log")).unwrap();
+    assert!(status.success(), "viewer exited with {status}: {log}");
+    assert!(log.contains("saved raylab-0001.png"), "{log}");
+}
+
+/// Presses Esc (on the press: a release would find no window left) and
+/// waits for the viewer to quit, at most 10 s.
+fn quit_on_esc(s: &Session, viewer: &mut Killed) -> std::process::ExitStatus {
     s.xdotool(&["keydown", "--window", &s.window, "Escape"]);
     let start = Instant::now();
-    let status = loop {
+    loop {
         if let Some(status) = viewer.0.try_wait().unwrap() {
-            break status;
+            return status;
         }
         assert!(
             start.elapsed() < Duration::from_secs(10),
             "viewer did not quit on Esc"
         );
         std::thread::sleep(Duration::from_millis(50));
-    };
-    let log = std::fs::read_to_string(dir.path().join("viewer.log")).unwrap();
-    assert!(status.success(), "viewer exited with {status}: {log}");
-    assert!(log.contains("saved raylab-0001.png"), "{log}");
+    }
 }
 
 /// The samples per pixel the title shows so far.
@@ -392,15 +398,7 @@ fn viewer_opens_a_gltf_scene_through_its_camera() {
         "screenshot differs from the render by {worst} codes"
     );
     assert!(mean(&shot, 0, 90, 0, 60, 0) > 40.0, "the view is dark");
-    s.xdotool(&["keydown", "--window", &s.window, "Escape"]);
-    let start = Instant::now();
-    while viewer.0.try_wait().unwrap().is_none() {
-        assert!(
-            start.elapsed() < Duration::from_secs(10),
-            "viewer did not quit on Esc"
-        );
-        std::thread::sleep(Duration::from_millis(50));
-    }
+    quit_on_esc(&s, &mut viewer);
 }
 
 /// Mean absolute difference between horizontally adjacent pixels of one
@@ -485,18 +483,7 @@ fn viewer_shows_the_denoised_frame_once_the_view_rests() {
         Duration::from_secs(30),
         || title(&s).contains("denoised at"),
     );
-    s.xdotool(&["keydown", "--window", &s.window, "Escape"]);
-    let start = Instant::now();
-    let status = loop {
-        if let Some(status) = viewer.0.try_wait().unwrap() {
-            break status;
-        }
-        assert!(
-            start.elapsed() < Duration::from_secs(10),
-            "viewer did not quit on Esc"
-        );
-        std::thread::sleep(Duration::from_millis(50));
-    };
+    let status = quit_on_esc(&s, &mut viewer);
     let log = std::fs::read_to_string(dir.path().join("viewer.log")).unwrap();
     assert!(status.success(), "viewer exited with {status}: {log}");
     assert!(log.contains("denoising with OIDN"), "{log}");

@@ -500,14 +500,7 @@ impl Material {
                 if ior.is_nan() || ior <= 0.0 {
                     return GuideLobes::NONE;
                 }
-                let (eta, cos_o) = if wo.z > 0.0 {
-                    (ior, wo.z)
-                } else {
-                    (1.0 / ior, -wo.z)
-                };
-                let cos_o = cos_o.min(1.0);
-                let sin2_t = (1.0 - cos_o * cos_o) / (eta * eta);
-                let f = fresnel_dielectric(cos_o, eta);
+                let (eta, sin2_t, f) = dielectric_interface(ior, wo);
                 let transmit = (sin2_t < 1.0)
                     .then(|| dielectric_refraction(wo, eta, sin2_t))
                     .and_then(|wi| GuideLobes::lobe(wi, Vec3A::splat(1.0 - f)));
@@ -692,15 +685,7 @@ impl Material {
         if wo.z == 0.0 || !wo.is_finite() || ior.is_nan() || ior <= 0.0 {
             return None;
         }
-        // Relative index across the interface as seen from wo's side.
-        let (eta, cos_o) = if wo.z > 0.0 {
-            (ior, wo.z)
-        } else {
-            (1.0 / ior, -wo.z)
-        };
-        let cos_o = cos_o.min(1.0);
-        let sin2_t = (1.0 - cos_o * cos_o) / (eta * eta);
-        let f = fresnel_dielectric(cos_o, eta);
+        let (eta, sin2_t, f) = dielectric_interface(ior, wo);
         if sin2_t >= 1.0 || u_lobe < f {
             return Some(BsdfSample {
                 wi: reflect_z(wo),
@@ -716,6 +701,22 @@ impl Material {
             specular: true,
         })
     }
+}
+
+/// For `wo` at a smooth dielectric interface of index `ior` (inside, on the
+/// `−z` side): the relative index across it as seen from `wo`'s side, the
+/// refracted sine squared (at least 1 under total internal reflection) and
+/// the Fresnel reflectance.
+#[inline]
+fn dielectric_interface(ior: f32, wo: Vec3A) -> (f32, f32, f32) {
+    let (eta, cos_o) = if wo.z > 0.0 {
+        (ior, wo.z)
+    } else {
+        (1.0 / ior, -wo.z)
+    };
+    let cos_o = cos_o.min(1.0);
+    let sin2_t = (1.0 - cos_o * cos_o) / (eta * eta);
+    (eta, sin2_t, fresnel_dielectric(cos_o, eta))
 }
 
 /// The direction `wo` refracts to through a smooth dielectric interface (the
