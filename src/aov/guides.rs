@@ -70,9 +70,20 @@ pub fn guides(scene: &Scene, ray: &Ray, s: &SurfaceHit, bsdf: &Material) -> Guid
 
 /// `L/(1 + L)` per channel: light as a guide value in `[0, 1)`.
 #[inline]
-pub(crate) fn squash(l: Vec3A) -> Vec3A {
+fn squash(l: Vec3A) -> Vec3A {
     let l = l.max(Vec3A::ZERO);
     l / (Vec3A::ONE + l)
+}
+
+/// The albedo guide of a ray that escapes along `dir`: the environment's
+/// radiance squashed (zero for a black one).
+#[inline]
+pub(crate) fn sky(scene: &Scene, dir: Vec3A) -> Vec3A {
+    if scene.environment().is_black() {
+        Vec3A::ZERO
+    } else {
+        squash(scene.environment_radiance(dir))
+    }
 }
 
 /// Adds to `g` what surface `s` (reached along `dir` with the chain's tint
@@ -165,10 +176,6 @@ fn follow(
             let bsdf = material.bsdf(&next.attrs, scene.textures());
             visit(scene, wi, &next, &bsdf, tint, share, depth + 1, g);
         }
-        None => {
-            if !scene.environment().is_black() {
-                g.albedo += tint * squash(scene.environment_radiance(wi));
-            }
-        }
+        None => g.albedo += tint * sky(scene, wi),
     }
 }

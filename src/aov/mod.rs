@@ -72,13 +72,15 @@ pub fn luminance(c: Vec3A) -> f32 {
 /// One output variable.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Aov {
-    /// First-hit BSDF albedo, linear RGB in `[0, 1]`.
+    /// The denoiser's albedo guide (through specular surfaces), linear RGB
+    /// in `[0, 1]`.
     Albedo,
-    /// World-space shading normal facing the camera.
+    /// The denoiser's normal guide: the world-space shading normal, facing
+    /// the ray, of the same surface.
     Normal,
-    /// Camera-space depth (along the viewing axis).
+    /// Camera-space depth of the camera ray's hit (along the viewing axis).
     Depth,
-    /// World-space hit position.
+    /// World-space position of the camera ray's hit.
     Position,
     /// Variance of the pixel's luminance estimate.
     Variance,
@@ -348,10 +350,8 @@ impl Layout {
             out[at] += crate::fixed::fixed(l * l);
         }
         let Some(hit) = hit else {
-            if let Some(at) = albedo
-                && !scene.environment().is_black()
-            {
-                let sky = guides::squash(scene.environment_radiance(ray.dir));
+            if let Some(at) = albedo {
+                let sky = guides::sky(scene, ray.dir);
                 if sky.is_finite() {
                     for (o, c) in out[at..at + 3].iter_mut().zip(sky.to_array()) {
                         *o += crate::fixed::fixed(c);

@@ -197,9 +197,11 @@ pub struct RenderArgs {
     /// Output file; `.png` (8-bit sRGB) or `.exr` (linear float32) [default: SCENE.png].
     #[arg(short, long, value_name = "FILE")]
     pub output: Option<PathBuf>,
-    /// Also write first-hit AOVs as extra EXR channels, averaged over each
-    /// pixel's samples: any of albedo, normal, depth, position, e.g.
-    /// `albedo,normal` (needs an .exr output; SCENE.exr without -o).
+    /// Also write AOVs as extra EXR channels, averaged over each pixel's
+    /// samples: any of albedo, normal (the denoiser's guides, through mirrors
+    /// and glass), depth, position (of the camera ray's hit), variance (of
+    /// the pixel's value), e.g. `albedo,normal` (needs an .exr output;
+    /// SCENE.exr without -o).
     #[arg(long, value_name = "AOV,...", value_parser = parse_aovs)]
     pub aov: Option<raylab::aov::AovSet>,
     /// Samples per pixel: sample 0 goes through the pixel centre, others are

@@ -145,11 +145,7 @@ fn merge_command(args: &args::MergeArgs) -> anyhow::Result<()> {
     )?;
     if !args.quiet {
         let denoised = match (denoised, &denoiser) {
-            (Some(t), Some(d)) => format!(
-                "; denoised in {:.1} ms by {}",
-                t.as_secs_f64() * 1e3,
-                d.describe()
-            ),
+            (Some(t), Some(d)) => render_cmd::denoised_clause(t, d),
             _ => String::new(),
         };
         eprintln!(

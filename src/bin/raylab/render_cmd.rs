@@ -502,12 +502,8 @@ impl Job<'_> {
             } else {
                 String::new()
             };
-            let denoised = match (&denoised, &self.denoiser) {
-                (Some(t), Some(d)) => format!(
-                    "; denoised in {:.1} ms by {}",
-                    t.as_secs_f64() * 1e3,
-                    d.describe()
-                ),
+            let denoised = match (denoised, self.denoiser.as_deref()) {
+                (Some(t), Some(d)) => denoised_clause(t, d),
                 _ if self.args.is_part() && self.args.scene.denoise == Some(true) => {
                     "; with the guides for `raylab merge --denoise`".to_string()
                 }
@@ -613,6 +609,15 @@ pub fn write_result(
     let metadata = metadata(took.is_some());
     write_image_meta(&image, channels, output, display, &metadata)?;
     Ok(took)
+}
+
+/// The summary line's `; denoised in 152.3 ms by OIDN ...`.
+pub fn denoised_clause(took: Duration, denoiser: &Denoiser) -> String {
+    format!(
+        "; denoised in {:.1} ms by {}",
+        took.as_secs_f64() * 1e3,
+        denoiser.describe()
+    )
 }
 
 /// The noisy image as the EXR layer `noisy` (`noisy.R`, `noisy.G`, `noisy.B`).

@@ -452,10 +452,15 @@ impl Viewer {
     /// denoising, the newest denoised frame of this view).
     fn present(&mut self) -> anyhow::Result<()> {
         let mut display = self.display();
+        // (Borrowed field by field: the window is borrowed mutably below.)
         let averaged;
         let pixels = match &self.denoise {
-            Some(_) => {
-                averaged = self.frame();
+            Some(Denoising {
+                shown: Some((film, _)),
+                ..
+            }) => &film.pixels,
+            Some(d) => {
+                averaged = d.acc.film();
                 &averaged.pixels
             }
             None => {
