@@ -26,8 +26,28 @@
 //!   guides, blended back towards the noisy image where it is good enough;
 //! * [`film`]: the image buffer, tone mapping and atomic PNG/EXR output;
 //! * [`checkpoint`]: a render's sums saved to resume it after a stop or a kill;
+//! * [`job`]: the render job, which owns the command line's policy (defaults,
+//!   a scene file's settings merged with the options, output, checkpoints,
+//!   parts, frames, denoising): `raylab render`, `raylab view` and `raylab
+//!   merge` are thin shells around it;
 //! * [`controls`]: the viewer's camera/light state and how input changes it;
 //! * [`workload`]: the ray-casting workloads of `raylab bench`.
+//!
+//! ## Rendering from Rust
+//!
+//! A [`job::Job`] does what `raylab render` does, with the same options,
+//! defaults and files (`examples/render_gltf.rs`; ARCHITECTURE.md maps the
+//! code):
+//!
+//! ```
+//! use raylab::job::{Job, JobOptions};
+//!
+//! let mut options = JobOptions::new("../shared/models/DamagedHelmet/DamagedHelmet.gltf");
+//! options.output = Some(std::env::temp_dir().join("raylab-doc-helmet.png"));
+//! options.scene.width = Some(160); // the height follows the camera's aspect ratio
+//! Job::new(options)?.run()?;
+//! # Ok::<(), anyhow::Error>(())
+//! ```
 
 #![warn(missing_docs)]
 
@@ -43,6 +63,7 @@ pub mod fixed;
 pub mod geometry;
 pub mod guard;
 pub mod integrators;
+pub mod job;
 pub mod lights;
 pub mod materials;
 pub mod memory;

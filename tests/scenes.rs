@@ -262,9 +262,24 @@ fn the_command_line_overrides_the_file() {
         dir.path(),
     );
     assert!(out.status.success());
-    assert_eq!(size("b.png"), (20, 30));
+    // One side given: the other follows the file's 40×30, not its height.
+    assert_eq!(size("b.png"), (20, 15));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("direct, 3 spp"), "{err}");
+    let out = common::raylab(
+        &["render", "s.toml", "--height", "60", "-o", "c.png"],
+        dir.path(),
+    );
+    assert!(out.status.success());
+    assert_eq!(size("c.png"), (80, 60));
+    let out = common::raylab(
+        &[
+            "render", "s.toml", "--width", "10", "--height", "50", "-o", "d.png",
+        ],
+        dir.path(),
+    );
+    assert!(out.status.success());
+    assert_eq!(size("d.png"), (10, 50));
 }
 
 /// The README's full example is a valid scene file that composes (its paths

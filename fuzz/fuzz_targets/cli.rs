@@ -1,6 +1,7 @@
 //! The command line's parsing and validation: the input, split at NUL bytes,
-//! is the argument list after `raylab`. What parses is validated as `render`
-//! and `view` would (scene options, image size) without rendering.
+//! is the argument list after `raylab`. What parses is checked as the render
+//! job checks it (`raylab::job`: scene options, a scene file's settings,
+//! image size) without rendering.
 #![no_main]
 use clap::Parser;
 use libfuzzer_sys::fuzz_target;
@@ -22,7 +23,10 @@ fuzz_target!(|data: &[u8]| {
         Ok(cli) => {
             let scene = match &cli.command {
                 Some(args::Command::Render(r)) => {
-                    if let Err(e) = r.with_scene_file() {
+                    // What `Job::new` does before any work (but loading Open
+                    // Image Denoise): the checks, then the scene file.
+                    let checked = r.scene.validate().and_then(|()| r.validate());
+                    if let Err(e) = checked.map_err(anyhow::Error::msg).and_then(|()| r.with_scene_file()) {
                         // The file name comes from the arguments, control
                         // characters and all: one line as the binary prints it.
                         raylab_fuzz::check_message(&raylab::guard::one_line(&format!("{e:#}")));
@@ -39,8 +43,8 @@ fuzz_target!(|data: &[u8]| {
             ] {
                 for aspect in [None, Some(0.0), Some(1.5), Some(f32::MAX)] {
                     if let Ok((w, h)) = scene.size(kind, aspect) {
-                        assert!((1..=args::MAX_SIDE).contains(&w) && (1..=args::MAX_SIDE).contains(&h));
-                        assert!(u64::from(w) * u64::from(h) <= args::MAX_PIXELS);
+                        assert!((1..=raylab::job::options::MAX_SIDE).contains(&w) && (1..=raylab::job::options::MAX_SIDE).contains(&h));
+                        assert!(u64::from(w) * u64::from(h) <= raylab::job::options::MAX_PIXELS);
                     }
                 }
             }

@@ -19,10 +19,9 @@ use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
 use winit::keyboard::PhysicalKey;
 use winit::window::{Window, WindowId};
 
-use crate::Session;
-use crate::args::SceneArgs;
 use crate::denoise_worker::Worker;
 use crate::keys::action_for_key;
+use raylab::job::{Hooks, SceneOptions, Session};
 
 /// Samples per pixel after which a still view stops refining and the viewer idles
 /// (`flat` and `direct`, whose images are exact but for antialiasing).
@@ -55,13 +54,29 @@ pub fn open_display() -> anyhow::Result<EventLoop<()>> {
 }
 
 /// Opens the viewer on the scene of `args`.
-pub fn run(args: &SceneArgs) -> anyhow::Result<()> {
-    let session = crate::load(args, false)?;
+/// Hooks that print the job's lines on standard error.
+pub fn hooks() -> Hooks<'static> {
+    Hooks {
+        on_event: &|event| {
+            if let raylab::job::Event::Line(line) = event {
+                eprintln!("{line}")
+            }
+        },
+        stop: None,
+    }
+}
+
+pub fn run(args: &SceneOptions) -> anyhow::Result<()> {
+    let session = raylab::job::load_session(args, false, 0, &hooks())?;
     run_on(open_display()?, session, args)
 }
 
 /// Runs the viewer on an event loop already connected to a display.
-pub fn run_on(event_loop: EventLoop<()>, session: Session, args: &SceneArgs) -> anyhow::Result<()> {
+pub fn run_on(
+    event_loop: EventLoop<()>,
+    session: Session,
+    args: &SceneOptions,
+) -> anyhow::Result<()> {
     let (w, h) = session.size;
     let proxy = event_loop.create_proxy();
     let wake: std::sync::Arc<dyn Fn() + Send + Sync> = std::sync::Arc::new(move || {
@@ -301,7 +316,7 @@ impl Viewer {
 
     /// How pixel values are shown (exposure, π for the lab's `path`, tone mapping).
     fn display(&self) -> Display {
-        crate::display(
+        raylab::job::display(
             self.kind,
             self.state.integrator,
             self.exposure,

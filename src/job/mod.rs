@@ -1,0 +1,362 @@
+//! The render job: what `raylab render` does, as a library call.
+//!
+//! A [`Job`] takes [`JobOptions`] (every option of the command line, with
+//! its defaults) and owns every rule the command line follows: a scene
+//! file's `[render]` settings fill in what the options leave out; the
+//! integrator, image size and tone mapping follow the kind of scene; one
+//! side of the image keeps the aspect ratio; PNG values are scaled for
+//! display by scene kind and exposure ([`display`]); a render resumes from
+//! its checkpoint and saves one when stopped; parts (`tile`, `samples`) are
+//! written for `raylab merge`; frames are rendered one by one; the image is
+//! denoised when asked; and the files are written atomically, exactly as
+//! `raylab render` writes them. `raylab render`, `raylab view`, `raylab
+//! merge` ([`merge`]), the fuzz targets and the tests all go through here.
+//!
+//! ```no_run
+//! use raylab::job::{Job, JobOptions};
+//!
+//! let mut options = JobOptions::new("../shared/models/DamagedHelmet/DamagedHelmet.gltf");
+//! options.output = Some("helmet.png".into());
+//! Job::new(options)?.run()?;
+//! # Ok::<(), anyhow::Error>(())
+//! ```
+//!
+//! What the command line prints (load summaries, warnings, the summary line
+//! of each image) comes out as [`Event::Line`]s, and progress as
+//! [`Event::Started`]/[`Event::Progress`], through the [`Hooks`] given to
+//! [`Job::run_with`], which also carry the flag that stops a render between
+//! passes (`raylab render` sets it on Ctrl-C).
+
+mod image;
+mod merge;
+pub mod options;
+mod session;
+mod write;
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::AtomicBool;
+use std::time::Duration;
+
+use anyhow::Context;
+
+use crate::aov::AovSet;
+use crate::denoise::{DenoiseOptions, Denoiser};
+use crate::farm;
+use crate::film::Format;
+use crate::render::Ended;
+
+pub use merge::{MergeOptions, MergeReport, merge};
+pub use options::{JobOptions, SceneOptions};
+pub use session::{Session, display, load_session};
+pub use write::{denoised_clause, write_result};
+
+/// What a job tells its caller while it runs.
+#[derive(Clone, Copy, Debug)]
+pub enum Event<'a> {
+    /// A line for the user, as `raylab render` prints it on standard error:
+    /// load summaries, notes, `warning: ...` lines and each image's summary
+    /// (with `quiet`, only warnings about the scene and `--nan-check`'s
+    /// findings). One line, without its newline.
+    Line(&'a str),
+    /// An image's render starts (its scene is loaded): progress goes from
+    /// `done` to `total`, counted in `unit`s.
+    Started {
+        /// Where the image goes.
+        output: &'a Path,
+        /// The progress when finished.
+        total: u64,
+        /// The progress already made (resumed samples, time spent before).
+        done: u64,
+        /// What progress counts.
+        unit: ProgressUnit,
+    },
+    /// Progress of the render started last, from any worker thread: the work
+    /// done so far, out of [`Event::Started`]'s `total`.
+    Progress(u64),
+    /// The render started last has taken its last sample.
+    Finished,
+    /// Files are about to be written through these temporary files: a caller
+    /// that can be killed removes them if it is.
+    Writing(&'a [PathBuf]),
+}
+
+/// What [`Event::Progress`] counts.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ProgressUnit {
+    /// Samples of image rows (rows × samples per pixel).
+    RowSamples,
+    /// Milliseconds of a time-limited render (`--time`).
+    Milliseconds,
+}
+
+/// What a job's caller hears and how it stops the job.
+#[derive(Clone, Copy)]
+pub struct Hooks<'a> {
+    /// Called with each [`Event`], from the job's thread and (for
+    /// [`Event::Progress`]) from the render's workers.
+    pub on_event: &'a (dyn Fn(Event<'_>) + Sync),
+    /// When set, the render stops after the samples in flight, keeps them in
+    /// its checkpoint and writes the image so far.
+    pub stop: Option<&'a AtomicBool>,
+}
+
+impl Default for Hooks<'_> {
+    /// Hears nothing; never stops.
+    fn default() -> Self {
+        Self {
+            on_event: &|_| {},
+            stop: None,
+        }
+    }
+}
+
+impl Hooks<'_> {
+    fn say(&self, line: &str) {
+        (self.on_event)(Event::Line(line));
+    }
+}
+
+/// How a job went: one entry per image written (frames: one each).
+#[derive(Clone, Debug, Default)]
+pub struct Report {
+    /// The images, in the order rendered.
+    pub images: Vec<ImageReport>,
+}
+
+/// One image of a [`Report`].
+#[derive(Clone, Debug)]
+pub struct ImageReport {
+    /// The file written (nothing is written when stopped before the first
+    /// sample).
+    pub output: PathBuf,
+    /// Samples per pixel in the image (resumed ones included).
+    pub spp: u32,
+    /// Samples per pixel resumed from a checkpoint.
+    pub resumed_spp: u32,
+    /// How the render ended.
+    pub ended: Ended,
+    /// Rays traced by this run.
+    pub rays: u64,
+    /// NaN or infinite samples dropped.
+    pub dropped: u64,
+    /// Time spent rendering by this run.
+    pub elapsed: Duration,
+    /// Time spent denoising, when the image was denoised.
+    pub denoise_time: Option<Duration>,
+}
+
+/// `--nan-check` found a NaN or infinite sample (already reported as an
+/// [`Event::Line`]): `raylab render` exits with code 3.
+#[derive(Debug)]
+pub struct NanFound;
+
+impl std::fmt::Display for NanFound {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("NaN/Inf samples found")
+    }
+}
+
+impl std::error::Error for NanFound {}
+
+/// A render job: options checked and merged with the scene file, ready to
+/// run.
+pub struct Job {
+    options: JobOptions,
+    denoiser: Option<Denoiser>,
+    session: Option<Session>,
+}
+
+impl Job {
+    /// A job of `options`: checks them as the command line does, merges the
+    /// scene file's `[render]` settings into what they leave out, and loads
+    /// Open Image Denoise when the image is to be denoised (an error that
+    /// says how to install it, before any time is spent). The scene is loaded
+    /// by [`Job::run`].
+    pub fn new(options: JobOptions) -> anyhow::Result<Job> {
+        let clean = |e: String| anyhow::anyhow!(e.trim_start_matches("error: ").to_string());
+        options.scene.validate().map_err(clean)?;
+        options.validate().map_err(clean)?;
+        let options = options.with_scene_file()?;
+        // A part is denoised only once merged: its render needs no library.
+        let denoiser = if options.denoise() && !options.is_part() {
+            let denoise = DenoiseOptions {
+                threads: options.threads.unwrap_or(0),
+                ..DenoiseOptions::default()
+            };
+            Some(Denoiser::new(&denoise).context("--denoise")?)
+        } else {
+            None
+        };
+        Ok(Job {
+            options,
+            denoiser,
+            session: None,
+        })
+    }
+
+    /// A job of `options` on a scene already loaded (by [`load_session`] with
+    /// the same scene options): the scene options that load (`add`, `env`,
+    /// lights, materials, ...) are those it was loaded with.
+    pub fn with_session(session: Session, options: JobOptions) -> anyhow::Result<Job> {
+        let mut job = Job::new(options)?;
+        job.session = Some(session);
+        Ok(job)
+    }
+
+    /// The options, merged with the scene file's settings.
+    pub fn options(&self) -> &JobOptions {
+        &self.options
+    }
+
+    /// The file the image goes to: `output`, else `SCENE.png` in the current
+    /// folder (`SCENE.exr` with AOVs, which only EXR holds); with frames, the
+    /// pattern.
+    pub fn output(&self) -> PathBuf {
+        self.options.output.clone().unwrap_or_else(|| {
+            let stem = Path::new(&self.options.scene.scene)
+                .file_stem()
+                .map_or_else(|| "image".into(), |s| s.to_string_lossy().into_owned());
+            let ext = if self.options.aov.is_some() {
+                "exr"
+            } else {
+                "png"
+            };
+            PathBuf::from(format!("{stem}.{ext}"))
+        })
+    }
+
+    /// Runs the job with no one listening and no way to stop it.
+    pub fn run(&mut self) -> anyhow::Result<Report> {
+        self.run_with(&Hooks::default())
+    }
+
+    /// Loads the scene (unless given), renders every image of the job
+    /// (one, or a part, or each frame) and writes it, telling `hooks`.
+    pub fn run_with(&mut self, hooks: &Hooks<'_>) -> anyhow::Result<Report> {
+        let args = &self.options;
+        let output = self.output();
+        // The AOVs gathered: those asked for, and the denoiser's.
+        let layers = args.aov.unwrap_or_default();
+        let aovs = if args.denoise() {
+            layers.with(crate::denoise::GUIDES)
+        } else {
+            layers
+        };
+        // Refuse an unsupported format or a missing folder before spending
+        // time on the render (of the first frame's file: the pattern is
+        // checked by `JobOptions::validate`).
+        let first_output = match args.frames {
+            Some((first, _)) => {
+                farm::frame_path(&output, first).context("-o has no frame number field")?
+            }
+            None => output.clone(),
+        };
+        Format::from_path(&first_output)?;
+        if let Some(dir) = first_output.parent().filter(|d| !d.as_os_str().is_empty())
+            && !dir.is_dir()
+        {
+            anyhow::bail!(
+                "cannot write {}: the folder {} does not exist",
+                first_output.display(),
+                dir.display()
+            );
+        }
+        let aov_channels = aovs.iter().map(|a| a.channels().len()).sum();
+        let session = match self.session.take() {
+            Some(s) => s,
+            None => load_session(&args.scene, args.quiet, aov_channels, hooks)?,
+        };
+        let result = self.render_all(&session, &output, aovs, layers, hooks);
+        self.session = Some(session);
+        result
+    }
+
+    fn render_all(
+        &mut self,
+        session: &Session,
+        output: &Path,
+        aovs: AovSet,
+        layers: AovSet,
+        hooks: &Hooks<'_>,
+    ) -> anyhow::Result<Report> {
+        let args = &self.options;
+        let scene = &session.scene;
+        let view = &session.view;
+        let camera = view.camera(session.size.0, session.size.1);
+        let integrator = view.integrator;
+        if !args.quiet {
+            for warning in settings_warnings(args, session) {
+                hooks.say(&warning);
+            }
+        }
+        let mut images = image::Images {
+            args,
+            session,
+            settings: image::settings(args, integrator),
+            aovs,
+            layers,
+            denoiser: self.denoiser.as_mut(),
+            hooks,
+        };
+        let mut report = Report::default();
+        let Some((first, end)) = args.frames else {
+            report
+                .images
+                .push(images.render_image(&camera, output, None)?);
+            return Ok(report);
+        };
+        // An animation: each frame a render of its own, of the scene loaded once.
+        let (low, high) = scene.bounds();
+        let centre = 0.5 * (low + high);
+        for frame in first..end {
+            let path = farm::frame_path(output, frame).context("-o has no frame number field")?;
+            let degrees = args
+                .orbit
+                .map_or(0.0, |d| (f64::from(d) * f64::from(frame)) % 360.0);
+            let camera = camera.orbited(centre, degrees as f32);
+            let image = images.render_image(&camera, &path, Some(frame))?;
+            let ended = image.ended;
+            report.images.push(image);
+            if ended == Ended::Stopped {
+                if !args.quiet && frame + 1 < end {
+                    hooks.say(&format!(
+                        "stopped at frame {frame}: frames {}..{end} not rendered",
+                        frame + 1
+                    ));
+                }
+                break;
+            }
+        }
+        Ok(report)
+    }
+}
+
+/// Warnings about options the scene makes useless.
+fn settings_warnings(args: &JobOptions, session: &Session) -> Vec<String> {
+    let (scene, integrator) = (&session.scene, session.view.integrator);
+    let mut said = Vec::new();
+    if integrator.is_physical() && !scene.has_lights() {
+        said.push(
+            "warning: the scene has no light (point light power 0, nothing emits): the path-traced image is black".to_string(),
+        );
+    }
+    let path_only = args.scene.max_depth.is_some() || !args.scene.material.is_empty();
+    if !integrator.is_physical() && path_only {
+        said.push(format!(
+            "warning: --max-depth and --material only change `path` images; {integrator} ignores them"
+        ));
+    }
+    if integrator == crate::Integrator::Direct && scene.point_power() == 0.0 {
+        said.push(
+            "warning: the point light is off: `direct` shows only the ambient term (emitting triangles light the scene under --integrator path)".to_string(),
+        );
+    }
+    said
+}
+
+impl JobOptions {
+    /// Whether the image is denoised (`denoise`, or the scene file's).
+    pub fn denoise(&self) -> bool {
+        self.scene.denoise.unwrap_or(false)
+    }
+}

@@ -1,0 +1,140 @@
+//! A loaded scene with what showing it needs: the view (camera, light,
+//! integrator), image size and tone mapping that the options and the scene's
+//! kind give, and how its values are scaled for display.
+
+use super::Hooks;
+use super::options::SceneOptions;
+use crate::film::{Display, ToneMap};
+use crate::scene::load::SceneKind;
+
+/// A loaded scene with everything the commands need to show it.
+pub struct Session {
+    /// The scene.
+    pub scene: crate::Scene,
+    /// What it was made from.
+    pub kind: SceneKind,
+    /// The starting view (camera, light, integrator).
+    pub view: crate::controls::ViewState,
+    /// Image size.
+    pub size: (u32, u32),
+    /// Tone mapping for PNG output and the screen.
+    pub tonemap: ToneMap,
+}
+
+/// How pixel values are shown (PNG, screen) for `exposure` stops. The lab's
+/// scenes and OBJ meshes: `2^E`, and `π` more for `path`, so that a diffuse
+/// surface lit by the point light alone shows the lab's `ρ·D` (radiance is
+/// `ρ·E/π`, the lab's `D` is the irradiance `E`). glTF scenes show radiance:
+/// `path` as it is, `direct`'s `ρ·(D + N)` divided by `π` (the radiance of a
+/// diffuse surface under that irradiance), `flat`'s base colour as it is.
+pub fn display(
+    kind: SceneKind,
+    integrator: crate::Integrator,
+    exposure: f32,
+    tonemap: ToneMap,
+) -> Display {
+    let factor = match (kind, integrator) {
+        (k, crate::Integrator::Direct) if k.is_physical() => 1.0 / std::f32::consts::PI,
+        (k, _) if k.is_physical() => 1.0,
+        (_, i) if i.is_physical() => std::f32::consts::PI,
+        _ => 1.0,
+    };
+    Display {
+        scale: factor * exposure.exp2(),
+        tonemap,
+    }
+}
+
+/// Loads the scene of `args` (from its `--cache` if given), says its
+/// warnings and (unless `quiet`) a summary line for files through `hooks`,
+/// and sets up the view: the camera, light and integrator of the options,
+/// the image size and tone mapping. The scene's memory estimate and that of
+/// a film with `aov_channels` AOV channels must fit `max_memory` together.
+pub fn load_session(
+    args: &SceneOptions,
+    quiet: bool,
+    aov_channels: usize,
+    hooks: &Hooks<'_>,
+) -> anyhow::Result<Session> {
+    if let Some(dir) = &args.cache {
+        crate::cache::set_dir(Some(dir.clone()))
+            .map_err(|e| anyhow::anyhow!("--cache {}: {e}", dir.display()))?;
+    }
+    let loaded = crate::scene::load(&args.scene, &args.load_options())?;
+    if let Some(dir) = &args.cache
+        && !quiet
+    {
+        let (hits, misses) = crate::cache::stats();
+        hooks.say(&format!(
+            "cache {}: {hits} of {} entries found (textures and BVHs)",
+            dir.display(),
+            hits + misses
+        ));
+    }
+    let size = args
+        .size(loaded.kind, loaded.view.aspect_ratio)
+        .map_err(|e| anyhow::anyhow!(e.trim_start_matches("error: ").to_string()))?;
+    // The film is allocated when the render starts: check it with the scene
+    // (already loaded within the budget) before then.
+    let needs = crate::memory::Needs {
+        film: crate::memory::film_bytes(size.0, size.1, aov_channels),
+        ..loaded.summary.needs
+    };
+    args.memory_budget().check(&args.scene, &needs)?;
+    for w in &loaded.warnings {
+        hooks.say(&format!("warning: {}", crate::guard::one_line(w)));
+    }
+    let kind = loaded.kind;
+    if !quiet && kind != SceneKind::Lab {
+        let s = &loaded.summary;
+        let mib = |b: usize| b as f64 / (1024.0 * 1024.0);
+        let plural = |n: usize, what: &str| format!("{n} {what}{}", if n == 1 { "" } else { "s" });
+        let lights = if loaded.default_light {
+            "no lights in the file: default key light and grey sky".to_string()
+        } else {
+            plural(s.punctual_lights, "light")
+        };
+        hooks.say(&format!(
+            "loaded {}: {}, {}, {} ({:.1} MiB), {}, {}, geometry {:.1} MiB, {:.0} ms",
+            args.scene,
+            plural(s.triangles, "triangle"),
+            plural(s.materials, "material"),
+            plural(s.textures, "texture"),
+            mib(s.texture_bytes),
+            lights,
+            plural(s.emitters, "emitting triangle"),
+            mib(s.geometry_bytes),
+            s.time.as_secs_f64() * 1e3,
+        ));
+    }
+    if !quiet && let Some([w, h]) = loaded.summary.environment_size {
+        let s = &loaded.summary;
+        hooks.say(&format!(
+            "environment {w}×{h}: {:.1} MiB with its sampling tables, {:.0} ms",
+            s.environment_bytes as f64 / (1024.0 * 1024.0),
+            s.environment_time.as_secs_f64() * 1e3
+        ));
+    }
+    let v = &loaded.view;
+    let view = crate::controls::ViewState {
+        camera_pos: args.camera_pos.unwrap_or(v.position),
+        base: v.rotation,
+        step: v.step,
+        yaw_deg: args.yaw,
+        pitch_deg: args.pitch,
+        light_pos: loaded.scene.light.position,
+        integrator: args.integrator(kind),
+        lens: v.lens,
+    };
+    let tonemap = args.tonemap.unwrap_or(match kind {
+        SceneKind::Gltf | SceneKind::Shot => ToneMap::KhronosPbrNeutral,
+        _ => ToneMap::Clamp,
+    });
+    Ok(Session {
+        scene: loaded.scene,
+        kind,
+        view,
+        size,
+        tonemap,
+    })
+}
