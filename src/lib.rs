@@ -31,7 +31,10 @@
 //!   parts, frames, denoising): `raylab render`, `raylab view` and `raylab
 //!   merge` are thin shells around it;
 //! * [`controls`]: the viewer's camera/light state and how input changes it;
-//! * [`workload`]: the ray-casting workloads of `raylab bench`.
+//! * [`interactive`]: a view that refines while it rests and denoises on a
+//!   thread of its own (`raylab view` shows it in a window);
+//! * [`workload`]: the ray-casting workloads of `raylab bench`, and [`bench`]
+//!   which times them.
 //!
 //! ## Rendering from Rust
 //!
@@ -52,6 +55,7 @@
 #![warn(missing_docs)]
 
 pub mod aov;
+pub mod bench;
 pub mod cache;
 pub mod camera;
 pub mod checkpoint;
@@ -63,6 +67,7 @@ pub mod fixed;
 pub mod geometry;
 pub mod guard;
 pub mod integrators;
+pub mod interactive;
 pub mod job;
 pub mod lights;
 pub mod materials;

@@ -2,7 +2,6 @@
 
 mod args;
 mod bench;
-mod denoise_worker;
 mod keys;
 mod render_cmd;
 mod signals;

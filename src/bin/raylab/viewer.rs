@@ -1,16 +1,13 @@
 //! `raylab view`: a window that renders on all cores and refines while still.
 
 use std::num::NonZeroU32;
-use std::path::{Path, PathBuf};
 use std::rc::Rc;
 use std::time::{Duration, Instant};
 
 use anyhow::{Context, anyhow};
-use raylab::controls::{Action, ViewState};
-use raylab::film::{Display, Film, ToneMap, write_image_with};
-use raylab::render::{Accumulator, accumulate};
-use raylab::scene::load::SceneKind;
-use raylab::{Integrator, Scene};
+use raylab::controls::Action;
+use raylab::interactive::{Applied, Preview};
+use raylab::job::{Hooks, SceneOptions, Session};
 use rayon::prelude::*;
 use winit::application::ApplicationHandler;
 use winit::dpi::PhysicalSize;
@@ -19,24 +16,10 @@ use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
 use winit::keyboard::PhysicalKey;
 use winit::window::{Window, WindowId};
 
-use crate::denoise_worker::Worker;
 use crate::keys::action_for_key;
-use raylab::job::{Hooks, SceneOptions, Session};
 
-/// Samples per pixel after which a still view stops refining and the viewer idles
-/// (`flat` and `direct`, whose images are exact but for antialiasing).
-const MAX_SAMPLES: u32 = 64;
-/// The same for `path`, whose noise keeps falling.
-const MAX_PATH_SAMPLES: u32 = 1 << 16;
 /// How often the title's timing figures are refreshed.
 const TITLE_INTERVAL: Duration = Duration::from_millis(250);
-/// How long the view rests before its first denoised frame is made: long
-/// enough that a held key or a drag does not denoise every step, short
-/// enough to feel immediate.
-const DENOISE_AFTER: Duration = Duration::from_millis(200);
-/// The first denoised frame needs two samples (the variance that weighs it
-/// needs two); later ones come when the samples have doubled.
-const DENOISE_FIRST_SPP: u32 = 2;
 
 /// Connects to the X display: the viewer's event loop, or why there is none.
 pub fn open_display() -> anyhow::Result<EventLoop<()>> {
@@ -77,33 +60,14 @@ pub fn run_on(
     session: Session,
     args: &SceneOptions,
 ) -> anyhow::Result<()> {
-    let (w, h) = session.size;
     let proxy = event_loop.create_proxy();
     let wake: std::sync::Arc<dyn Fn() + Send + Sync> = std::sync::Arc::new(move || {
         let _ = proxy.send_event(());
     });
     // --denoise: OIDN is loaded before the window opens (a missing library is
     // one line and exit 1, as for `raylab render`).
-    let worker = match args.denoise {
-        Some(true) => {
-            let wake = wake.clone();
-            Some(Worker::start(move || wake())?)
-        }
-        _ => None,
-    };
     let mut app = Viewer {
-        wake,
-        denoise: worker.map(|worker| Denoising::new(worker, w, h)),
-        path: args.integrator_for_path(),
-        exposure: args.exposure.unwrap_or(0.0),
-        kind: session.kind,
-        tonemap: session.tonemap,
-        scene: session.scene,
-        initial: session.view,
-        state: session.view,
-        size: (w, h),
-        sums: Film::new(w, h),
-        samples: 0,
+        preview: Preview::new(session, args, wake)?,
         gfx: None,
         dragging: false,
         cursor: None,
@@ -126,25 +90,8 @@ struct Graphics {
 }
 
 struct Viewer {
-    /// Wakes the event loop from the denoising thread.
-    wake: std::sync::Arc<dyn Fn() + Send + Sync>,
-    /// The denoiser, while denoised frames are shown (--denoise, key N).
-    denoise: Option<Denoising>,
-    /// The `path` integrator with the command line's options (key 3).
-    path: Integrator,
-    /// PNG exposure in stops, also applied on screen.
-    exposure: f32,
-    /// What the scene was made from (how values are shown).
-    kind: SceneKind,
-    /// Tone mapping on screen and in screenshots.
-    tonemap: ToneMap,
-    scene: Scene,
-    initial: ViewState,
-    state: ViewState,
-    size: (u32, u32),
-    /// Sums of `samples` samples per pixel.
-    sums: Film,
-    samples: u32,
+    /// The scene, its view and its samples.
+    preview: Preview,
     gfx: Option<Graphics>,
     /// Whether the left button is down (dragging looks around).
     dragging: bool,
@@ -152,82 +99,6 @@ struct Viewer {
     cursor: Option<(f64, f64)>,
     timing: Timing,
     error: Option<anyhow::Error>,
-}
-
-/// The viewer's state while it denoises: exact sums with the denoiser's
-/// guides (instead of the f32 film), and the denoised frames of this view.
-struct Denoising {
-    worker: Worker,
-    /// Samples of the current view, with the guides and variance.
-    acc: Accumulator,
-    /// Which view the sums are of (bumped by every change).
-    generation: u64,
-    /// When the view last changed.
-    since: Instant,
-    /// Samples at which the next frame is denoised.
-    next_spp: u32,
-    /// The newest denoised frame of this view and its samples.
-    shown: Option<(Film, u32)>,
-    /// How long the last denoising took.
-    took: Duration,
-}
-
-impl Denoising {
-    fn new(worker: Worker, w: u32, h: u32) -> Self {
-        Self {
-            worker,
-            acc: Accumulator::new(w, h, raylab::denoise::GUIDES),
-            generation: 0,
-            since: Instant::now(),
-            next_spp: DENOISE_FIRST_SPP,
-            shown: None,
-            took: Duration::ZERO,
-        }
-    }
-
-    /// When the next frame is due to be denoised, if it waits only for the
-    /// view to rest.
-    fn due_at(&self) -> Option<Instant> {
-        let ready = !self.worker.busy() && self.acc.spp() >= self.next_spp;
-        let at = self.since + DENOISE_AFTER;
-        (ready && Instant::now() < at).then_some(at)
-    }
-
-    /// Starts over for a changed view.
-    fn restart(&mut self, w: u32, h: u32) {
-        self.acc = Accumulator::new(w, h, raylab::denoise::GUIDES);
-        self.generation += 1;
-        self.since = Instant::now();
-        self.next_spp = DENOISE_FIRST_SPP;
-        self.shown = None;
-    }
-
-    /// Takes a finished frame (if it is of this view), and hands the worker
-    /// the next one when it is due: the view has rested a moment and the
-    /// samples have doubled since the last.
-    fn step(&mut self) {
-        while let Some(done) = self.worker.poll() {
-            if done.generation != self.generation {
-                continue; // of a view left behind
-            }
-            match done.film {
-                Ok(film) => {
-                    self.shown = Some((film, done.spp));
-                    self.took = done.took;
-                }
-                Err(e) => eprintln!("error: {}", raylab::guard::one_line(&e)),
-            }
-        }
-        let spp = self.acc.spp();
-        if !self.worker.busy() && spp >= self.next_spp && self.since.elapsed() >= DENOISE_AFTER {
-            let rendered = self.acc.rendered();
-            if let Some(aovs) = rendered.aovs {
-                self.worker
-                    .submit(self.generation, spp, rendered.film, aovs);
-                self.next_spp = spp.saturating_mul(2);
-            }
-        }
-    }
 }
 
 /// Frame time and rate for the title bar.
@@ -269,220 +140,63 @@ impl Viewer {
         event_loop.exit();
     }
 
-    fn restart(&mut self) {
-        self.samples = 0;
-        if let Some(d) = &mut self.denoise {
-            d.restart(self.size.0, self.size.1);
-        }
+    fn redraw(&self) {
         if let Some(g) = &self.gfx {
             g.window.request_redraw();
         }
     }
 
     fn set_title(&self) {
-        let denoised = match &self.denoise {
-            Some(Denoising {
-                shown: Some((_, spp)),
-                took,
-                ..
-            }) => format!(
-                " · denoised at {spp} spp in {:.0} ms",
-                took.as_secs_f64() * 1e3
-            ),
-            Some(_) => " · denoising".to_string(),
-            None => String::new(),
-        };
         if let Some(g) = &self.gfx {
-            g.window.set_title(&format!(
-                "raylab · {} · {}×{} · {:.1} ms ({:.0} fps) · {} spp{denoised}",
-                self.state.integrator,
-                self.size.0,
-                self.size.1,
-                self.timing.last_frame_ms,
-                self.timing.fps,
-                self.samples
-            ));
+            let title = self
+                .preview
+                .title(self.timing.last_frame_ms, self.timing.fps);
+            g.window.set_title(&title);
         }
-    }
-
-    /// Samples per pixel at which refinement stops for the current integrator.
-    fn max_samples(&self) -> u32 {
-        if self.state.integrator.is_physical() {
-            MAX_PATH_SAMPLES
-        } else {
-            MAX_SAMPLES
-        }
-    }
-
-    /// How pixel values are shown (exposure, π for the lab's `path`, tone mapping).
-    fn display(&self) -> Display {
-        raylab::job::display(
-            self.kind,
-            self.state.integrator,
-            self.exposure,
-            self.tonemap,
-        )
     }
 
     fn handle(&mut self, action: Action, event_loop: &ActiveEventLoop) -> anyhow::Result<()> {
-        // Key 3 selects `path` with the command line's options (--max-depth).
-        let action = match action {
-            Action::Use(Integrator::Path(_)) => Action::Use(self.path),
-            other => other,
-        };
-        match action {
-            Action::Quit => event_loop.exit(),
-            Action::ToggleDenoise => {
-                if self.denoise.take().is_none() {
-                    // A library that cannot be loaded is said, not fatal.
-                    let wake = self.wake_fn();
-                    match Worker::start(wake) {
-                        Ok(worker) => {
-                            eprintln!("denoising with {}", worker.describe());
-                            self.denoise = Some(Denoising::new(worker, self.size.0, self.size.1));
-                        }
-                        Err(e) => {
-                            eprintln!("error: {}", raylab::guard::one_line(&format!("{e:#}")))
-                        }
-                    }
-                }
-                self.restart();
-            }
-            Action::Screenshot => {
-                // After a change the sums are stale until the next frame: draw it now.
-                if self.samples == 0 {
-                    self.draw()?;
-                }
-                // A screenshot that cannot be saved is reported, not fatal.
-                match self.save_screenshot() {
-                    Ok(path) => eprintln!("saved {}", path.display()),
-                    Err(e) => eprintln!("error: screenshot not saved: {e:#}"),
-                }
-            }
-            _ => {
-                if self.state.apply(action, &self.initial) {
-                    self.restart();
-                }
+        match self.preview.apply(action)? {
+            Applied::Quit => event_loop.exit(),
+            Applied::Nothing => {}
+            Applied::Changed => self.redraw(),
+            Applied::Said(line) => {
+                eprintln!("{line}");
+                self.redraw();
             }
         }
         Ok(())
     }
 
-    /// Saves the frame on screen as the first free `raylab-NNNN.png`.
-    fn save_screenshot(&self) -> anyhow::Result<PathBuf> {
-        let path = (1..)
-            .map(|i| PathBuf::from(format!("raylab-{i:04}.png")))
-            .find(|p| !p.exists())
-            .expect("a free name");
-        write_image_with(&self.frame(), Path::new(&path), self.display())?;
-        Ok(path)
-    }
-
-    /// The frame to show: the denoised one of this view when there is one,
-    /// else the average of the samples so far.
-    fn frame(&self) -> Film {
-        match &self.denoise {
-            Some(Denoising {
-                shown: Some((film, _)),
-                ..
-            }) => film.clone(),
-            Some(d) => d.acc.film(),
-            None => {
-                let mut frame = self.sums.clone();
-                frame.average(self.samples);
-                frame
-            }
-        }
-    }
-
-    /// A function that wakes the event loop (for the denoising thread).
-    fn wake_fn(&self) -> impl Fn() + Send + 'static {
-        let wake = self.wake.clone();
-        move || wake()
-    }
-
-    /// Adds one sample per pixel and shows the average.
+    /// Adds one sample per pixel and shows the result.
     fn draw(&mut self) -> anyhow::Result<()> {
         if self.gfx.is_none() {
             return Ok(());
         }
         let start = Instant::now();
-        let (w, h) = self.size;
-        if self.samples == 0 {
-            self.sums.pixels.fill(glam::Vec3A::ZERO);
+        let (new_frame, said) = self.preview.refine();
+        for line in said {
+            eprintln!("{line}");
         }
-        // While a frame is being denoised, refinement pauses: OIDN then has
-        // every core (on two cores it took 0.74–0.97 s beside the render
-        // instead of 0.21 s alone, for the helmet at 640×480), and the
-        // samples it would add cannot reach the frame in hand anyway.
-        let paused = self.denoise.as_ref().is_some_and(|d| d.worker.busy());
-        if self.samples < self.max_samples() && !paused {
-            self.scene.light.position = self.state.light_pos;
-            let camera = self.state.camera(w, h);
-            let k = self.samples;
-            match &mut self.denoise {
-                // Exact sums with the guides, for the denoiser.
-                Some(d) => {
-                    d.acc
-                        .add(&self.scene, &camera, self.state.integrator, 0, 1, &|_| {});
-                }
-                None => {
-                    accumulate(
-                        &self.scene,
-                        &camera,
-                        self.state.integrator,
-                        0,
-                        k..k + 1,
-                        &mut self.sums,
-                        &|_| {},
-                    );
-                }
-            }
-            self.samples += 1;
-        }
-        let mut new_frame = false;
-        let mut waiting = false;
-        if let Some(d) = &mut self.denoise {
-            let before = d.shown.as_ref().map(|s| s.1);
-            d.step();
-            new_frame = d.shown.as_ref().map(|s| s.1) != before;
-            // The thread wakes the loop when its frame is done.
-            waiting = d.worker.busy();
-        }
+        // The thread wakes the loop when its frame is done.
+        let waiting = self.preview.denoising();
         self.present()?;
-        let refining = self.samples < self.max_samples();
+        let refining = self.preview.refining();
         // Refresh the title a few times a second, and at once after a change (the
         // integrator may be new) or when refinement ends.
         let due = self.timing.frame(start.elapsed().as_secs_f64() * 1e3);
-        if due || self.samples == 1 || !refining || new_frame {
+        if due || self.preview.samples() == 1 || !refining || new_frame {
             self.set_title();
         }
-        if let (true, false, Some(gfx)) = (refining, waiting, &self.gfx) {
-            gfx.window.request_redraw();
+        if refining && !waiting {
+            self.redraw();
         }
         Ok(())
     }
 
-    /// Shows the average of the samples so far, sRGB-encoded (or, while
-    /// denoising, the newest denoised frame of this view).
+    /// Shows the preview's pixels, sRGB-encoded.
     fn present(&mut self) -> anyhow::Result<()> {
-        let mut display = self.display();
-        // (Borrowed field by field: the window is borrowed mutably below.)
-        let averaged;
-        let pixels = match &self.denoise {
-            Some(Denoising {
-                shown: Some((film, _)),
-                ..
-            }) => &film.pixels,
-            Some(d) => {
-                averaged = d.acc.film();
-                &averaged.pixels
-            }
-            None => {
-                display.scale /= self.samples.max(1) as f32;
-                &self.sums.pixels
-            }
-        };
+        let (pixels, display) = self.preview.pixels();
         let Some(gfx) = self.gfx.as_mut() else {
             return Ok(());
         };
@@ -511,11 +225,8 @@ impl Viewer {
                 .resize(w, h)
                 .map_err(|e| anyhow!("cannot resize: {e}"))?;
         }
-        if self.size != (w.get(), h.get()) || self.sums.pixels.is_empty() {
-            self.size = (w.get(), h.get());
-            self.sums = Film::new(w.get(), h.get());
-        }
-        self.restart();
+        self.preview.resize(w.get(), h.get());
+        self.redraw();
         Ok(())
     }
 }
@@ -527,7 +238,10 @@ impl ApplicationHandler for Viewer {
         }
         let attrs = Window::default_attributes()
             .with_title("raylab")
-            .with_inner_size(PhysicalSize::new(self.size.0, self.size.1));
+            .with_inner_size(PhysicalSize::new(
+                self.preview.size().0,
+                self.preview.size().1,
+            ));
         let result = (|| -> anyhow::Result<Graphics> {
             let window = Rc::new(
                 event_loop
@@ -587,9 +301,10 @@ impl ApplicationHandler for Viewer {
             WindowEvent::CursorMoved { position, .. } => {
                 let now = (position.x, position.y);
                 if let (true, Some((x0, y0))) = (self.dragging, self.cursor)
-                    && self.state.drag((now.0 - x0) as f32, (now.1 - y0) as f32)
+                    && self.preview.drag((now.0 - x0) as f32, (now.1 - y0) as f32)
+                        == Applied::Changed
                 {
-                    self.restart();
+                    self.redraw();
                 }
                 self.cursor = Some(now);
                 Ok(())
@@ -604,7 +319,7 @@ impl ApplicationHandler for Viewer {
     fn about_to_wait(&mut self, event_loop: &ActiveEventLoop) {
         // A denoised frame due once the view has rested: wake up for it even
         // if refinement has ended.
-        let flow = match self.denoise.as_ref().and_then(Denoising::due_at) {
+        let flow = match self.preview.denoise_due_at() {
             Some(t) => ControlFlow::WaitUntil(t),
             None => ControlFlow::Wait,
         };

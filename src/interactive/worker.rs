@@ -1,14 +1,15 @@
-//! The viewer's denoiser: Open Image Denoise on a thread of its own, so that
-//! the window goes on refining (and answering keys) while a frame is denoised.
+//! The interactive denoiser: Open Image Denoise on a thread of its own, so
+//! that a window goes on refining (and answering keys) while a frame is
+//! denoised.
 
 use std::sync::mpsc;
 use std::thread::JoinHandle;
 use std::time::Duration;
 
+use crate::aov::AovImage;
+use crate::denoise::{DenoiseOptions, Denoiser, Prefilter, Quality};
+use crate::film::Film;
 use anyhow::Context;
-use raylab::aov::AovImage;
-use raylab::denoise::{DenoiseOptions, Denoiser, Prefilter, Quality};
-use raylab::film::Film;
 
 /// A frame to denoise: which view it belongs to and at how many samples.
 struct Request {
