@@ -282,14 +282,14 @@ fn the_command_line_overrides_the_file() {
     assert_eq!(size("d.png"), (10, 50));
 }
 
-/// The README's full example is a valid scene file that composes (its paths
-/// are relative to `scenes/`).
+/// The full example of docs/scene-files.md is a valid scene file that
+/// composes (its paths are relative to `scenes/`).
 #[test]
-fn the_readme_example_composes() {
-    let readme = std::fs::read_to_string(project("README.md")).unwrap();
+fn the_documented_example_composes() {
+    let readme = std::fs::read_to_string(project("docs/scene-files.md")).unwrap();
     let section = &readme[readme
-        .find("## Scene files")
-        .expect("a Scene files section")..];
+        .find("A full example")
+        .expect("a full example")..];
     let start = section.find("```toml\n").expect("a toml block") + 8;
     let text = &section[start..start + section[start..].find("```").unwrap()];
     let path = project("scenes/readme-example.toml");
