@@ -96,3 +96,29 @@ fn bad_options_are_refused_before_any_work() {
         .expect("a missing scene file");
     assert!(e.to_string().contains("no-such-scene.toml"), "{e}");
 }
+
+/// A job rendered in memory gives the values of the EXR the same job
+/// writes, bit for bit, AOVs included; the file's job writes nothing else.
+#[test]
+fn in_memory_equals_the_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let exr = dir.path().join("box.exr");
+    let mut options = JobOptions::new("cornell");
+    options.scene.integrator = Some(raylab::Integrator::path());
+    options.scene.width = Some(48);
+    options.spp = Some(3);
+    options.aov = Some("albedo,depth".parse().unwrap());
+    let kept = Job::new(options.clone())
+        .unwrap()
+        .render_with(&Hooks::default())
+        .unwrap();
+    options.output = Some(exr.clone());
+    Job::new(options).unwrap().run().unwrap();
+    let file = raylab::film::read_exr(&exr).unwrap();
+    assert_eq!((file.width, file.height), (48, 48));
+    assert!(common::bit_identical(&kept.finished.image, &file));
+    assert_eq!(kept.report.spp, 3);
+    let aovs = kept.finished.aovs.expect("the AOVs asked for");
+    assert_eq!(aovs.layers.len(), 2);
+    assert!(kept.finished.noisy.is_none());
+}

@@ -287,9 +287,7 @@ fn the_command_line_overrides_the_file() {
 #[test]
 fn the_documented_example_composes() {
     let readme = std::fs::read_to_string(project("docs/scene-files.md")).unwrap();
-    let section = &readme[readme
-        .find("A full example")
-        .expect("a full example")..];
+    let section = &readme[readme.find("A full example").expect("a full example")..];
     let start = section.find("```toml\n").expect("a toml block") + 8;
     let text = &section[start..start + section[start..].find("```").unwrap()];
     let path = project("scenes/readme-example.toml");

@@ -43,6 +43,9 @@ pub(super) struct Images<'a> {
     pub layers: AovSet,
     pub denoiser: Option<&'a mut Denoiser>,
     pub hooks: &'a Hooks<'a>,
+    /// `Some` to render in memory (no checkpoint, no file): the result goes
+    /// here.
+    pub kept: Option<Option<super::write::Finished>>,
 }
 
 impl Images<'_> {
@@ -81,7 +84,9 @@ impl Images<'_> {
 
         // The checkpoint: the one named, else the one a stopped render leaves
         // beside its output.
-        let explicit = args.checkpoint.is_some();
+        // In memory: no checkpoint read or written.
+        let in_memory = self.kept.is_some();
+        let explicit = args.checkpoint.is_some() && !in_memory;
         let ckpt_path = args
             .checkpoint
             .clone()
@@ -106,7 +111,7 @@ impl Images<'_> {
         // The spp of the checkpoint on disk that is this render's (resumed from or
         // saved by this run), if any.
         let mut on_disk: Option<u32> = None;
-        if ckpt_path.exists() {
+        if !in_memory && ckpt_path.exists() {
             match resume(&ckpt_path, key(), settings, budget.is_none()) {
                 Ok((a, s)) => {
                     let a = a.into_part(split, first_sample);
@@ -262,7 +267,7 @@ impl Images<'_> {
         // A stopped render keeps its samples (unless the checkpoint on disk
         // already holds them all).
         let mut saved_now = false;
-        if stopped && on_disk != Some(acc.spp()) {
+        if stopped && !in_memory && on_disk != Some(acc.spp()) {
             match checkpoint::write(&ckpt_path, &key(), &acc, spent) {
                 Ok(()) => {
                     on_disk = Some(acc.spp());
@@ -281,6 +286,21 @@ impl Images<'_> {
             args.scene.exposure.unwrap_or(0.0),
             session.tonemap,
         );
+        if let Some(kept) = self.kept.as_mut() {
+            let finished = super::write::finish(&acc, self.layers, self.denoiser.as_deref_mut())?;
+            let report = ImageReport {
+                output: output.clone(),
+                spp: acc.spp(),
+                resumed_spp,
+                ended,
+                rays: acc.tally().rays - tally_before.rays,
+                dropped: acc.tally().dropped,
+                elapsed,
+                denoise_time: finished.denoise_time,
+            };
+            *kept = Some(finished);
+            return Ok(report);
+        }
         let existed = output.exists();
         let written = if args.is_part() {
             let part = farm::Part {

@@ -48,7 +48,7 @@ use crate::render::Ended;
 pub use merge::{MergeOptions, MergeReport, merge};
 pub use options::{JobOptions, SceneOptions};
 pub use session::{Session, display, load_session};
-pub use write::{denoised_clause, write_result};
+pub use write::{Finished, denoised_clause, finish, write_result};
 
 /// What a job tells its caller while it runs.
 #[derive(Clone, Copy, Debug)]
@@ -143,6 +143,15 @@ pub struct ImageReport {
     pub elapsed: Duration,
     /// Time spent denoising, when the image was denoised.
     pub denoise_time: Option<Duration>,
+}
+
+/// An image rendered in memory ([`Job::render_with`]).
+#[derive(Clone, Debug)]
+pub struct Rendered {
+    /// The image, its noisy twin when denoised, and its AOVs.
+    pub finished: Finished,
+    /// How it went.
+    pub report: ImageReport,
 }
 
 /// `--nan-check` found a NaN or infinite sample (already reported as an
@@ -261,14 +270,80 @@ impl Job {
                 dir.display()
             );
         }
-        let aov_channels = aovs.iter().map(|a| a.channels().len()).sum();
-        let session = match self.session.take() {
-            Some(s) => s,
-            None => load_session(&args.scene, args.quiet, aov_channels, hooks)?,
-        };
+        let session = self.take_session(aovs, hooks)?;
         let result = self.render_all(&session, &output, aovs, layers, hooks);
         self.session = Some(session);
         result
+    }
+
+    /// Renders the image in memory, as [`Job::run_with`] would write it (the
+    /// same values, bit for bit, as the EXR it writes), without reading or
+    /// writing any file but the scene's. Not for frames or parts, which are
+    /// files by nature.
+    pub fn render_with(&mut self, hooks: &Hooks<'_>) -> anyhow::Result<Rendered> {
+        let args = &self.options;
+        if args.frames.is_some() || args.is_part() {
+            anyhow::bail!(
+                "frames and parts (--frames, --tile, --samples) are rendered to files: run the job instead"
+            );
+        }
+        let layers = args.aov.unwrap_or_default();
+        let aovs = if args.denoise() {
+            layers.with(crate::denoise::GUIDES)
+        } else {
+            layers
+        };
+        let output = self.output();
+        let session = self.take_session(aovs, hooks)?;
+        let result = self.render_kept(&session, &output, aovs, layers, hooks);
+        self.session = Some(session);
+        result
+    }
+
+    fn render_kept(
+        &mut self,
+        session: &Session,
+        output: &Path,
+        aovs: AovSet,
+        layers: AovSet,
+        hooks: &Hooks<'_>,
+    ) -> anyhow::Result<Rendered> {
+        let args = &self.options;
+        let camera = session.view.camera(session.size.0, session.size.1);
+        if !args.quiet {
+            for warning in settings_warnings(args, session) {
+                hooks.say(&warning);
+            }
+        }
+        let mut images = image::Images {
+            args,
+            session,
+            settings: image::settings(args, session.view.integrator),
+            aovs,
+            layers,
+            denoiser: self.denoiser.as_mut(),
+            hooks,
+            kept: Some(None),
+        };
+        let report = images.render_image(&camera, output, None)?;
+        let Some(Some(finished)) = images.kept else {
+            anyhow::bail!("stopped before the first sample: no image");
+        };
+        Ok(Rendered { finished, report })
+    }
+
+    /// The loaded scene (loaded now if not given), for a film with `aovs`.
+    fn take_session(&mut self, aovs: AovSet, hooks: &Hooks<'_>) -> anyhow::Result<Session> {
+        let aov_channels = aovs.iter().map(|a| a.channels().len()).sum();
+        match self.session.take() {
+            Some(s) => Ok(s),
+            None => load_session(&self.options.scene, self.options.quiet, aov_channels, hooks),
+        }
+    }
+
+    /// The scene, once loaded (by [`Job::run_with`] or given).
+    pub fn session(&self) -> Option<&Session> {
+        self.session.as_ref()
     }
 
     fn render_all(
@@ -297,6 +372,7 @@ impl Job {
             layers,
             denoiser: self.denoiser.as_mut(),
             hooks,
+            kept: None,
         };
         let mut report = Report::default();
         let Some((first, end)) = args.frames else {
