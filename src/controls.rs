@@ -115,10 +115,16 @@ impl ViewState {
 
     /// Mouse-look: dragging right turns right, dragging up looks up.
     pub fn drag(&mut self, dx_px: f32, dy_px: f32) -> bool {
+        self.turn(DRAG_DEG_PER_PIXEL * dx_px, -DRAG_DEG_PER_PIXEL * dy_px)
+    }
+
+    /// Turns the camera by `yaw_deg` (positive: right) and `pitch_deg`
+    /// (positive: up), as a mouse drag does: yaw wraps into `(-180, 180]`,
+    /// pitch stays within ±[`MAX_PITCH_DEG`]. Returns whether anything changed.
+    pub fn turn(&mut self, yaw_deg: f32, pitch_deg: f32) -> bool {
         let before = *self;
-        self.yaw_deg = wrap_degrees(self.yaw_deg + DRAG_DEG_PER_PIXEL * dx_px);
-        self.pitch_deg =
-            (self.pitch_deg - DRAG_DEG_PER_PIXEL * dy_px).clamp(-MAX_PITCH_DEG, MAX_PITCH_DEG);
+        self.yaw_deg = wrap_degrees(self.yaw_deg + yaw_deg);
+        self.pitch_deg = (self.pitch_deg + pitch_deg).clamp(-MAX_PITCH_DEG, MAX_PITCH_DEG);
         *self != before
     }
 }
@@ -250,5 +256,9 @@ mod tests {
         assert_eq!(s.pitch_deg, MAX_PITCH_DEG);
         s.drag(-1000.0, 0.0);
         assert!(s.yaw_deg > -180.0 && s.yaw_deg <= 180.0);
+        let mut t = init;
+        assert!(t.turn(190.0, -100.0));
+        assert_eq!((t.yaw_deg, t.pitch_deg), (-170.0, -MAX_PITCH_DEG));
+        assert!(!t.turn(0.0, 0.0));
     }
 }

@@ -122,3 +122,43 @@ fn in_memory_equals_the_file() {
     assert_eq!(aovs.layers.len(), 2);
     assert!(kept.finished.noisy.is_none());
 }
+
+/// One loaded scene serves renders of other sizes, cameras and integrators,
+/// each the image a job that loads the scene itself renders, bit for bit;
+/// options that load another scene (here the light's power) load it.
+#[test]
+fn a_session_serves_many_views() {
+    let quiet = Hooks::default();
+    let base = JobOptions::new("cornell");
+    let session = raylab::job::load_session(&base.scene, true, 0, &quiet).unwrap();
+    let mut views = Vec::new();
+    for (width, yaw, integrator) in [(24, 0.0, "direct"), (32, 12.5, "path")] {
+        let mut options = base.clone();
+        options.scene.width = Some(width);
+        options.scene.yaw = yaw;
+        options.scene.integrator = Some(integrator.parse().unwrap());
+        options.spp = Some(2);
+        views.push(options);
+    }
+    let mut brighter = views[1].clone();
+    brighter.scene.light_power = Some(30.0);
+    views.push(brighter);
+    for options in views {
+        assert_eq!(
+            session.loads(&options.scene),
+            options.scene.light_power.is_none()
+        );
+        let shared = Job::with_session(session.clone(), options.clone())
+            .unwrap()
+            .render_with(&quiet)
+            .unwrap();
+        let own = Job::new(options).unwrap().render_with(&quiet).unwrap();
+        assert!(common::bit_identical(
+            &shared.finished.image,
+            &own.finished.image
+        ));
+    }
+    // The session itself is unchanged: its first view, 500×500 direct.
+    assert_eq!(session.size, (500, 500));
+    assert_eq!(session.view.yaw_deg, 0.0);
+}

@@ -100,7 +100,8 @@ impl Preview {
             exposure: options.exposure.unwrap_or(0.0),
             kind: session.kind,
             tonemap: session.tonemap,
-            scene: session.scene,
+            // The viewer moves the scene's light: its own copy (none when unshared).
+            scene: std::sync::Arc::unwrap_or_clone(session.scene),
             initial: session.view,
             state: session.view,
             size: (w, h),

@@ -299,6 +299,10 @@ impl Images<'_> {
                 denoise_time: finished.denoise_time,
             };
             *kept = Some(finished);
+            // In memory the finding is said, and the image kept all the same.
+            if args.nan_check {
+                nan_check(args, scene, &camera, integrator, &acc, hooks)?;
+            }
             return Ok(report);
         }
         let existed = output.exists();
@@ -439,35 +443,49 @@ impl Images<'_> {
             elapsed,
             denoise_time: denoised,
         };
-        if args.nan_check {
-            let dropped = acc.tally().dropped;
-            if dropped == 0 {
-                hooks.say(&format!(
-                    "nan-check: no NaN/Inf samples in {} spp",
-                    acc.spp()
-                ));
-                return Ok(report);
-            }
-            let samples = acc.first_sample()..acc.first_sample() + acc.spp();
-            let scan = || first_bad_sample(scene, &camera, integrator, seed, samples.clone());
-            let bad = match args.threads {
-                Some(n) => rayon::ThreadPoolBuilder::new()
-                    .num_threads(n)
-                    .build()
-                    .context("cannot start worker threads")?
-                    .install(scan),
-                None => scan(),
-            };
-            match bad {
-                Some(b) => hooks.say(&format!("nan-check: {dropped} NaN/Inf samples; {b}")),
-                None => hooks.say(&format!(
-                    "nan-check: {dropped} NaN/Inf samples, but none when evaluated one by one (the render traces rays in packets, which may break exact ties differently)"
-                )),
-            }
+        if args.nan_check && nan_check(args, scene, &camera, integrator, &acc, hooks)? {
             return Err(NanFound.into());
         }
         Ok(report)
     }
+}
+
+/// `--nan-check`: says whether the render of `acc` dropped NaN or infinite
+/// samples and, if it did, where the first went bad; returns whether it did.
+fn nan_check(
+    args: &JobOptions,
+    scene: &crate::Scene,
+    camera: &crate::camera::Camera,
+    integrator: crate::Integrator,
+    acc: &Accumulator,
+    hooks: &Hooks<'_>,
+) -> anyhow::Result<bool> {
+    let dropped = acc.tally().dropped;
+    if dropped == 0 {
+        hooks.say(&format!(
+            "nan-check: no NaN/Inf samples in {} spp",
+            acc.spp()
+        ));
+        return Ok(false);
+    }
+    let seed = args.seed.unwrap_or(0);
+    let samples = acc.first_sample()..acc.first_sample() + acc.spp();
+    let scan = || first_bad_sample(scene, camera, integrator, seed, samples.clone());
+    let bad = match args.threads {
+        Some(n) => rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build()
+            .context("cannot start worker threads")?
+            .install(scan),
+        None => scan(),
+    };
+    match bad {
+        Some(b) => hooks.say(&format!("nan-check: {dropped} NaN/Inf samples; {b}")),
+        None => hooks.say(&format!(
+            "nan-check: {dropped} NaN/Inf samples, but none when evaluated one by one (the render traces rays in packets, which may break exact ties differently)"
+        )),
+    }
+    Ok(true)
 }
 
 /// `.NAME.raylab-checkpoint` beside `output`.

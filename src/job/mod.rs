@@ -203,9 +203,12 @@ impl Job {
         })
     }
 
-    /// A job of `options` on a scene already loaded (by [`load_session`] with
-    /// the same scene options): the scene options that load (`add`, `env`,
-    /// lights, materials, ...) are those it was loaded with.
+    /// A job of `options` on a scene already loaded (by [`load_session`]):
+    /// when `options` load the same scene ([`Session::loads`]: the same
+    /// scene, `add`, `env`, lights, materials, ...) it is rendered as
+    /// `options` show it (size, camera, integrator, tone mapping) without
+    /// loading it again; otherwise the scene of `options` is loaded. A
+    /// session's clone is cheap: one load serves many jobs.
     pub fn with_session(session: Session, options: JobOptions) -> anyhow::Result<Job> {
         let mut job = Job::new(options)?;
         job.session = Some(session);
@@ -278,8 +281,9 @@ impl Job {
 
     /// Renders the image in memory, as [`Job::run_with`] would write it (the
     /// same values, bit for bit, as the EXR it writes), without reading or
-    /// writing any file but the scene's. Not for frames or parts, which are
-    /// files by nature.
+    /// writing any file but the scene's (no checkpoint either; `nan_check`'s
+    /// finding is said, and the image kept). Not for frames or parts, which
+    /// are files by nature.
     pub fn render_with(&mut self, hooks: &Hooks<'_>) -> anyhow::Result<Rendered> {
         let args = &self.options;
         if args.frames.is_some() || args.is_part() {
@@ -336,8 +340,8 @@ impl Job {
     fn take_session(&mut self, aovs: AovSet, hooks: &Hooks<'_>) -> anyhow::Result<Session> {
         let aov_channels = aovs.iter().map(|a| a.channels().len()).sum();
         match self.session.take() {
-            Some(s) => Ok(s),
-            None => load_session(&self.options.scene, self.options.quiet, aov_channels, hooks),
+            Some(s) if s.loads(&self.options.scene) => s.shown(&self.options.scene, aov_channels),
+            _ => load_session(&self.options.scene, self.options.quiet, aov_channels, hooks),
         }
     }
 

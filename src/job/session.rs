@@ -2,15 +2,20 @@
 //! integrator), image size and tone mapping that the options and the scene's
 //! kind give, and how its values are scaled for display.
 
+use std::sync::Arc;
+
 use super::Hooks;
 use super::options::SceneOptions;
 use crate::film::{Display, ToneMap};
-use crate::scene::load::SceneKind;
+use crate::scene::load::{InitialView, SceneKind};
 
-/// A loaded scene with everything the commands need to show it.
+/// A loaded scene with everything the commands need to show it. A clone is
+/// cheap (the scene is shared): one load serves many renders
+/// ([`Session::shown`], [`super::Job::with_session`]).
+#[derive(Clone)]
 pub struct Session {
     /// The scene.
-    pub scene: crate::Scene,
+    pub scene: Arc<crate::Scene>,
     /// What it was made from.
     pub kind: SceneKind,
     /// The starting view (camera, light, integrator).
@@ -19,6 +24,44 @@ pub struct Session {
     pub size: (u32, u32),
     /// Tone mapping for PNG output and the screen.
     pub tonemap: ToneMap,
+    /// The scene's own view, before the options' camera and size.
+    pub initial: InitialView,
+    /// The options it was loaded with.
+    pub loaded_with: SceneOptions,
+    /// The memory the scene needs (without a film).
+    pub needs: crate::memory::Needs,
+}
+
+impl Session {
+    /// Whether `args` load this scene: the same scene, load options (`add`,
+    /// `env`, lights, materials, `camera`, `max_memory`, ...) and cache.
+    pub fn loads(&self, args: &SceneOptions) -> bool {
+        let was = &self.loaded_with;
+        was.scene == args.scene
+            && was.cache == args.cache
+            && was.load_options() == args.load_options()
+    }
+
+    /// The same scene shown as `args` show it (image size, camera, integrator,
+    /// tone mapping), without loading it again, for a film with
+    /// `aov_channels` AOV channels (checked against the memory budget). The
+    /// options that load ([`Session::loads`]) are those it was loaded with.
+    pub fn shown(&self, args: &SceneOptions, aov_channels: usize) -> anyhow::Result<Session> {
+        let (view, size, tonemap) = frame(
+            args,
+            self.kind,
+            &self.initial,
+            self.scene.light.position,
+            self.needs,
+            aov_channels,
+        )?;
+        Ok(Session {
+            view,
+            size,
+            tonemap,
+            ..self.clone()
+        })
+    }
 }
 
 /// How pixel values are shown (PNG, screen) for `exposure` stops. The lab's
@@ -71,16 +114,14 @@ pub fn load_session(
             hits + misses
         ));
     }
-    let size = args
-        .size(loaded.kind, loaded.view.aspect_ratio)
-        .map_err(|e| anyhow::anyhow!(e.trim_start_matches("error: ").to_string()))?;
-    // The film is allocated when the render starts: check it with the scene
-    // (already loaded within the budget) before then.
-    let needs = crate::memory::Needs {
-        film: crate::memory::film_bytes(size.0, size.1, aov_channels),
-        ..loaded.summary.needs
-    };
-    args.memory_budget().check(&args.scene, &needs)?;
+    let (view, size, tonemap) = frame(
+        args,
+        loaded.kind,
+        &loaded.view,
+        loaded.scene.light.position,
+        loaded.summary.needs,
+        aov_channels,
+    )?;
     for w in &loaded.warnings {
         hooks.say(&format!("warning: {}", crate::guard::one_line(w)));
     }
@@ -115,26 +156,52 @@ pub fn load_session(
             s.environment_time.as_secs_f64() * 1e3
         ));
     }
-    let v = &loaded.view;
+    Ok(Session {
+        scene: Arc::new(loaded.scene),
+        kind,
+        view,
+        size,
+        tonemap,
+        initial: loaded.view,
+        loaded_with: args.clone(),
+        needs: loaded.summary.needs,
+    })
+}
+
+/// The view, image size and tone mapping of `args` for a scene of `kind`
+/// loaded with the view `initial` and its light at `light_pos`, checked
+/// (with a film of `aov_channels` AOV channels) against the memory budget.
+fn frame(
+    args: &SceneOptions,
+    kind: SceneKind,
+    initial: &InitialView,
+    light_pos: glam::Vec3A,
+    needs: crate::memory::Needs,
+    aov_channels: usize,
+) -> anyhow::Result<(crate::controls::ViewState, (u32, u32), ToneMap)> {
+    let size = args
+        .size(kind, initial.aspect_ratio)
+        .map_err(|e| anyhow::anyhow!(e.trim_start_matches("error: ").to_string()))?;
+    // The film is allocated when the render starts: check it with the scene
+    // (already loaded within the budget) before then.
+    let needs = crate::memory::Needs {
+        film: crate::memory::film_bytes(size.0, size.1, aov_channels),
+        ..needs
+    };
+    args.memory_budget().check(&args.scene, &needs)?;
     let view = crate::controls::ViewState {
-        camera_pos: args.camera_pos.unwrap_or(v.position),
-        base: v.rotation,
-        step: v.step,
+        camera_pos: args.camera_pos.unwrap_or(initial.position),
+        base: initial.rotation,
+        step: initial.step,
         yaw_deg: args.yaw,
         pitch_deg: args.pitch,
-        light_pos: loaded.scene.light.position,
+        light_pos,
         integrator: args.integrator(kind),
-        lens: v.lens,
+        lens: initial.lens,
     };
     let tonemap = args.tonemap.unwrap_or(match kind {
         SceneKind::Gltf | SceneKind::Shot => ToneMap::KhronosPbrNeutral,
         _ => ToneMap::Clamp,
     });
-    Ok(Session {
-        scene: loaded.scene,
-        kind,
-        view,
-        size,
-        tonemap,
-    })
+    Ok((view, size, tonemap))
 }

@@ -45,7 +45,7 @@ impl SceneKind {
 }
 
 /// Options of [`load`].
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct LoadOptions {
     /// OBJ meshes to place in the built-in box.
     pub add: Vec<PathBuf>,
