@@ -280,7 +280,9 @@ def load(scene, /, **options):
     the environment, ``camera=N`` of a glTF file, ``max_memory``, ``cache``)
     load the scene again when a render changes them; the others cost
     nothing. Raises :class:`LoadError` with the command line's message
-    (naming the file) if the scene cannot be loaded.
+    (naming the file) if the scene cannot be loaded. The GIL is released
+    while it loads; a load cannot be stopped halfway, so Ctrl-C raises its
+    ``KeyboardInterrupt`` once the load is done.
 
     The scene has ``.camera`` (a :class:`Camera` to move), ``.size``,
     ``.kind``, ``.bounds``, ``.name`` and ``.options``.
