@@ -14,7 +14,7 @@
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
-use std::sync::{Arc, Condvar, Mutex, OnceLock};
+use std::sync::{Arc, Condvar, Mutex, OnceLock, mpsc};
 use std::time::{Duration, Instant};
 
 use clap::{ArgAction, FromArgMatches};
@@ -371,20 +371,52 @@ fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
     }
 }
 
-/// Runs `work` on a thread of raylab's worker pool, with hooks that collect
-/// its lines and progress and carry a stop flag, while this thread waits
-/// without the GIL, waking every 50 ms to print the lines on `sys.stderr`,
-/// call `progress` with `(done, total)` when it moved, and check for
-/// signals. A signal's exception (Ctrl-C's `KeyboardInterrupt`) stops the
-/// work, which is waited for; it is returned beside the work's result. A
-/// panic in `work` is a [`RenderError`].
-///
-/// The pool's threads live on between calls: a thread started for each
-/// call, or a pool of its own, costs milliseconds on a busy two-core
-/// machine (the small renders of `test_a_python_call_adds_under_5_ms`
-/// took 4 ms instead of 1 ms). The work's own parallel loops run on the
-/// same pool, which also shares it fairly between the renders of several
-/// Python threads.
+/// Work for a driver thread.
+type Task = Box<dyn FnOnce() + Send>;
+
+/// Idle driver threads, each waiting for a task on its channel.
+static IDLE: Mutex<Vec<mpsc::Sender<Task>>> = Mutex::new(Vec::new());
+
+/// Runs `task` on an idle driver thread, or on a new one if none is idle.
+/// Drivers live on between calls and a render's parallel loops run on
+/// rayon's global pool, so that a call starts no thread: threads started
+/// for each call (a driver and a pool of its own) cost 1-3 ms on a busy
+/// two-core machine, and the small renders of
+/// `test_a_python_call_adds_under_5_ms` took 4 ms instead of 0.7 ms. Nor is
+/// the driver one of the pool's workers: a worker waiting for its render's
+/// loops would run another call's driver on top of its own, and two
+/// renders in two Python threads would end one after the other.
+fn drive(task: Task) -> PyResult<()> {
+    let idle = IDLE.lock().unwrap().pop();
+    let task = match idle {
+        Some(driver) => match driver.send(task) {
+            Ok(()) => return Ok(()),
+            Err(mpsc::SendError(task)) => task,
+        },
+        None => task,
+    };
+    let (to_driver, tasks) = mpsc::channel::<Task>();
+    std::thread::Builder::new()
+        .name("raylab".into())
+        .spawn(move || {
+            let mut next = Some(task);
+            while let Some(task) = next {
+                task();
+                IDLE.lock().unwrap().push(to_driver.clone());
+                next = tasks.recv().ok();
+            }
+        })
+        .map(|_| ())
+        .map_err(|e| RenderError::new_err(format!("cannot start a thread: {e}")))
+}
+
+/// Runs `work` on a driver thread ([`drive`]), with hooks that collect its
+/// lines and progress and carry a stop flag, while this thread waits without
+/// the GIL, waking every 50 ms to print the lines on `sys.stderr`, call
+/// `progress` with `(done, total)` when it moved, and check for signals. A
+/// signal's exception (Ctrl-C's `KeyboardInterrupt`) stops the work, which is
+/// waited for; it is returned beside the work's result. A panic in `work` is
+/// a [`RenderError`].
 fn run_blocking<T: Send + 'static>(
     py: Python<'_>,
     progress: Option<&Bound<'_, PyAny>>,
@@ -399,7 +431,7 @@ fn run_blocking<T: Send + 'static>(
     });
     let stderr = py.import("sys")?.getattr("stderr")?;
     let worker = mailbox.clone();
-    rayon::spawn(move || {
+    drive(Box::new(move || {
         let mailbox = &worker;
         let on_event = |e: Event<'_>| match e {
             Event::Line(l) => mailbox.say(l),
@@ -418,7 +450,7 @@ fn run_blocking<T: Send + 'static>(
         };
         let result = catch_unwind(AssertUnwindSafe(|| work(&hooks)));
         mailbox.finish(result);
-    });
+    }))?;
     let mut raised: Option<PyErr> = None;
     let mut shown = (u64::MAX, u64::MAX);
     let result = loop {
