@@ -26,6 +26,8 @@
 //!   guides, blended back towards the noisy image where it is good enough;
 //! * [`film`]: the image buffer, tone mapping and atomic PNG/EXR output;
 //! * [`checkpoint`]: a render's sums saved to resume it after a stop or a kill;
+//! * [`fingerprint`]: the stable hash of checkpoints, the cache's entries and
+//!   scenes;
 //! * [`controls`]: the viewer's camera/light state and how input changes it;
 //! * [`workload`]: the ray-casting workloads of `raylab bench`.
 
@@ -39,6 +41,7 @@ pub mod controls;
 pub mod denoise;
 pub mod farm;
 pub mod film;
+pub mod fingerprint;
 pub mod fixed;
 pub mod geometry;
 pub mod guard;

@@ -111,7 +111,7 @@ pub fn bvh(data: &[u8]) {
 /// A render checkpoint (`--checkpoint FILE`), its checksum appended so that
 /// inputs get past it to the header and the sums: read as a resume reads it.
 pub fn checkpoint(data: &[u8]) {
-    let mut f = raylab::checkpoint::Fingerprint::new();
+    let mut f = raylab::fingerprint::Fingerprint::new();
     f.update(data);
     let mut bytes = data.to_vec();
     bytes.extend_from_slice(&f.value().to_le_bytes());

@@ -241,7 +241,7 @@ impl Scene {
     /// texels).
     pub fn fingerprint(&self) -> u64 {
         use std::fmt::Write;
-        let mut f = crate::checkpoint::Fingerprint::new();
+        let mut f = crate::fingerprint::Fingerprint::new();
         let v3 = |v: &Vec3A| v.to_array();
         f.floats(self.triangles.iter().flat_map(|t| t.v.iter().flat_map(v3)));
         f.floats(self.normals.iter().flat_map(v3));

@@ -9,10 +9,11 @@ use std::time::{Duration, Instant};
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use raylab::aov::{AovImage, AovSet};
-use raylab::checkpoint::{self, Fingerprint, Key};
+use raylab::checkpoint::{self, Key};
 use raylab::denoise::{DenoiseOptions, Denoiser};
 use raylab::farm;
 use raylab::film::{Channel, Display, Format, MetaValue, write_image_meta};
+use raylab::fingerprint::Fingerprint;
 use raylab::nan_check::first_bad_sample;
 use raylab::render::{Accumulator, Ended, Passes, RenderSettings, Split, render_passes};
 
