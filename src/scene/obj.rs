@@ -22,6 +22,7 @@ use thiserror::Error;
 use super::mtl::{MapRef, MtlMaterial, parse_mtl, phong_roughness};
 use super::{Instance, MeshData, SceneParts, Tangents};
 use crate::geometry::triangle::Triangle;
+use crate::guard::quote;
 use crate::materials::surface::{AlphaMode, GltfMaterial, MaterialKind, SurfaceMaterial};
 use crate::textures::{ColorSpace, Image, TextureRef, TextureStore, TextureTransform, Wrap};
 
@@ -120,19 +121,6 @@ pub struct ObjFile {
     pub skipped: BTreeMap<String, usize>,
     /// `vn` lines with a NaN or infinite coordinate (kept as zero normals).
     pub bad_normals: usize,
-}
-
-/// Longest word quoted in a message, in characters: a malformed file may
-/// hold a 100 MB token, and the message must stay one readable line.
-pub const QUOTE_CHARS: usize = 40;
-
-/// `word` for an error message: cut to [`QUOTE_CHARS`] characters (with `…`
-/// and the full length) when longer.
-pub fn quote(word: &str) -> String {
-    match word.char_indices().nth(QUOTE_CHARS) {
-        None => word.to_string(),
-        Some((cut, _)) => format!("{}… ({} bytes)", &word[..cut], word.len()),
-    }
 }
 
 /// Reads `n` numbers (at least `min`) after a keyword; finite ones only unless
