@@ -15,7 +15,7 @@
 use std::f32::consts::PI;
 
 use crate::camera::Camera;
-use crate::geometry::bvh::{Closest8, Rays8};
+use crate::geometry::packet::{Closest8, Rays8};
 use crate::geometry::ray::SHADOW_EPSILON;
 use crate::geometry::triangle::Lanes;
 use crate::scene::Scene;

@@ -27,7 +27,8 @@ use glam::{Vec2, Vec3A};
 
 use super::lab8::shadow_segments8;
 use super::path::{PathSampler, RR_DEPTH, RR_SCALE, SobolSampler, light_terms, power_heuristic};
-use crate::geometry::bvh::{Closest8, Singles8};
+use crate::geometry::bvh::Singles8;
+use crate::geometry::packet::Closest8;
 use crate::geometry::ray::{Hit, Ray};
 use crate::geometry::triangle::Lanes;
 use crate::materials::Material;

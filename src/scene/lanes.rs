@@ -10,7 +10,8 @@ use std::arch::x86_64::*;
 use std::mem::{offset_of, size_of};
 
 use super::Scene;
-use crate::geometry::bvh::{Closest8, Rays8, Singles8};
+use crate::geometry::bvh::Singles8;
+use crate::geometry::packet::{Closest8, Rays8};
 use crate::geometry::ray::{Hit, Ray, gamma};
 use crate::geometry::triangle::{Lanes, Triangle};
 use crate::materials::surface::{MaterialKind, SurfaceMaterial};

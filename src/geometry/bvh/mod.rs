@@ -26,8 +26,6 @@ use crate::geometry::triangle::{Triangle, TriangleHit};
 use node::{BoxQuery, ChildRef, EMPTY, Isa, LEAF, NodeBoxes, WIDTH, leaf_parts};
 use packet::{Packet, PacketRay};
 #[cfg(target_arch = "x86_64")]
-pub(crate) use ray8::{Closest8, Rays8};
-#[cfg(target_arch = "x86_64")]
 pub(crate) use single8::Singles8;
 pub use stream::IN_FLIGHT;
 
