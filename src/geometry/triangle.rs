@@ -9,11 +9,15 @@
 //! computes each triangle's barycentrics from its own edge vectors, so rounding can
 //! let a ray slip between two neighbours.
 
+#[cfg(target_arch = "x86_64")]
+use std::arch::x86_64::{_mm256_andnot_ps, _mm256_set1_ps};
 use std::ops::{Add, Div, Mul};
 
 use glam::{Mat3A, Vec3A, Vec4};
 
 use crate::geometry::ray::{Ray, gamma};
+#[cfg(target_arch = "x86_64")]
+use crate::simd::F8;
 
 /// A triangle given by its three vertices, in the winding the scene defines.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -210,6 +214,25 @@ impl Lanes for Vec4 {
     }
     fn max(self, other: Self) -> Self {
         Vec4::max(self, other)
+    }
+}
+
+// SAFETY (of the `unsafe` block): as for every operation on `F8` (see
+// `crate::simd`), which is only made and used inside AVX2 code.
+#[cfg(target_arch = "x86_64")]
+impl Lanes for F8 {
+    #[inline(always)]
+    fn splat(x: f32) -> Self {
+        F8::splat(x)
+    }
+    #[inline(always)]
+    fn abs(self) -> Self {
+        F8(unsafe { _mm256_andnot_ps(_mm256_set1_ps(-0.0), self.0) })
+    }
+    /// As `Vec4::max` (SSE `maxps`): the second operand where either is NaN.
+    #[inline(always)]
+    fn max(self, other: Self) -> Self {
+        self.max_(other)
     }
 }
 
