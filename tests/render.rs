@@ -37,7 +37,7 @@ fn block_boxes(scene: &Scene) -> Vec<(Vec3A, Vec3A)> {
     [cornell::parts::SHORT_BLOCK, cornell::parts::TALL_BLOCK]
         .into_iter()
         .map(|r| {
-            let (lo, hi) = raylab::workload::bounds(&scene.triangles()[r]);
+            let (lo, hi) = raylab::geometry::triangle::bounds(&scene.triangles()[r]);
             (lo - 0.01, hi + 0.01)
         })
         .collect()

@@ -182,6 +182,14 @@ const ORDER_OF_KEY: [[usize; 3]; 6] = [
     [1, 0, 2],
 ];
 
+/// Componentwise minimum and maximum of all vertices.
+pub fn bounds(triangles: &[Triangle]) -> (Vec3A, Vec3A) {
+    triangles.iter().fold(
+        (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY)),
+        |(lo, hi), t| (lo.min(t.min()), hi.max(t.max())),
+    )
+}
+
 /// Numbers the error bound is computed on: `f32` for one ray, [`Vec4`] for four
 /// lanes at once, with the same operations in the same order.
 pub trait Lanes: Copy + Add<Output = Self> + Mul<Output = Self> + Div<Output = Self> {

@@ -403,7 +403,7 @@ pub fn load(name: &str, options: &LoadOptions) -> Result<Loaded, LoadError> {
             // An empty OBJ (a warning) is framed as a point at the origin.
             let (lo, hi) = match parts.triangles.is_empty() {
                 true => (Vec3A::ZERO, Vec3A::ZERO),
-                false => crate::workload::bounds(&parts.triangles),
+                false => crate::geometry::triangle::bounds(&parts.triangles),
             };
             let framing = framing::frame(lo, hi);
             parts.light = framing.light;

@@ -7,6 +7,7 @@ use anyhow::{Context, anyhow};
 use raylab::film::write_bytes;
 use raylab::geometry::bvh::Bvh;
 use raylab::geometry::ray::{Hit, Ray};
+use raylab::geometry::triangle::bounds;
 use raylab::workload::{
     self, cast_closest, cast_closest_stream, cast_closest4, cast_closest8, cast_occluded,
     cast_occluded_stream, encode_hits,
@@ -111,7 +112,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
                 .collect()
         }
         None => {
-            let (lo, hi) = workload::bounds(tris);
+            let (lo, hi) = bounds(tris);
             let diag = (hi - lo).length();
             let incoherent = workload::incoherent(lo, hi, INCOHERENT_RAYS);
             let primary = workload::primary(lo, hi);
