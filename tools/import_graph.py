@@ -148,7 +148,8 @@ def skip_item(code, i):
     return n
 
 
-CFG_TEST = re.compile(r"#\s*\[\s*cfg\s*\(\s*test\s*\)\s*\]")
+# `#[cfg(test)]` and `#[cfg(all(test, ...))]`: code that only tests compile.
+CFG_TEST = re.compile(r"#\s*\[\s*cfg\s*\(\s*(?:test|all\s*\(\s*test\s*,[^\]]*)\)\s*\]")
 ATTR = re.compile(r"\s*#\s*\[[^\]]*\]")
 
 

@@ -347,9 +347,9 @@ impl FromStr for Integrator {
 /// the triangles, `ambient` is the lab's `N`.
 #[cfg(all(test, target_arch = "x86_64"))]
 pub(crate) fn random_two_sided_scene(stream: u64, ambient: Vec3A) -> Scene {
-    use crate::PointLight;
     use crate::geometry::triangle::Triangle;
     use crate::sampling::sampler::Rng;
+    use crate::scene::PointLight;
     use crate::scene::SceneParts;
     let mut rng = Rng::new(5, stream);
     let mut r = move || rng.next_f32() * 2.0 - 1.0;

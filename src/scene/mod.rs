@@ -1542,7 +1542,7 @@ mod tests {
         for tris in [vec![], vec![Triangle::new(p, p, p); 3]] {
             let n = tris.len();
             let scene = Scene::new(tris, vec![Vec3A::ONE; n], light(), Vec3A::ONE).unwrap();
-            let cam = crate::Camera::lab(Vec3A::new(0.0, 0.0, -3.0), 0.0, 0.0, 16, 16);
+            let cam = crate::camera::Camera::lab(Vec3A::new(0.0, 0.0, -3.0), 0.0, 0.0, 16, 16);
             let settings = crate::render::RenderSettings::default();
             let out = crate::render::render(&scene, &cam, &settings, &|_| {});
             assert!(out.film.pixels.iter().all(|p| *p == Vec3A::ZERO));

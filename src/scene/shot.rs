@@ -17,9 +17,10 @@ use thiserror::Error;
 
 use super::cornell::{self, MaterialChoice};
 use super::{PointLight, SceneParts};
-use crate::Integrator;
 use crate::camera::{Lens, SceneCamera};
 use crate::film::ToneMap;
+use crate::geometry::triangle::Triangle;
+use crate::integrators::Integrator;
 use crate::lights::Light;
 use crate::materials::Material;
 use crate::materials::surface::{GltfMaterial, MaterialKind, SurfaceMaterial};
@@ -955,8 +956,8 @@ pub fn compose_with(
                 all.materials.push(m);
                 let material = all.materials.len() as u32 - 1;
                 for t in [
-                    crate::Triangle::new(a, a + u, a + u + v),
-                    crate::Triangle::new(a, a + u + v, a + v),
+                    Triangle::new(a, a + u, a + u + v),
+                    Triangle::new(a, a + u + v, a + v),
                 ] {
                     all.triangles.push(t);
                     all.normals.push(normal);
