@@ -20,6 +20,7 @@
 //! * [`sampling`]: PCG32 streams keyed by (seed, pixel, sample), and
 //!   Owen-scrambled Sobol' points;
 //! * [`render`]: tiles on rayon, deterministic per-pixel sampling;
+//! * [`limits`]: the largest image, sample count and time a render accepts;
 //! * [`aov`]: albedo and normal guides (through specular chains), depth,
 //!   position and variance per pixel, gathered by the render;
 //! * [`denoise`]: Open Image Denoise, loaded at run time, on an image and its
@@ -47,6 +48,7 @@ pub mod geometry;
 pub mod guard;
 pub mod integrators;
 pub mod lights;
+pub mod limits;
 pub mod materials;
 pub mod memory;
 pub mod nan_check;

@@ -30,15 +30,6 @@ use crate::simd::F8;
 /// that scheduling costs nothing; even, so that tiles hold whole pixel quads.
 pub const TILE_ROWS: usize = 4;
 
-/// Largest image side accepted from the command line or a scene file, in pixels.
-pub const MAX_SIDE: u32 = 16_384;
-/// Largest image accepted, in pixels.
-pub const MAX_PIXELS: u64 = 1 << 27;
-/// Most samples per pixel accepted.
-pub const MAX_SPP: u32 = 1 << 20;
-/// Longest time budget accepted, in seconds (a week).
-pub const MAX_TIME: f64 = 7.0 * 24.0 * 3600.0;
-
 /// How to render.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct RenderSettings {

@@ -386,7 +386,7 @@ fn check(path: &Path, what: &str, values: &[f32], non_negative: bool) -> Result<
 
 fn settings(path: &Path, r: &RenderSection) -> Result<ShotSettings, ShotError> {
     let bad = |m: String| invalid(path, format!("[render] {m}"));
-    use crate::render::{MAX_PIXELS, MAX_SIDE, MAX_SPP, MAX_TIME};
+    use crate::limits::{MAX_PIXELS, MAX_SIDE, MAX_SPP, MAX_TIME};
     for (key, v) in [("width", r.width), ("height", r.height)] {
         if let Some(v) = v
             && !(1..=MAX_SIDE).contains(&v)

@@ -8,7 +8,7 @@ use raylab::Integrator;
 use raylab::scene::cornell::{self, MaterialChoice};
 use raylab::scene::load::SceneKind;
 
-pub use raylab::render::{MAX_PIXELS, MAX_SIDE, MAX_SPP, MAX_TIME};
+pub use raylab::limits::{MAX_PIXELS, MAX_SIDE, MAX_SPP, MAX_TIME};
 
 #[derive(Debug, Parser)]
 #[command(
