@@ -391,7 +391,7 @@ pub fn load(name: &str, options: &LoadOptions) -> Result<Loaded, LoadError> {
                 rotation: Mat3A::IDENTITY,
                 lens: Lens::LAB,
                 aspect_ratio: None,
-                step: crate::controls::LAB_STEP,
+                step: cornell::LAB_STEP,
             };
             (scene, view)
         }
