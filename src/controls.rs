@@ -129,7 +129,7 @@ fn wrap_degrees(deg: f32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::cornell::LAB_STEP;
+    use crate::load::cornell::LAB_STEP;
 
     fn start() -> ViewState {
         ViewState {

@@ -8,8 +8,9 @@
 //!   ray–triangle test and the eight-wide BVH;
 //! * [`scene`]: the one scene representation of every source (triangles, their
 //!   vertex attributes, materials, textures, lights, cameras) behind the
-//!   [`Scene::intersect`] / [`Scene::occluded`] seam, and its loaders (the lab's
-//!   built-in boxes, Wavefront OBJ, glTF 2.0);
+//!   [`Scene::intersect`] / [`Scene::occluded`] seam;
+//! * [`load`]: the scene's loaders above it (the lab's built-in boxes,
+//!   Wavefront OBJ, glTF 2.0, scene files);
 //! * [`camera`]: pinhole (and orthographic) cameras;
 //! * [`materials`]: BSDFs (diffuse, mirror, glass, rough conductor, the glTF
 //!   metallic–roughness BRDF);
@@ -49,6 +50,7 @@ pub mod guard;
 pub mod integrators;
 pub mod lights;
 pub mod limits;
+pub mod load;
 pub mod materials;
 pub mod memory;
 pub mod nan_check;

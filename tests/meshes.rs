@@ -14,7 +14,7 @@ fn check_mesh(name: &str, stride: usize) {
     let path = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../shared/models")
         .join(name);
-    let mesh = raylab::scene::obj::load_obj(&path)
+    let mesh = raylab::load::obj::load_obj(&path)
         .unwrap_or_else(|e| panic!("{e}: the shared folder must sit beside the project"));
     let tris = &mesh.triangles;
     let bvh = Bvh::build(tris);
@@ -73,7 +73,7 @@ fn teapot_agrees_with_brute_force() {
 #[test]
 fn rays_starting_inside_the_box_and_nan_rays() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/models/teapot.obj");
-    let tris = raylab::scene::obj::load_obj(&path).unwrap().triangles;
+    let tris = raylab::load::obj::load_obj(&path).unwrap().triangles;
     let bvh = Bvh::build(&tris);
     let (lo, hi) = bounds(&tris);
     let centre = (lo + hi) / 2.0;

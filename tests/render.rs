@@ -5,8 +5,8 @@ mod common;
 
 use glam::Vec3A;
 use raylab::film::Film;
+use raylab::load::cornell::{self, colors};
 use raylab::render::{RenderSettings, accumulate, render, sample_pixel};
-use raylab::scene::cornell::{self, colors};
 use raylab::{Camera, Integrator, Scene};
 
 /// The seven reflectances of the box.

@@ -1,7 +1,7 @@
 //! The targets' bodies, callable from the fuzz targets and from the
 //! regression test that replays committed findings (`tests/fuzz_regressions.rs`).
 
-use raylab::scene::load::LoadOptions;
+use raylab::load::LoadOptions;
 
 use super::{load_and_render, load_with_env, put, scratch, split_nul};
 
@@ -42,7 +42,7 @@ pub fn glb(data: &[u8]) {
 /// and the scene loaded and rendered.
 pub fn scene_toml(data: &[u8]) {
     let path = put("in.toml", data);
-    if let Err(e) = raylab::scene::shot::read_settings(&path) {
+    if let Err(e) = raylab::load::shot::read_settings(&path) {
         super::check_message(&e.to_string());
     }
     load_and_render(&path, &LoadOptions::default());

@@ -196,8 +196,8 @@ mod tests {
     use super::*;
     use crate::geometry::ray::Hit;
     use crate::integrators::Integrator;
+    use crate::load::cornell;
     use crate::sampling::sampler::Rng;
-    use crate::scene::cornell;
 
     #[target_feature(enable = "avx2")]
     fn lanes(

@@ -492,9 +492,9 @@ mod tests {
     /// are lit (misses, points facing away from the light, the box's blocks).
     #[test]
     fn shadow_rays_in_lanes_equal_shadow_rays_one_by_one() {
-        let scene = crate::scene::cornell::scene();
+        let scene = crate::load::cornell::scene();
         let camera =
-            crate::camera::Camera::lab(crate::scene::cornell::CAMERA_POSITION, 0.0, 0.0, 64, 64);
+            crate::camera::Camera::lab(crate::load::cornell::CAMERA_POSITION, 0.0, 0.0, 64, 64);
         let mut rng = Rng::new(8, 8);
         let (mut lit, mut unlit) = (0, 0);
         for _ in 0..2000 {

@@ -601,8 +601,8 @@ fn sin_cos_quarter(x: F8) -> (F8, F8) {
 mod tests {
     use super::*;
     use crate::integrators::path::{self, PathOptions, SamplerKind};
+    use crate::load::cornell;
     use crate::sampling::sampler::Rng;
-    use crate::scene::cornell;
 
     /// The lab box (one-sided); forty random triangles with a wall in a
     /// two-sided scene (the form of meshes), to hit from both sides; the

@@ -5,19 +5,12 @@
 //! by the materials; lights (the key point light, other punctual lights,
 //! emitting triangles); cameras. Rays see it through one query seam
 //! ([`Scene::intersect`], [`Scene::occluded`]), which also makes alpha-masked
-//! surfaces holes.
+//! surfaces holes. The loaders that make scenes from files are in
+//! [`crate::load`], above this model.
 
 pub mod compose;
-pub mod cornell;
-pub mod framing;
-pub mod gltf;
 mod lanes;
-pub mod load;
 pub mod mesh;
-pub mod mtl;
-pub mod obj;
-pub mod shot;
-pub mod transform;
 
 use std::collections::HashMap;
 use std::f32::consts::PI;
@@ -36,7 +29,6 @@ use crate::materials::Material;
 use crate::materials::surface::{AlphaMode, HitAttributes, SurfaceMaterial};
 use crate::sampling::distribution::AliasTable;
 use crate::textures::TextureStore;
-pub use load::{LoadError, LoadOptions, Loaded, load};
 pub use mesh::{Instance, MeshData, Tangents};
 
 /// The lab's point light: position and power per colour channel.
@@ -1465,7 +1457,7 @@ mod tests {
     fn surface_points_in_lanes_are_surface_points() {
         let mut rng = crate::sampling::sampler::Rng::new(8, 1);
         for two_sided in [false, true] {
-            let mut scene = crate::scene::cornell::scene();
+            let mut scene = crate::load::cornell::scene();
             scene.two_sided = two_sided;
             let n = scene.triangles().len();
             for _ in 0..5_000 {

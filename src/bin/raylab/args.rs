@@ -5,8 +5,8 @@ use std::path::PathBuf;
 use clap::{Args, Parser, Subcommand};
 use glam::Vec3A;
 use raylab::Integrator;
-use raylab::scene::cornell::{self, MaterialChoice};
-use raylab::scene::load::SceneKind;
+use raylab::load::SceneKind;
+use raylab::load::cornell::{self, MaterialChoice};
 
 pub use raylab::limits::{MAX_PIXELS, MAX_SIDE, MAX_SPP, MAX_TIME};
 
@@ -105,7 +105,7 @@ pub struct SceneArgs {
     /// `auto` (when the file has no punctual light and no emitters strong enough
     /// to light it), `on` or `off`.
     #[arg(long, value_name = "WHEN", default_value = "auto", value_parser = parse_default_light)]
-    pub default_light: raylab::scene::load::DefaultLight,
+    pub default_light: raylab::load::DefaultLight,
     /// Tone mapping of PNG output and the viewer: `clamp`, `aces` or
     /// `khronos-pbr-neutral` [default: khronos-pbr-neutral for glTF, clamp otherwise].
     #[arg(long, value_name = "OP", value_parser = parse_tonemap)]
@@ -166,7 +166,7 @@ pub struct SceneArgs {
     /// y = 0, centred, scaled to the height). One for all meshes, or one per --add.
     /// The bunny on the lab box's floor: "fit 0.8; rotate x 180; translate 0.3 1 -0.3".
     #[arg(long, value_name = "OPS", allow_hyphen_values = true)]
-    pub transform: Vec<raylab::scene::transform::Transform>,
+    pub transform: Vec<raylab::load::transform::Transform>,
     /// Ambient term N added to the direct light (the lab's stand-in for indirect
     /// light) [default: 0.5 in the box, 0.15 for a mesh].
     #[arg(long, value_name = "N", allow_hyphen_values = true, value_parser = parse_non_negative)]
@@ -460,8 +460,8 @@ fn check_pixels(w: u32, h: u32) -> Result<(), String> {
 
 impl SceneArgs {
     /// The library's load options from the arguments.
-    pub fn load_options(&self) -> raylab::scene::LoadOptions {
-        raylab::scene::LoadOptions {
+    pub fn load_options(&self) -> raylab::load::LoadOptions {
+        raylab::load::LoadOptions {
             add: self.add.clone(),
             transforms: self.transform.clone(),
             materials: self.material.clone(),
@@ -470,10 +470,10 @@ impl SceneArgs {
             ambient: self.ambient,
             camera: self.camera,
             default_light: self.default_light,
-            environment: raylab::scene::load::EnvironmentOptions {
+            environment: raylab::load::EnvironmentOptions {
                 source: match (&self.env, self.env_color) {
-                    (Some(path), _) => Some(raylab::scene::load::EnvSource::File(path.clone())),
-                    (None, Some(c)) => Some(raylab::scene::load::EnvSource::Color(c)),
+                    (Some(path), _) => Some(raylab::load::EnvSource::File(path.clone())),
+                    (None, Some(c)) => Some(raylab::load::EnvSource::Color(c)),
                     (None, None) => None,
                 },
                 strength: self.env_strength,
@@ -513,7 +513,7 @@ pub fn is_scene_file(scene: &str) -> bool {
 impl SceneArgs {
     /// These arguments with what they leave out taken from a scene file's
     /// `[render]` settings.
-    pub fn with_file_settings(&self, s: &raylab::scene::shot::ShotSettings) -> Self {
+    pub fn with_file_settings(&self, s: &raylab::load::shot::ShotSettings) -> Self {
         Self {
             width: self.width.or(s.width),
             height: self.height.or(s.height),
@@ -534,7 +534,7 @@ impl RenderArgs {
         if !is_scene_file(&self.scene.scene) {
             return Ok(self.clone());
         }
-        let s = raylab::scene::shot::read_settings(std::path::Path::new(&self.scene.scene))?;
+        let s = raylab::load::shot::read_settings(std::path::Path::new(&self.scene.scene))?;
         Ok(Self {
             scene: self.scene.with_file_settings(&s),
             spp: self.spp.or(s.spp),
@@ -601,7 +601,7 @@ fn parse_camera(s: &str) -> Result<usize, String> {
         .map_err(|_| "expected a camera number from 0".to_string())
 }
 
-fn parse_default_light(s: &str) -> Result<raylab::scene::load::DefaultLight, String> {
+fn parse_default_light(s: &str) -> Result<raylab::load::DefaultLight, String> {
     s.parse()
 }
 

@@ -69,7 +69,7 @@ impl Query {
 const BUILD_RUNS: usize = 5;
 
 pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
-    let mesh = raylab::scene::obj::load_obj(&args.mesh)?;
+    let mesh = raylab::load::obj::load_obj(&args.mesh)?;
     for w in &mesh.warnings {
         eprintln!("warning: {}", raylab::guard::one_line(w));
     }

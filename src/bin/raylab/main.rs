@@ -16,7 +16,7 @@ use clap::error::ErrorKind;
 
 use args::{Cli, Command, SceneArgs};
 use raylab::film::{Display, ToneMap};
-use raylab::scene::load::SceneKind;
+use raylab::load::SceneKind;
 
 fn main() -> ExitCode {
     // A panic the library catches in a third-party decoder becomes an
@@ -167,7 +167,7 @@ fn merge_command(args: &args::MergeArgs) -> anyhow::Result<()> {
 /// arguments leave them out.
 fn view_command(args: &SceneArgs) -> anyhow::Result<()> {
     if args::is_scene_file(&args.scene) {
-        let settings = raylab::scene::shot::read_settings(std::path::Path::new(&args.scene))?;
+        let settings = raylab::load::shot::read_settings(std::path::Path::new(&args.scene))?;
         return viewer::run(&args.with_file_settings(&settings));
     }
     viewer::run(args)
@@ -245,7 +245,7 @@ pub fn load_for(args: &SceneArgs, quiet: bool, aov_channels: usize) -> anyhow::R
         raylab::cache::set_dir(Some(dir.clone()))
             .map_err(|e| anyhow::anyhow!("--cache {}: {e}", dir.display()))?;
     }
-    let loaded = raylab::scene::load(&args.scene, &args.load_options())?;
+    let loaded = raylab::load::load(&args.scene, &args.load_options())?;
     if let Some(dir) = &args.cache
         && !quiet
     {

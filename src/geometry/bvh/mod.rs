@@ -1035,9 +1035,9 @@ mod tests {
     /// against 1.84 (and 7 % more instructions for `path`, 11 % for `direct`).
     #[test]
     fn rays_in_a_small_room_enter_few_leaves() {
-        let (tris, _) = crate::scene::cornell::triangles();
+        let (tris, _) = crate::load::cornell::triangles();
         let bvh = Bvh::build(&tris);
-        let room = crate::scene::cornell::parts::ROOM;
+        let room = crate::load::cornell::parts::ROOM;
         let mut leaf_boxes = Vec::new();
         for (n, kids) in bvh.children.iter().enumerate() {
             for (c, &kid) in kids.iter().enumerate() {

@@ -16,7 +16,6 @@ use serde::Deserialize;
 use thiserror::Error;
 
 use super::cornell::{self, MaterialChoice};
-use super::{PointLight, SceneParts};
 use crate::camera::{Lens, SceneCamera};
 use crate::film::ToneMap;
 use crate::geometry::triangle::Triangle;
@@ -24,6 +23,7 @@ use crate::integrators::Integrator;
 use crate::lights::Light;
 use crate::materials::Material;
 use crate::materials::surface::{GltfMaterial, MaterialKind, SurfaceMaterial};
+use crate::scene::{PointLight, SceneParts};
 
 /// Why a scene file cannot be used; the message starts with the file (and the
 /// line and column where the parser knows them).
@@ -963,7 +963,7 @@ pub fn compose_with(
                     all.normals.push(normal);
                     all.material_of.push(material);
                     if !all.instance_of.is_empty() {
-                        all.instance_of.push(super::NO_INSTANCE);
+                        all.instance_of.push(crate::scene::NO_INSTANCE);
                     }
                 }
             }

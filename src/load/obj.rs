@@ -20,10 +20,10 @@ use glam::{Affine3A, Vec2, Vec3, Vec3A, Vec4};
 use thiserror::Error;
 
 use super::mtl::{MapRef, MtlMaterial, parse_mtl, phong_roughness};
-use super::{Instance, MeshData, SceneParts, Tangents};
 use crate::geometry::triangle::Triangle;
 use crate::guard::quote;
 use crate::materials::surface::{AlphaMode, GltfMaterial, MaterialKind, SurfaceMaterial};
+use crate::scene::{Instance, MeshData, SceneParts, Tangents};
 use crate::textures::{ColorSpace, Image, TextureRef, TextureStore, TextureTransform, Wrap};
 
 /// Reflectance of triangles without an MTL colour.
