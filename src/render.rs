@@ -15,9 +15,9 @@ use crate::film::Film;
 use crate::fixed::{self, Fixed3};
 use crate::geometry::ray::{Hit, Ray};
 use crate::integrators::Integrator;
-use crate::integrators::path::{self, PathOptions, PathSampler, SamplerKind};
 #[cfg(target_arch = "x86_64")]
-use crate::integrators::{lab8, path8};
+use crate::integrators::direct;
+use crate::integrators::path::{self, PathOptions, PathSampler, SamplerKind};
 use crate::materials::Material;
 #[cfg(target_arch = "x86_64")]
 use crate::sampling::sampler::pixel_jitter8;
@@ -1036,7 +1036,7 @@ impl Tile<'_> {
         rays
     }
 
-    /// [`Tile::trace_path`] with eight paths in AVX2 lanes ([`path8`]): the
+    /// [`Tile::trace_path`] with eight paths in AVX2 lanes ([`path::lanes`]): the
     /// tile's samples in sample order, each lane taking the next when its path
     /// ends. Only for scenes where [`Scene::path_lanes_apply`].
     #[cfg(target_arch = "x86_64")]
@@ -1054,7 +1054,7 @@ impl Tile<'_> {
             None
         };
         let (mut x, mut y) = (0, 0);
-        let mut ready: [Option<path8::Start>; 8] = [const { None }; 8];
+        let mut ready: [Option<path::lanes::Start>; 8] = [const { None }; 8];
         let (mut taken, mut made) = (0, 0);
         let mut next = || {
             if taken == made {
@@ -1068,7 +1068,7 @@ impl Tile<'_> {
                         unreachable!("the lanes take Sobol' samples only");
                     };
                     *ray = start.ray;
-                    *slot = Some(path8::Start {
+                    *slot = Some(path::lanes::Start {
                         tag: y * width + px,
                         sampler,
                         ray: start.ray,
@@ -1104,7 +1104,7 @@ impl Tile<'_> {
             taken += 1;
             ready[taken - 1].take()
         };
-        let traced = path8::trace(scene, options.max_depth, &mut next, &mut |i, v| {
+        let traced = path::lanes::trace(scene, options.max_depth, &mut next, &mut |i, v| {
             add.add(i, v)
         });
         rays + traced
@@ -1123,7 +1123,7 @@ impl Tile<'_> {
 
     /// [`Tile::trace`] for the lab's integrators (`flat`, `direct`); with
     /// `LANES` (only in [`Tile::trace_lab_avx2`]) its 4×2 blocks are shaded in
-    /// AVX2 lanes from the camera rays to the values (`integrators::lab8`)
+    /// AVX2 lanes from the camera rays to the values (`integrators::direct::lanes`)
     /// where the scene allows it.
     #[inline(always)]
     fn trace_lab<const AOVS: bool, const LANES: bool>(
@@ -1193,7 +1193,8 @@ impl Tile<'_> {
                     if lanes {
                         let direct = integrator == Integrator::Direct;
                         // SAFETY: as above.
-                        let shaded = unsafe { lab8::radiance8(scene, camera, &px, &py, direct) };
+                        let shaded =
+                            unsafe { direct::lanes::radiance8(scene, camera, &px, &py, direct) };
                         if let Some((values, shadow_rays)) = shaded {
                             rays += 8 + u64::from(shadow_rays);
                             add.add8_channels(pixels, &values);
