@@ -1,15 +1,15 @@
-//! Rendering an image: tiles of rows on rayon, samples keyed by (seed, pixel,
-//! sample) so the result is bit-identical for any number of threads.
+//! The tiles' loops: one tile's rows traced sample by sample, the camera
+//! rays of 4×2 pixel blocks (then 2×2 quads, then single pixels) traced
+//! together, and each value handed to a [`Sink`]: the accumulator's exact
+//! sums or an f32 film.
 
 use std::ops::Range;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::{Duration, Instant};
 
 use glam::{DVec3, Vec3A};
 use rayon::prelude::*;
-use thiserror::Error;
 
-use crate::aov::{Aov, AovImage, AovSet, AovSums, FirstHit, Layout};
+use super::{Split, TILE_ROWS, Tally};
+use crate::aov::{FirstHit, Layout};
 use crate::camera::Camera;
 use crate::film::Film;
 use crate::fixed::{self, Fixed3};
@@ -26,636 +26,12 @@ use crate::scene::{Scene, SurfaceHit};
 #[cfg(target_arch = "x86_64")]
 use crate::simd::F8;
 
-/// Rows per tile: small enough to balance two cores on small images, large enough
-/// that scheduling costs nothing; even, so that tiles hold whole pixel quads.
-pub const TILE_ROWS: usize = 4;
-
-/// How to render.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct RenderSettings {
-    /// Light transport algorithm.
-    pub integrator: Integrator,
-    /// Samples per pixel (at least 1).
-    pub spp: u32,
-    /// Seed of the sample positions.
-    pub seed: u64,
-}
-
-impl Default for RenderSettings {
-    fn default() -> Self {
-        Self {
-            integrator: Integrator::Direct,
-            spp: 1,
-            seed: 0,
-        }
-    }
-}
-
-/// A rendered image and what it cost.
-#[derive(Clone, Debug)]
-pub struct Rendered {
-    /// Pixel values (box-filtered averages).
-    pub film: Film,
-    /// Rays cast (camera and shadow rays).
-    pub rays: u64,
-    /// Samples that came out NaN or infinite and were dropped (counted as black).
-    pub dropped: u64,
-    /// The AOVs asked for ([`render_with_aovs`]), averaged over the same samples;
-    /// `None` when none were.
-    pub aovs: Option<AovImage>,
-}
-
-/// What a call of [`accumulate`] cost and found.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct Tally {
-    /// Rays cast (closest-hit and shadow rays).
-    pub rays: u64,
-    /// Samples that came out NaN or infinite: counted here and left out of the
-    /// sums (so they count as black).
-    pub dropped: u64,
-}
-
-impl std::ops::Add for Tally {
-    type Output = Tally;
-    fn add(self, o: Tally) -> Tally {
-        Tally {
-            rays: self.rays + o.rays,
-            dropped: self.dropped + o.dropped,
-        }
-    }
-}
-
-impl std::iter::Sum for Tally {
-    fn sum<I: Iterator<Item = Tally>>(iter: I) -> Tally {
-        iter.fold(Tally::default(), |a, b| a + b)
-    }
-}
-
-/// Renders `settings.spp` samples per pixel and averages them. `progress` is
-/// called after each tile with the rows it finished times the samples it took
-/// of them (the render is done at `height × spp`), from any thread.
-pub fn render(
-    scene: &Scene,
-    camera: &Camera,
-    settings: &RenderSettings,
-    progress: &(dyn Fn(u64) + Sync),
-) -> Rendered {
-    render_with_aovs(scene, camera, settings, AovSet::NONE, progress)
-}
-
-/// [`render`] that also gathers `aovs` from the camera rays' first hits (see
-/// [`crate::aov`]); the image is the same as without them, bit for bit.
-pub fn render_with_aovs(
-    scene: &Scene,
-    camera: &Camera,
-    settings: &RenderSettings,
-    aovs: AovSet,
-    progress: &(dyn Fn(u64) + Sync),
-) -> Rendered {
-    let mut acc = Accumulator::new(camera.width, camera.height, aovs);
-    render_passes(
-        scene,
-        camera,
-        settings,
-        &mut acc,
-        &Passes::default(),
-        &mut |_, _| {},
-        progress,
-    );
-    acc.rendered()
-}
-
-/// A render that took as many samples per pixel as fitted a time budget.
-#[derive(Clone, Debug)]
-pub struct Progressive {
-    /// The image, its rays and dropped samples.
-    pub rendered: Rendered,
-    /// Samples per pixel taken.
-    pub spp: u32,
-}
-
-/// Longest pass of a time-limited render: short enough to stop close to the
-/// budget and to report progress.
-const MAX_PASS: Duration = Duration::from_millis(250);
-
-/// Longest pass of a render of a given number of samples: short enough that a
-/// stop request (Ctrl-C) is answered within about half a second, long enough
-/// that the pass's end (the last tiles on one core) costs under 1 %.
-const MAX_SPP_PASS: Duration = Duration::from_millis(500);
-
-/// Renders in passes of whole samples per pixel (sample `k` is the same as in a
-/// render with `--spp` above `k`) until `budget` is spent or `max_spp` reached,
-/// always at least one sample. A pass is only started when about half its
-/// expected time still fits in the budget. `progress` is called with the time
-/// spent so far after every tile.
-pub fn render_for(
-    scene: &Scene,
-    camera: &Camera,
-    integrator: Integrator,
-    seed: u64,
-    budget: Duration,
-    max_spp: u32,
-    progress: &(dyn Fn(Duration) + Sync),
-) -> Progressive {
-    let settings = RenderSettings {
-        integrator,
-        spp: max_spp,
-        seed,
-    };
-    render_for_with_aovs(scene, camera, &settings, AovSet::NONE, budget, progress)
-}
-
-/// [`render_for`] that also gathers `aovs` (see [`crate::aov`]) over the
-/// samples taken; `settings.spp` is the most samples per pixel to take. The
-/// image is the one [`render_with_aovs`] gives for the samples taken, bit for
-/// bit.
-pub fn render_for_with_aovs(
-    scene: &Scene,
-    camera: &Camera,
-    settings: &RenderSettings,
-    aovs: AovSet,
-    budget: Duration,
-    progress: &(dyn Fn(Duration) + Sync),
-) -> Progressive {
-    let start = Instant::now();
-    let mut acc = Accumulator::new(camera.width, camera.height, aovs);
-    let passes = Passes {
-        budget: Some(budget),
-        ..Passes::default()
-    };
-    render_passes(
-        scene,
-        camera,
-        settings,
-        &mut acc,
-        &passes,
-        &mut |_, _| {},
-        &|_| progress(start.elapsed()),
-    );
-    Progressive {
-        rendered: acc.rendered(),
-        spp: acc.spp(),
-    }
-}
-
-/// Which rows of the image a render takes: the `index`-th of `count` parts,
-/// made of the image's row tiles ([`TILE_ROWS`] rows each, from the top)
-/// `index`, `index + count`, `index + 2·count`, ...: interleaved, so that every
-/// part has rows from all over the image and costs about the same. The whole
-/// image is part 0 of 1.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub struct Split {
-    /// Which part (from 0).
-    pub index: u32,
-    /// Parts in all (at least 1).
-    pub count: u32,
-}
-
-impl Split {
-    /// The whole image.
-    pub const WHOLE: Split = Split { index: 0, count: 1 };
-
-    /// Row tiles of an image `height` pixels high.
-    pub fn row_tiles(height: u32) -> u32 {
-        height.div_ceil(TILE_ROWS as u32)
-    }
-
-    /// Part `index` of `count` of an image `height` rows high, if every part
-    /// gets at least one row tile.
-    pub fn new(index: u32, count: u32, height: u32) -> Result<Split, String> {
-        if count == 0 || index >= count {
-            return Err(format!(
-                "tile {index}/{count}: the tile number must be below the number of tiles"
-            ));
-        }
-        let tiles = Self::row_tiles(height);
-        if count > tiles {
-            return Err(format!(
-                "tile {index}/{count}: an image {height} pixels high has at most {tiles} tiles (one per {TILE_ROWS} rows)"
-            ));
-        }
-        Ok(Split { index, count })
-    }
-
-    /// Whether row tile `tile` is in this part.
-    pub fn has_tile(&self, tile: u32) -> bool {
-        tile % self.count == self.index
-    }
-
-    /// Whether this is the whole image.
-    pub fn is_whole(&self) -> bool {
-        self.count == 1
-    }
-}
-
-impl std::fmt::Display for Split {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "{}/{}", self.index, self.count)
-    }
-}
-
-/// The per-pixel sums of a render in progress: samples `first..first + spp` of
-/// every pixel in its [`Split`] (the whole image unless made by
-/// [`Accumulator::part`]), summed exactly in fixed point ([`crate::fixed`]),
-/// so that any split of the samples into calls of [`Accumulator::add`]
-/// (passes, a render stopped, saved and resumed) or into parts rendered apart
-/// and merged gives the same sums bit for bit. 48 bytes a pixel, and 16 per
-/// AOV channel.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Accumulator {
-    width: u32,
-    height: u32,
-    split: Split,
-    first: u32,
-    spp: u32,
-    image: Vec<Fixed3>,
-    aovs: Option<(AovSet, Vec<i128>)>,
-    tally: Tally,
-}
-
-/// Why [`Accumulator::from_parts`] refused its parts.
-#[derive(Clone, Debug, PartialEq, Eq, Error)]
-#[error("{0}")]
-pub struct PartsError(String);
-
-impl Accumulator {
-    /// No samples yet of a `width × height` image, with the AOVs `aovs`.
-    pub fn new(width: u32, height: u32, aovs: AovSet) -> Self {
-        Self::part(width, height, aovs, Split::WHOLE, 0)
-    }
-
-    /// No samples yet of the rows of `split`, whose samples start at `first`
-    /// (a part of a render, to be merged with the others: see
-    /// [`crate::farm`]). The sums of rows outside `split` stay zero.
-    pub fn part(width: u32, height: u32, aovs: AovSet, split: Split, first: u32) -> Self {
-        let pixels = width as usize * height as usize;
-        let aovs = (!aovs.is_empty()).then(|| (aovs, zeroed(pixels * Self::aov_stride(aovs))));
-        Self {
-            width,
-            height,
-            split,
-            first,
-            spp: 0,
-            image: vec![[0; 3]; pixels],
-            aovs,
-            tally: Tally::default(),
-        }
-    }
-
-    /// Sums read back (e.g. from a checkpoint) of samples `0..spp` of the
-    /// whole image: `image` holds `width × height` RGB sums, `aov_sums` the AOV
-    /// records (see [`Accumulator::aov_sums`]). [`Accumulator::into_part`]
-    /// makes them a part's.
-    pub fn from_parts(
-        width: u32,
-        height: u32,
-        aovs: AovSet,
-        spp: u32,
-        tally: Tally,
-        image: Vec<Fixed3>,
-        aov_sums: Vec<i128>,
-    ) -> Result<Self, PartsError> {
-        let mut acc = Self {
-            width,
-            height,
-            split: Split::WHOLE,
-            first: 0,
-            spp,
-            image,
-            aovs: None,
-            tally,
-        };
-        let pixels = width as usize * height as usize;
-        if acc.image.len() != pixels {
-            return Err(PartsError(format!(
-                "{} image sums for {width}×{height} pixels",
-                acc.image.len()
-            )));
-        }
-        let want = pixels * Self::aov_stride(aovs);
-        if aov_sums.len() != want {
-            return Err(PartsError(format!(
-                "{} AOV sums where {aovs} need {want}",
-                aov_sums.len()
-            )));
-        }
-        acc.aovs = (!aovs.is_empty()).then_some((aovs, aov_sums));
-        Ok(acc)
-    }
-
-    /// AOV values per pixel that [`Accumulator::aov_sums`] holds for `aovs`:
-    /// their channels in the set's order, then the number of samples that hit.
-    pub fn aov_stride(aovs: AovSet) -> usize {
-        if aovs.is_empty() {
-            0
-        } else {
-            Layout::new(aovs).stride
-        }
-    }
-
-    /// Image width in pixels.
-    pub fn width(&self) -> u32 {
-        self.width
-    }
-
-    /// Image height in pixels.
-    pub fn height(&self) -> u32 {
-        self.height
-    }
-
-    /// Samples per pixel summed: samples `first..first + spp` of every pixel
-    /// (see [`Accumulator::first_sample`]).
-    pub fn spp(&self) -> u32 {
-        self.spp
-    }
-
-    /// The first sample summed (0 but for a part of a render).
-    pub fn first_sample(&self) -> u32 {
-        self.first
-    }
-
-    /// The rows summed.
-    pub fn split(&self) -> Split {
-        self.split
-    }
-
-    /// These sums as those of samples `first..first + spp` of the rows of
-    /// `split` (which they must be: the rows outside it zero).
-    pub fn into_part(mut self, split: Split, first: u32) -> Self {
-        self.split = split;
-        self.first = first;
-        self
-    }
-
-    /// Rays cast and samples dropped so far.
-    pub fn tally(&self) -> Tally {
-        self.tally
-    }
-
-    /// The AOVs gathered.
-    pub fn aov_set(&self) -> AovSet {
-        self.aovs.as_ref().map_or(AovSet::NONE, |(set, _)| *set)
-    }
-
-    /// The image's per-pixel sums ([`crate::fixed`]), row-major from the
-    /// top-left.
-    pub fn image_sums(&self) -> &[Fixed3] {
-        &self.image
-    }
-
-    /// The AOVs' per-pixel records ([`Accumulator::aov_stride`] fixed-point
-    /// values each), row-major; empty without AOVs.
-    pub fn aov_sums(&self) -> &[i128] {
-        self.aovs.as_ref().map_or(&[], |(_, s)| s)
-    }
-
-    /// Adds `other`'s sums, rays and dropped samples to these (parts of one
-    /// render; [`crate::farm::merge`] checks that they are). Exact: the result
-    /// does not depend on the order of the parts.
-    pub(crate) fn add_sums(&mut self, other: &Accumulator) -> Result<(), String> {
-        let overflow = || "its sums overflow those of the other parts".to_string();
-        for (a, b) in self.image.iter_mut().zip(&other.image) {
-            for c in 0..3 {
-                a[c] = a[c].checked_add(b[c]).ok_or_else(overflow)?;
-            }
-        }
-        if let (Some((_, a)), Some((_, b))) = (&mut self.aovs, &other.aovs) {
-            for (a, b) in a.iter_mut().zip(b) {
-                *a = a.checked_add(*b).ok_or_else(overflow)?;
-            }
-        }
-        self.tally = Tally {
-            rays: self.tally.rays.saturating_add(other.tally.rays),
-            dropped: self.tally.dropped.saturating_add(other.tally.dropped),
-        };
-        Ok(())
-    }
-
-    /// Sets the samples these sums hold (after [`Accumulator::add_sums`]).
-    pub(crate) fn set_samples(&mut self, split: Split, first: u32, spp: u32) {
-        (self.split, self.first, self.spp) = (split, first, spp);
-    }
-
-    /// Adds samples `spp..spp + n` of every pixel (see [`accumulate`] for what a
-    /// sample is) and returns what they cost. `progress` as for [`render`].
-    pub fn add(
-        &mut self,
-        scene: &Scene,
-        camera: &Camera,
-        integrator: Integrator,
-        seed: u64,
-        n: u32,
-        progress: &(dyn Fn(u64) + Sync),
-    ) -> Tally {
-        assert_eq!((self.width, self.height), (camera.width, camera.height));
-        let start = self.first + self.spp;
-        let samples = start..start.saturating_add(n);
-        let k = samples.len() as u64;
-        let aovs = self
-            .aovs
-            .as_mut()
-            .map(|(set, sums)| (Layout::new(*set), &mut sums[..]));
-        let tally = accumulate_into(
-            scene,
-            camera,
-            integrator,
-            seed,
-            samples.clone(),
-            Target::Wide {
-                image: &mut self.image,
-                aovs,
-                split: self.split,
-            },
-            &|rows| progress(rows * k),
-        );
-        self.spp = samples.end - self.first;
-        self.tally = self.tally + tally;
-        tally
-    }
-
-    /// The image and AOVs averaged over the samples taken. The sums are rounded
-    /// to f32 and then averaged, as a render in one call always did, so that
-    /// renders keep their values bit for bit.
-    pub fn rendered(&self) -> Rendered {
-        let film = self.film();
-        let aovs = self.aovs.as_ref().map(|(set, wide)| {
-            let mut sums = AovSums::new(*set, self.width, self.height);
-            sums.sums
-                .par_iter_mut()
-                .zip(wide.par_iter())
-                .for_each(|(s, w)| *s = 0.0 + fixed::to_f64(*w) as f32);
-            if let Some(at) = Layout::new(*set).offset(Aov::Variance) {
-                // The estimate from the exact sums, in f64 (Σ L² − (Σ L)²/n
-                // cancels where a pixel's noise is small), kept in the record.
-                let stride = Layout::new(*set).stride;
-                let n = f64::from(self.spp);
-                sums.sums
-                    .par_chunks_mut(stride)
-                    .zip(wide.par_chunks(stride))
-                    .zip(self.image.par_iter())
-                    .for_each(|((record, exact), image)| {
-                        record[at] = if self.spp < 2 {
-                            f32::INFINITY
-                        } else {
-                            let sum = image.map(fixed::to_f64);
-                            let l = 0.2126 * sum[0] + 0.7152 * sum[1] + 0.0722 * sum[2];
-                            let squares = fixed::to_f64(exact[at]);
-                            ((squares - l * l / n).max(0.0) / (n * (n - 1.0))) as f32
-                        };
-                    });
-            }
-            sums.average(self.spp)
-        });
-        Rendered {
-            film,
-            rays: self.tally.rays,
-            dropped: self.tally.dropped,
-            aovs,
-        }
-    }
-}
-
-impl Accumulator {
-    /// The image averaged over the samples taken, as [`Accumulator::rendered`]
-    /// gives it (without the AOVs).
-    pub fn film(&self) -> Film {
-        let mut film = Film::new(self.width, self.height);
-        film.pixels
-            .par_iter_mut()
-            .zip(self.image.par_iter())
-            // `0 + x`, not `x`: what adding the sum to a zeroed f32 film gave.
-            .for_each(|(p, w)| {
-                *p = Vec3A::ZERO + Vec3A::from_array(w.map(|c| fixed::to_f64(c) as f32))
-            });
-        film.average(self.spp);
-        film
-    }
-}
-
-/// `len` zeros, written rather than lazily zeroed (see [`AovSums::new`]).
-#[allow(clippy::slow_vector_initialization)]
-fn zeroed(len: usize) -> Vec<i128> {
-    let mut v = Vec::with_capacity(len);
-    v.resize(len, 0);
-    v
-}
-
-/// How [`render_passes`] goes about its passes.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct Passes<'a> {
-    /// Stop when this much time is spent (counting `spent`), rather than
-    /// only at `settings.spp`; at least one sample is always taken.
-    pub budget: Option<Duration>,
-    /// Time already spent on the accumulator (by an earlier, stopped run).
-    pub spent: Duration,
-    /// Checked between passes: when set, the render stops after the samples in
-    /// flight, with whole samples of every pixel.
-    pub stop: Option<&'a AtomicBool>,
-}
-
-/// How [`render_passes`] ended.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Ended {
-    /// Every sample asked for was taken.
-    Complete,
-    /// The time budget was spent.
-    Budget,
-    /// The stop flag was set.
-    Stopped,
-}
-
-/// Adds samples to `acc` in passes of whole samples per pixel, each pass sized
-/// to take about half a second (or a quarter under a budget) by the time
-/// per sample so far, until `settings.spp` samples are taken, the budget is
-/// spent or `passes.stop` is set (checked before every pass). After each pass
-/// `after_pass` is given the sums and the time spent in all (with
-/// `passes.spent`), e.g. to save them. `progress` as for [`render`]. The
-/// sums, and so the image, do not depend on how the samples fell into passes.
-pub fn render_passes(
-    scene: &Scene,
-    camera: &Camera,
-    settings: &RenderSettings,
-    acc: &mut Accumulator,
-    passes: &Passes<'_>,
-    after_pass: &mut dyn FnMut(&Accumulator, Duration),
-    progress: &(dyn Fn(u64) + Sync),
-) -> Ended {
-    let start = Instant::now();
-    let max_spp = settings.spp.max(1);
-    let longest = if passes.budget.is_some() {
-        MAX_PASS
-    } else {
-        MAX_SPP_PASS
-    };
-    loop {
-        if acc.spp >= max_spp {
-            return Ended::Complete;
-        }
-        if passes.stop.is_some_and(|s| s.load(Ordering::Relaxed)) {
-            return Ended::Stopped;
-        }
-        let spent = passes.spent + start.elapsed();
-        let n = if acc.spp == 0 {
-            1
-        } else {
-            let per_sample = spent / acc.spp;
-            let mut room = longest;
-            if let Some(budget) = passes.budget {
-                let remaining = budget.saturating_sub(spent);
-                if remaining < per_sample / 2 {
-                    return Ended::Budget;
-                }
-                room = room.min(remaining);
-            }
-            let fit = room.as_secs_f64() / per_sample.as_secs_f64().max(1e-9);
-            (fit.round().min(u32::MAX as f64) as u32).clamp(1, max_spp - acc.spp)
-        };
-        acc.add(
-            scene,
-            camera,
-            settings.integrator,
-            settings.seed,
-            n,
-            progress,
-        );
-        after_pass(acc, passes.spent + start.elapsed());
-    }
-}
-
-/// Adds samples `samples` of every pixel to `sums`, in sample order, and returns
-/// the number of rays cast and of samples dropped. For `flat` and `direct`, sample
-/// 0 goes through the pixel centre and the others are uniformly jittered over the
-/// pixel; `path` jitters every sample (a box filter, the pixel-area average, as
-/// Mitsuba's `box`), its random numbers keyed by (seed, pixel, sample,
-/// dimension). A sample that is NaN or infinite is dropped and counted. The viewer
-/// refines by calls for `0..1`, `1..2`, ...; one call for `0..n` gives the same
-/// sums up to f32 rounding ([`Accumulator`] keeps them exact).
-pub fn accumulate(
-    scene: &Scene,
-    camera: &Camera,
-    integrator: Integrator,
-    seed: u64,
-    samples: Range<u32>,
-    sums: &mut Film,
-    progress: &(dyn Fn(u64) + Sync),
-) -> Tally {
-    accumulate_into(
-        scene,
-        camera,
-        integrator,
-        seed,
-        samples,
-        Target::Narrow(sums),
-        progress,
-    )
-}
-
 /// Where [`accumulate_into`] adds its samples.
-enum Target<'a> {
+pub(super) enum Target<'a> {
     /// An f32 film (the viewer's refinement): one sample is added to it
     /// straight, several are summed in f64 per tile first.
     Narrow(&'a mut Film),
-    /// Exact sums kept across calls ([`Accumulator`]), with the AOVs' if
+    /// Exact sums kept across calls ([`super::Accumulator`]), with the AOVs' if
     /// any, of the row tiles of `split`.
     Wide {
         image: &'a mut [Fixed3],
@@ -673,7 +49,7 @@ enum TileSums<'a> {
 /// [`accumulate`] into `target`, gathering the AOVs (if any) from the same
 /// camera rays and their closest hits, which the render finds anyway: the
 /// image does not change, and no ray is added.
-fn accumulate_into(
+pub(super) fn accumulate_into(
     scene: &Scene,
     camera: &Camera,
     integrator: Integrator,
@@ -811,7 +187,7 @@ trait Sink {
     }
 }
 
-/// A tile's exact sums (see [`Accumulator`]).
+/// A tile's exact sums (see [`super::Accumulator`]).
 struct ExactSums<'a> {
     sums: &'a mut [Fixed3],
     dropped: &'a mut u64,
@@ -1265,23 +641,23 @@ impl Tile<'_> {
 }
 
 /// The sampler of one `path` sample.
-enum AnySampler {
+pub(super) enum AnySampler {
     Sobol(path::SobolSampler),
     Independent(Rng),
 }
 
 /// One sample of the `path` integrator for pixel number `pixel`: its sampler and
 /// its camera ray, through a uniformly chosen point of the pixel.
-struct PathStart {
-    sampler: AnySampler,
-    ray: Ray,
+pub(super) struct PathStart {
+    pub(super) sampler: AnySampler,
+    pub(super) ray: Ray,
 }
 
 impl PathStart {
     /// (Inlined: as a call it copied the sampler's sixteen pairs out again,
     /// 0.7 % of the box's `path`.)
     #[inline(always)]
-    fn new(
+    pub(super) fn new(
         camera: &Camera,
         options: &PathOptions,
         seed: u64,
@@ -1330,7 +706,14 @@ impl PathStart {
 /// The camera ray of sample `s` of pixel `(x, y)`: through the centre for sample
 /// 0, uniformly jittered by the (seed, pixel, sample) generator otherwise.
 #[inline]
-fn pixel_ray(camera: &Camera, seed: u64, s: u32, x: usize, y: usize, width: usize) -> Ray {
+pub(super) fn pixel_ray(
+    camera: &Camera,
+    seed: u64,
+    s: u32,
+    x: usize,
+    y: usize,
+    width: usize,
+) -> Ray {
     let (px, py) = pixel_point(seed, s, x, y, width);
     camera.ray(px, py)
 }
@@ -1379,70 +762,4 @@ fn pixel_point(seed: u64, s: u32, x: usize, y: usize, width: usize) -> (f32, f32
         pixel_jitter(seed, (y * width + x) as u64, s)
     };
     (x as f32 + dx, y as f32 + dy)
-}
-
-/// The value of one pixel sample, for tests and tools that probe single pixels.
-pub fn sample_pixel(
-    scene: &Scene,
-    camera: &Camera,
-    integrator: Integrator,
-    x: u32,
-    y: u32,
-) -> Vec3A {
-    let mut rays = 0;
-    let ray = camera.ray(x as f32 + 0.5, y as f32 + 0.5);
-    integrator.radiance(scene, &ray, &mut rays)
-}
-
-/// Sample `s` of pixel `(x, y)` exactly as a render with `seed` computes it (the
-/// same camera ray, random numbers and hit), its path shown to `tracer`
-/// (`path` only; `flat` and `direct` have no path). For `--nan-check` and for
-/// reproducing one sample of an image.
-#[allow(clippy::too_many_arguments)]
-pub fn probe_sample(
-    scene: &Scene,
-    camera: &Camera,
-    integrator: Integrator,
-    seed: u64,
-    x: u32,
-    y: u32,
-    s: u32,
-    tracer: &mut impl path::PathTracer,
-) -> Vec3A {
-    let mut rays = 0;
-    let width = camera.width as usize;
-    match integrator {
-        Integrator::Path(options) => {
-            let start = PathStart::new(camera, &options, seed, (x as usize, y as usize), s);
-            let hit = scene.intersect(&start.ray, f32::INFINITY);
-            let ray = start.ray;
-            let mut observe = |_: &SurfaceHit, _: &Material| {};
-            match start.sampler {
-                AnySampler::Sobol(mut smp) => path::radiance_traced(
-                    scene,
-                    &ray,
-                    hit,
-                    &options,
-                    &mut smp,
-                    &mut rays,
-                    &mut observe,
-                    tracer,
-                ),
-                AnySampler::Independent(mut rng) => path::radiance_traced(
-                    scene,
-                    &ray,
-                    hit,
-                    &options,
-                    &mut rng,
-                    &mut rays,
-                    &mut observe,
-                    tracer,
-                ),
-            }
-        }
-        _ => {
-            let ray = pixel_ray(camera, seed, s, x as usize, y as usize, width);
-            integrator.radiance(scene, &ray, &mut rays)
-        }
-    }
 }
