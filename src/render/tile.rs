@@ -251,6 +251,40 @@ impl Sink for FilmSums<'_> {
     }
 }
 
+/// The one walk over a tile's pixels, for one sample: rows in pairs, each
+/// pair as 4×2 blocks (`block(qx, qy)`: the block's top-left pixel), then its
+/// last columns as 2×2 quads (`quad(quad)`: the four pixels, row by row); a
+/// last odd row or column pixel by pixel (`pixel(x, y)`). Pixels are in the
+/// tile's coordinates; `continue` in `block` goes on to the next block.
+///
+/// A macro, not a function taking closures: both loops that use it inline
+/// their bodies into it, and the lab's copy is compiled with AVX2 inside
+/// [`Tile::trace_lab_avx2`], which closures are not (see `crate::simd`); the
+/// notes in the bodies measure what a call left in them costs.
+macro_rules! for_each_block {
+    (
+        $width:ident, $n_rows:ident,
+        block($qx:ident, $qy:ident) $block:block
+        quad($quad:ident) $quad_body:block
+        pixel($x:ident, $y:ident) $pixel:block
+    ) => {
+        for $qy in (0..$n_rows).step_by(2) {
+            let blocks_end = if $qy + 1 < $n_rows { $width / 4 * 4 } else { 0 };
+            for $qx in (0..blocks_end).step_by(4) $block
+            for qx in (blocks_end..$width).step_by(2) {
+                if $qy + 1 < $n_rows && qx + 1 < $width {
+                    let $quad = [(qx, $qy), (qx + 1, $qy), (qx, $qy + 1), (qx + 1, $qy + 1)];
+                    $quad_body
+                } else {
+                    for $y in $qy..($qy + 2).min($n_rows) {
+                        for $x in qx..(qx + 2).min($width) $pixel
+                    }
+                }
+            }
+        }
+    };
+}
+
 /// One tile's share of a call of [`accumulate_into`]: its rows and the samples.
 struct Tile<'a> {
     scene: &'a Scene,
@@ -341,9 +375,8 @@ impl Tile<'_> {
             // Camera rays of 4×2 pixel blocks traced together (eight AVX2
             // lanes), then each path on its own; the last columns as 2×2
             // quads, a last odd row or column alone.
-            for qy in (0..n_rows).step_by(2) {
-                let blocks_end = if qy + 1 < n_rows { width / 4 * 4 } else { 0 };
-                for qx in (0..blocks_end).step_by(4) {
+            for_each_block!(width, n_rows,
+                block(qx, qy) {
                     let block: [(usize, usize); 8] =
                         std::array::from_fn(|i| (qx + i % 4, qy + i / 4));
                     // (Written out: `block.map` here was left as a call, its
@@ -382,32 +415,26 @@ impl Tile<'_> {
                     }
                     add.add8(pixels, values);
                 }
-                for qx in (blocks_end..width).step_by(2) {
-                    if qy + 1 < n_rows && qx + 1 < width {
-                        let quad = [(qx, qy), (qx + 1, qy), (qx, qy + 1), (qx + 1, qy + 1)];
-                        let mut starts = quad
-                            .map(|(x, y)| PathStart::new(camera, &options, seed, (x, y0 + y), s));
-                        let primary = starts.each_ref().map(|p| p.ray);
-                        rays += 4;
-                        let hits = scene.intersect4(&primary, f32::INFINITY);
-                        for (((x, y), start), hit) in quad.into_iter().zip(&mut starts).zip(hits) {
-                            let v = path_sample(y * width + x, start, hit, &mut rays);
-                            add.add(y * width + x, v);
-                        }
-                    } else {
-                        for y in qy..(qy + 2).min(n_rows) {
-                            for x in qx..(qx + 2).min(width) {
-                                let mut start =
-                                    PathStart::new(camera, &options, seed, (x, y0 + y), s);
-                                rays += 1;
-                                let hit = scene.intersect(&start.ray, f32::INFINITY);
-                                let v = path_sample(y * width + x, &mut start, hit, &mut rays);
-                                add.add(y * width + x, v);
-                            }
-                        }
+                quad(quad) {
+                    let mut starts = quad
+                        .map(|(x, y)| PathStart::new(camera, &options, seed, (x, y0 + y), s));
+                    let primary = starts.each_ref().map(|p| p.ray);
+                    rays += 4;
+                    let hits = scene.intersect4(&primary, f32::INFINITY);
+                    for (((x, y), start), hit) in quad.into_iter().zip(&mut starts).zip(hits) {
+                        let v = path_sample(y * width + x, start, hit, &mut rays);
+                        add.add(y * width + x, v);
                     }
+
                 }
-            }
+                pixel(x, y) {
+                    let mut start = PathStart::new(camera, &options, seed, (x, y0 + y), s);
+                    rays += 1;
+                    let hit = scene.intersect(&start.ray, f32::INFINITY);
+                    let v = path_sample(y * width + x, &mut start, hit, &mut rays);
+                    add.add(y * width + x, v);
+                }
+            );
         }
         rays
     }
@@ -527,9 +554,8 @@ impl Tile<'_> {
         for s in samples.clone() {
             // 4×2 pixel blocks traced together (eight AVX2 lanes), then the last
             // columns as 2×2 quads; a last odd row or column alone.
-            for qy in (0..n_rows).step_by(2) {
-                let blocks_end = if qy + 1 < n_rows { width / 4 * 4 } else { 0 };
-                for qx in (0..blocks_end).step_by(4) {
+            for_each_block!(width, n_rows,
+                block(qx, qy) {
                     // (Written out: `array::from_fn` here was left as a call
                     // in the AVX2 copy of this loop.)
                     let block: [(usize, usize); 8] = [
@@ -593,48 +619,41 @@ impl Tile<'_> {
                     }
                     add.add8(pixels, values);
                 }
-                for qx in (blocks_end..width).step_by(2) {
-                    if qy + 1 < n_rows && qx + 1 < width {
-                        let quad = [(qx, qy), (qx + 1, qy), (qx, qy + 1), (qx + 1, qy + 1)];
-                        // Four plain calls, not `quad.map`: the compiler did not
-                        // always inline the closure through it (3 % of `flat`).
-                        let ray =
-                            |(x, y): (usize, usize)| pixel_ray(camera, seed, s, x, y0 + y, width);
-                        let primary = [ray(quad[0]), ray(quad[1]), ray(quad[2]), ray(quad[3])];
-                        let values = if !AOVS {
-                            integrator.radiance4(scene, &primary, &mut rays)
-                        } else {
-                            rays += 4;
-                            let hits = scene.intersect4(&primary, f32::INFINITY);
-                            let values =
-                                integrator.radiance4_from(scene, &primary, hits, &mut rays);
-                            for (k, ((x, y), ray)) in quad.into_iter().zip(&primary).enumerate() {
-                                gather(y * width + x, ray, hits[k], None, values[k]);
-                            }
-                            values
-                        };
-                        for ((x, y), v) in quad.into_iter().zip(values) {
-                            add.add(y * width + x, v);
-                        }
+                quad(quad) {
+                    // Four plain calls, not `quad.map`: the compiler did not
+                    // always inline the closure through it (3 % of `flat`).
+                    let ray = |(x, y): (usize, usize)| pixel_ray(camera, seed, s, x, y0 + y, width);
+                    let primary = [ray(quad[0]), ray(quad[1]), ray(quad[2]), ray(quad[3])];
+                    let values = if !AOVS {
+                        integrator.radiance4(scene, &primary, &mut rays)
                     } else {
-                        for y in qy..(qy + 2).min(n_rows) {
-                            for x in qx..(qx + 2).min(width) {
-                                let ray = pixel_ray(camera, seed, s, x, y0 + y, width);
-                                let v = if !AOVS {
-                                    integrator.radiance(scene, &ray, &mut rays)
-                                } else {
-                                    rays += 1;
-                                    let hit = scene.intersect(&ray, f32::INFINITY);
-                                    let v = integrator.radiance_from(scene, &ray, hit, &mut rays);
-                                    gather(y * width + x, &ray, hit, None, v);
-                                    v
-                                };
-                                add.add(y * width + x, v);
-                            }
+                        rays += 4;
+                        let hits = scene.intersect4(&primary, f32::INFINITY);
+                        let values = integrator.radiance4_from(scene, &primary, hits, &mut rays);
+                        for (k, ((x, y), ray)) in quad.into_iter().zip(&primary).enumerate() {
+                            gather(y * width + x, ray, hits[k], None, values[k]);
                         }
+                        values
+                    };
+                    for ((x, y), v) in quad.into_iter().zip(values) {
+                        add.add(y * width + x, v);
                     }
+
                 }
-            }
+                pixel(x, y) {
+                    let ray = pixel_ray(camera, seed, s, x, y0 + y, width);
+                    let v = if !AOVS {
+                        integrator.radiance(scene, &ray, &mut rays)
+                    } else {
+                        rays += 1;
+                        let hit = scene.intersect(&ray, f32::INFINITY);
+                        let v = integrator.radiance_from(scene, &ray, hit, &mut rays);
+                        gather(y * width + x, &ray, hit, None, v);
+                        v
+                    };
+                    add.add(y * width + x, v);
+                }
+            );
         }
         rays
     }
