@@ -4,14 +4,13 @@
 //! `raylab render` gets.
 //!
 //! The loaders sit above the scene model ([`crate::scene`]), which knows
-//! nothing of files: [`cornell`] (the lab's boxes), [`obj`] with [`mtl`],
+//! nothing of files: [`cornell`] (the lab's boxes), [`obj`] with its MTL,
 //! [`gltf`], the scene files of [`shot`], and what they share: the default
 //! view of a mesh ([`framing`]) and the placing of one ([`transform`]).
 
 pub mod cornell;
 pub mod framing;
 pub mod gltf;
-pub mod mtl;
 pub mod obj;
 pub mod shot;
 pub mod transform;
