@@ -25,13 +25,18 @@ back into the graph.
 Prints the number of modules and edges at two levels, file (one node per .rs
 file) and top-level module (`aov`, `cache`, `scene`, ... with every file under
 src/scene/ one node `scene`), and the strongly connected components (Tarjan)
-with more than one member at each level. `--layers` also lists every import
-that goes from a lower layer to a higher one in LAYERS below; `--edges` prints
-every edge with the lines it comes from.
+with more than one member at each level. A file-level circle is either between
+files, or within one module split over its folder: the folder's mod.rs (which
+declares the other files and uses or re-exports their items) is in it with
+files below it, which use its items (`use super::...`), as `geometry/bvh/`'s
+files implement `Bvh`'s methods. `--layers` also lists every import that goes
+from a lower layer to a higher one in LAYERS below; `--edges` prints every edge
+with the lines it comes from.
 
-Exit status: 1 if the top-level-module graph or the file-level graph has a
-circle (or, with `--layers`, an import goes up a layer), 0 otherwise, so CI
-can run it: `python3 tools/import_graph.py --layers`.
+Exit status: 1 if the top-level-module graph has a circle, if the file-level
+graph has a circle between files (`--strict`: any circle at all), or, with
+`--layers`, if an import goes up a layer; 0 otherwise, so CI can run it:
+`python3 tools/import_graph.py --layers`.
 """
 
 import argparse
@@ -388,6 +393,16 @@ def tarjan(nodes, succ):
     return comps
 
 
+def common_prefix(mods):
+    """The longest module path that every one of `mods` starts with."""
+    out = ()
+    for parts in zip(*mods):
+        if len(set(parts)) != 1:
+            break
+        out += (parts[0],)
+    return out
+
+
 def top(mod):
     return mod[0] if mod else ROOT
 
@@ -405,6 +420,11 @@ def main():
     ap.add_argument("--layers", action="store_true", help="list imports that go up the layer order")
     ap.add_argument("--edges", action="store_true", help="print every edge and where it comes from")
     ap.add_argument("--with-tests", action="store_true", help="count #[cfg(test)] code too")
+    ap.add_argument(
+        "--strict",
+        action="store_true",
+        help="also fail on circles within one module's folder (its mod.rs and the files below it)",
+    )
     args = ap.parse_args()
 
     g = Graph(os.path.normpath(args.src), args.with_tests)
@@ -416,12 +436,23 @@ def main():
         succ[name(a)].add(name(b))
     nodes = [name(m) for m in g.modules]
     comps = [c for c in tarjan(nodes, succ) if len(c) > 1]
-    print(f"file level: {len(nodes)} modules, {len(g.edges)} edges, {len(comps)} circle(s)")
+    inside, crossing = [], []
+    for c in comps:
+        root = common_prefix([tuple(m.split("::")) if m != ROOT else () for m in c])
+        # (the crate root's "folder" is all of src/: a circle through it is
+        # one between modules)
+        (inside if root and name(root) in c else crossing).append((c, root))
+    print(
+        f"file level: {len(nodes)} modules, {len(g.edges)} edges, {len(comps)} circle(s): "
+        f"{len(crossing)} between files, {len(inside)} within a module split over its folder"
+    )
     tests_note = "counted" if args.with_tests else f"left out: {len(g.test_files)} test-only file(s), {g.test_refs} reference(s) in test code"
     print(f"  (#[cfg(test)] code {tests_note})")
-    for c in sorted(comps, key=len, reverse=True):
-        print(f"  circle of {len(c)}: {', '.join(c)}")
-    bad |= bool(comps)
+    for c, root in sorted(crossing, key=lambda x: len(x[0]), reverse=True):
+        print(f"  circle of {len(c)} between files: {', '.join(c)}")
+    for c, root in sorted(inside, key=lambda x: len(x[0]), reverse=True):
+        print(f"  circle of {len(c)} within {name(root)} (its mod.rs and files below it): {', '.join(c)}")
+    bad |= bool(crossing) or (args.strict and bool(inside))
 
     # top-level-module level
     tsucc = defaultdict(set)
