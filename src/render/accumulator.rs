@@ -15,7 +15,7 @@ use crate::fixed::{self, Fixed3};
 use crate::integrators::Integrator;
 use crate::scene::Scene;
 
-/// What a call of [`accumulate`] cost and found.
+/// What a call of [`accumulate`](super::accumulate) cost and found.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Tally {
     /// Rays cast (closest-hit and shadow rays).
@@ -279,8 +279,8 @@ impl Accumulator {
         (self.split, self.first, self.spp) = (split, first, spp);
     }
 
-    /// Adds samples `spp..spp + n` of every pixel (see [`accumulate`] for what a
-    /// sample is) and returns what they cost. `progress` as for [`render`].
+    /// Adds samples `spp..spp + n` of every pixel (see [`accumulate`](super::accumulate) for what a
+    /// sample is) and returns what they cost. `progress` as for [`render`](super::render).
     pub fn add(
         &mut self,
         scene: &Scene,

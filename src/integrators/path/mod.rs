@@ -13,7 +13,7 @@
 //! triangles radiance `Le`, diffuse surfaces reflect `ρ/π`. Nothing is added for
 //! ambient light: the path tracer computes it.
 //!
-//! The path tracer is [`scalar`]'s, one path at a time; [`lanes`] shades eight
+//! The path tracer is `scalar`'s, one path at a time; `lanes` shades eight
 //! paths at once in AVX2 registers where the scene allows, with the same
 //! values bit for bit.
 
