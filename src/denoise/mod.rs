@@ -8,7 +8,7 @@
 //!
 //! ```no_run
 //! use raylab::denoise::{DenoiseOptions, Denoiser};
-//! use raylab::scene::cornell;
+//! use raylab::load::cornell;
 //! # fn main() -> Result<(), Box<dyn std::error::Error>> {
 //! let scene = cornell::scene();
 //! let camera = raylab::Camera::lab(cornell::CAMERA_POSITION, 0.0, 0.0, 256, 256);

@@ -13,15 +13,19 @@ use super::options::{JobOptions, MAX_SPP};
 use super::write::{denoised_clause, write_result};
 use super::{Event, Hooks, ImageReport, NanFound, ProgressUnit, Session};
 use crate::aov::AovSet;
-use crate::checkpoint::{self, Fingerprint, Key};
+use crate::checkpoint::{self, Key};
 use crate::denoise::Denoiser;
 use crate::farm;
+use crate::fingerprint::Fingerprint;
 use crate::nan_check::first_bad_sample;
 use crate::render::{Accumulator, Ended, Passes, RenderSettings, Split, render_passes};
 
 /// The render settings of `args`: without `time`, exactly `spp` samples (1
 /// if not given); with it, at most `spp`.
-pub(super) fn settings(args: &JobOptions, integrator: crate::Integrator) -> RenderSettings {
+pub(super) fn settings(
+    args: &JobOptions,
+    integrator: crate::integrators::Integrator,
+) -> RenderSettings {
     RenderSettings {
         integrator,
         spp: match args.time {
@@ -507,7 +511,7 @@ fn resume(
 /// output: a checkpoint goes on with more samples under any of those.
 fn render_key(
     args: &JobOptions,
-    scene: &crate::Scene,
+    scene: &crate::scene::Scene,
     camera: &crate::camera::Camera,
     settings: &RenderSettings,
     aovs: crate::aov::AovSet,

@@ -5,12 +5,12 @@
 use super::Hooks;
 use super::options::SceneOptions;
 use crate::film::{Display, ToneMap};
-use crate::scene::load::SceneKind;
+use crate::load::SceneKind;
 
 /// A loaded scene with everything the commands need to show it.
 pub struct Session {
     /// The scene.
-    pub scene: crate::Scene,
+    pub scene: crate::scene::Scene,
     /// What it was made from.
     pub kind: SceneKind,
     /// The starting view (camera, light, integrator).
@@ -29,12 +29,14 @@ pub struct Session {
 /// diffuse surface under that irradiance), `flat`'s base colour as it is.
 pub fn display(
     kind: SceneKind,
-    integrator: crate::Integrator,
+    integrator: crate::integrators::Integrator,
     exposure: f32,
     tonemap: ToneMap,
 ) -> Display {
     let factor = match (kind, integrator) {
-        (k, crate::Integrator::Direct) if k.is_physical() => 1.0 / std::f32::consts::PI,
+        (k, crate::integrators::Integrator::Direct) if k.is_physical() => {
+            1.0 / std::f32::consts::PI
+        }
         (k, _) if k.is_physical() => 1.0,
         (_, i) if i.is_physical() => std::f32::consts::PI,
         _ => 1.0,
@@ -60,7 +62,7 @@ pub fn load_session(
         crate::cache::set_dir(Some(dir.clone()))
             .map_err(|e| anyhow::anyhow!("--cache {}: {e}", dir.display()))?;
     }
-    let loaded = crate::scene::load(&args.scene, &args.load_options())?;
+    let loaded = crate::load::load(&args.scene, &args.load_options())?;
     if let Some(dir) = &args.cache
         && !quiet
     {
