@@ -37,7 +37,7 @@
 //! * [`controls`]: the viewer's camera/light state and how input changes it;
 //! * [`interactive`]: a view that refines while it rests and denoises on a
 //!   thread of its own (`raylab view` shows it in a window);
-//! * [`workload`]: the ray-casting workloads of `raylab bench`, and [`bench`]
+//! * [`workload`]: the ray-casting workloads of `raylab bench`, and [`bench`](mod@bench)
 //!   which times them.
 //!
 //! ## Rendering from Rust

@@ -99,7 +99,7 @@ pub struct DenoiseOptions {
     /// otherwise they are taken as clean as they are (raylab's are).
     pub prefilter: Prefilter,
     /// Blend the denoised image back towards the noisy one where the noisy
-    /// pixels are already as good ([`blend`]).
+    /// pixels are already as good ([`blend()`]).
     pub blend: bool,
 }
 

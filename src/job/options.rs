@@ -3,6 +3,9 @@
 //! library and the Python package, so that names, defaults, limits and help
 //! texts cannot drift apart; the parsers of their values; and the rules that
 //! merge them with a scene file's `[render]` settings and the scene's kind.
+// The fields' doc comments are the command line's help texts, shown as
+// written (`glass[:IOR]`, `[default: ...]`), not Markdown links.
+#![allow(rustdoc::broken_intra_doc_links)]
 
 use std::path::PathBuf;
 
