@@ -6,7 +6,7 @@
 use std::time::Instant;
 
 use raylab::render::{RenderSettings, render};
-use raylab::{Camera, Integrator, scene::cornell};
+use raylab::{Camera, Integrator, load::cornell};
 
 fn main() {
     let scene = cornell::scene();

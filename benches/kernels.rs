@@ -9,7 +9,7 @@ use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use glam::Vec3A;
 use raylab::geometry::bvh::Bvh;
 use raylab::geometry::ray::Ray;
-use raylab::geometry::triangle::{RayShear, Triangle, intersect};
+use raylab::geometry::triangle::{RayShear, Triangle, bounds, intersect};
 use raylab::workload;
 
 /// A UV sphere of about `2·n²` triangles with a bumpy radius.
@@ -73,7 +73,7 @@ fn bvh(c: &mut Criterion) {
         b.iter(|| Bvh::build(black_box(&tris)))
     });
     let bvh = Bvh::build(&tris);
-    let (lo, hi) = workload::bounds(&tris);
+    let (lo, hi) = bounds(&tris);
     let incoherent = workload::incoherent(lo, hi, 1 << 16);
     let primary: Vec<Ray> = workload::primary(lo, hi).into_iter().step_by(16).collect();
     let diag = (hi - lo).length();

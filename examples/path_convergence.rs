@@ -11,7 +11,7 @@ use raylab::film::{Film, read_exr, rel_mse};
 use raylab::integrators::Integrator;
 use raylab::integrators::path::{PathOptions, SamplerKind};
 use raylab::render::accumulate;
-use raylab::{Camera, scene::cornell};
+use raylab::{Camera, load::cornell};
 
 fn main() {
     let mut args = std::env::args().skip(1);

@@ -108,7 +108,7 @@ pub fn run(
     out: &mut dyn Write,
     warn: &mut dyn FnMut(&str),
 ) -> anyhow::Result<()> {
-    let mesh = crate::scene::obj::load_obj(&args.mesh)?;
+    let mesh = crate::load::obj::load_obj(&args.mesh)?;
     for w in &mesh.warnings {
         warn(&format!("warning: {}", crate::guard::one_line(w)));
     }
@@ -150,7 +150,7 @@ pub fn run(
                 .collect()
         }
         None => {
-            let (lo, hi) = workload::bounds(tris);
+            let (lo, hi) = crate::geometry::triangle::bounds(tris);
             let diag = (hi - lo).length();
             let incoherent = workload::incoherent(lo, hi, INCOHERENT_RAYS);
             let primary = workload::primary(lo, hi);

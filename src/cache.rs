@@ -18,7 +18,7 @@ use std::path::{Path, PathBuf};
 use std::sync::RwLock;
 use std::sync::atomic::{AtomicU64, Ordering};
 
-use crate::checkpoint::Fingerprint;
+use crate::fingerprint::Fingerprint;
 
 /// The entries' magic.
 const MAGIC: &[u8; 8] = b"RAYLABCA";

@@ -11,7 +11,7 @@ use glam::{Mat3A, Vec3A, Vec4};
 
 use crate::geometry::ray::Ray;
 #[cfg(target_arch = "x86_64")]
-use crate::{geometry::bvh::Rays8, simd::F8};
+use crate::{geometry::packet::Rays8, simd::F8};
 
 /// How a camera projects: perspective with a focal length relative to the image
 /// height, or orthographic with a fixed view height.

@@ -6,9 +6,6 @@ use glam::{Mat3A, Vec3A};
 use crate::camera::{Camera, Lens, lab_rotation};
 use crate::integrators::Integrator;
 
-/// Camera and light travel per key press in the lab box (2 units wide); other
-/// scenes scale it with their size (see [`ViewState::step`]).
-pub const LAB_STEP: f32 = 0.1;
 /// Camera turn per key press, in degrees.
 pub const TURN_STEP_DEG: f32 = 5.0;
 /// Degrees of yaw or pitch per pixel of mouse drag.
@@ -138,6 +135,7 @@ fn wrap_degrees(deg: f32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::load::cornell::LAB_STEP;
 
     fn start() -> ViewState {
         ViewState {

@@ -346,14 +346,14 @@ pub fn read_part_within(
         };
         if width == 0
             || height == 0
-            || width > crate::render::MAX_SIDE
-            || height > crate::render::MAX_SIDE
-            || u64::from(width) * u64::from(height) > crate::render::MAX_PIXELS
+            || width > crate::limits::MAX_SIDE
+            || height > crate::limits::MAX_SIDE
+            || u64::from(width) * u64::from(height) > crate::limits::MAX_PIXELS
         {
             return Err(format!("an image of {width}×{height} pixels"));
         }
         let split = Split::new(index, count, height)?;
-        if a >= b || b > spp || spp > crate::render::MAX_SPP {
+        if a >= b || b > spp || spp > crate::limits::MAX_SPP {
             return Err(format!("samples {a}..{b} of a render of {spp} spp"));
         }
         Ok((width, height, split, a..b, aovs, render, tally))

@@ -6,7 +6,7 @@
 //! resumed, sample ranges rendered on different machines and merged) give the
 //! same sums bit for bit, which f64 sums do not. Each sample is rounded
 //! towards zero to a multiple of 2⁻⁶⁴ (5.4e-20) and clamped to ±2⁴²
-//! (4.4e12), so that [`crate::render::MAX_SPP`] = 2²⁰ samples cannot overflow
+//! (4.4e12), so that [`crate::limits::MAX_SPP`] = 2²⁰ samples cannot overflow
 //! the sum (2⁴²·2²⁰·2⁶⁴ = 2¹²⁶ < 2¹²⁷). Near 1 that is 40 bits finer than an
 //! f32, and finer than a sum of 2²⁰ samples in f64.
 
@@ -491,7 +491,7 @@ mod tests {
         assert_eq!(fixed(f32::INFINITY), max);
         assert_eq!(fixed(f32::NEG_INFINITY), -max);
         assert_eq!(fixed(f32::NAN), 0);
-        assert!(max.checked_mul(crate::render::MAX_SPP as i128).is_some());
+        assert!(max.checked_mul(crate::limits::MAX_SPP as i128).is_some());
     }
 
     #[test]

@@ -9,6 +9,9 @@
 //! one) not to print the usual multi-line report for a panic that is caught
 //! here. The fuzz targets still see every such panic (libFuzzer's panic hook
 //! aborts before unwinding), so decoder bugs are found and worked around.
+//!
+//! Messages about such files stay one readable line: [`one_line`] escapes the
+//! control characters of a name, [`quote`] cuts a long word short.
 
 use std::cell::Cell;
 use std::panic::{AssertUnwindSafe, catch_unwind};
@@ -82,6 +85,19 @@ pub fn one_line(message: &str) -> std::borrow::Cow<'_, str> {
         })
         .collect::<String>()
         .into()
+}
+
+/// Longest word quoted in a message, in characters: a malformed file may
+/// hold a 100 MB token, and the message must stay one readable line.
+pub const QUOTE_CHARS: usize = 40;
+
+/// `word` for an error message: cut to [`QUOTE_CHARS`] characters (with `…`
+/// and the full length) when longer.
+pub fn quote(word: &str) -> String {
+    match word.char_indices().nth(QUOTE_CHARS) {
+        None => word.to_string(),
+        Some((cut, _)) => format!("{}… ({} bytes)", &word[..cut], word.len()),
+    }
 }
 
 #[cfg(test)]

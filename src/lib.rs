@@ -8,8 +8,9 @@
 //!   ray–triangle test and the eight-wide BVH;
 //! * [`scene`]: the one scene representation of every source (triangles, their
 //!   vertex attributes, materials, textures, lights, cameras) behind the
-//!   [`Scene::intersect`] / [`Scene::occluded`] seam, and its loaders (the lab's
-//!   built-in boxes, Wavefront OBJ, glTF 2.0);
+//!   [`Scene::intersect`] / [`Scene::occluded`] seam;
+//! * [`load`]: the scene's loaders above it (the lab's built-in boxes,
+//!   Wavefront OBJ, glTF 2.0, scene files);
 //! * [`camera`]: pinhole (and orthographic) cameras;
 //! * [`materials`]: BSDFs (diffuse, mirror, glass, rough conductor, the glTF
 //!   metallic–roughness BRDF);
@@ -20,12 +21,15 @@
 //! * [`sampling`]: PCG32 streams keyed by (seed, pixel, sample), and
 //!   Owen-scrambled Sobol' points;
 //! * [`render`]: tiles on rayon, deterministic per-pixel sampling;
+//! * [`limits`]: the largest image, sample count and time a render accepts;
 //! * [`aov`]: albedo and normal guides (through specular chains), depth,
 //!   position and variance per pixel, gathered by the render;
 //! * [`denoise`]: Open Image Denoise, loaded at run time, on an image and its
 //!   guides, blended back towards the noisy image where it is good enough;
 //! * [`film`]: the image buffer, tone mapping and atomic PNG/EXR output;
 //! * [`checkpoint`]: a render's sums saved to resume it after a stop or a kill;
+//! * [`fingerprint`]: the stable hash of checkpoints, the cache's entries and
+//!   scenes;
 //! * [`job`]: the render job, which owns the command line's policy (defaults,
 //!   a scene file's settings merged with the options, output, checkpoints,
 //!   parts, frames, denoising): `raylab render`, `raylab view` and `raylab
@@ -33,7 +37,7 @@
 //! * [`controls`]: the viewer's camera/light state and how input changes it;
 //! * [`interactive`]: a view that refines while it rests and denoises on a
 //!   thread of its own (`raylab view` shows it in a window);
-//! * [`workload`]: the ray-casting workloads of `raylab bench`, and [`bench`]
+//! * [`workload`]: the ray-casting workloads of `raylab bench`, and [`bench`](mod@bench)
 //!   which times them.
 //!
 //! ## Rendering from Rust
@@ -63,6 +67,7 @@ pub mod controls;
 pub mod denoise;
 pub mod farm;
 pub mod film;
+pub mod fingerprint;
 pub mod fixed;
 pub mod geometry;
 pub mod guard;
@@ -70,6 +75,8 @@ pub mod integrators;
 pub mod interactive;
 pub mod job;
 pub mod lights;
+pub mod limits;
+pub mod load;
 pub mod materials;
 pub mod memory;
 pub mod nan_check;

@@ -13,8 +13,6 @@
 use std::arch::x86_64::*;
 use std::ops::{Add, BitAnd, BitOr, Div, Mul, Not, Sub};
 
-use crate::geometry::triangle::Lanes;
-
 /// Eight f32 lanes (also used as a mask: all bits set = true).
 #[derive(Clone, Copy, Debug)]
 #[repr(transparent)]
@@ -258,21 +256,5 @@ impl Not for F8 {
     #[inline(always)]
     fn not(self) -> F8 {
         F8(unsafe { _mm256_xor_ps(self.0, _mm256_castsi256_ps(_mm256_set1_epi32(-1))) })
-    }
-}
-
-impl Lanes for F8 {
-    #[inline(always)]
-    fn splat(x: f32) -> Self {
-        F8::splat(x)
-    }
-    #[inline(always)]
-    fn abs(self) -> Self {
-        F8(unsafe { _mm256_andnot_ps(_mm256_set1_ps(-0.0), self.0) })
-    }
-    /// As `Vec4::max` (SSE `maxps`): the second operand where either is NaN.
-    #[inline(always)]
-    fn max(self, other: Self) -> Self {
-        self.max_(other)
     }
 }

@@ -14,14 +14,6 @@ use crate::sampling::sampler::Rng;
 /// Rays handed to one thread at a time.
 const CHUNK: usize = 1024;
 
-/// Componentwise minimum and maximum of all vertices.
-pub fn bounds(triangles: &[Triangle]) -> (Vec3A, Vec3A) {
-    triangles.iter().fold(
-        (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY)),
-        |(lo, hi), t| (lo.min(t.min()), hi.max(t.max())),
-    )
-}
-
 /// The primary workload: a 1024×1024 pinhole view from `c + (0, 0, 2·ext)` along
 /// −z, up +y, vertical field of view 45°, one ray per pixel centre, row-major
 /// from the top row (computed in f64, as the reference generator does).

@@ -16,8 +16,8 @@ use std::time::Duration;
 use glam::{Mat3A, Vec3A};
 use raylab::aov::{Aov, AovImage, AovSet};
 use raylab::camera::{Lens, Y_UP_TOWARDS_MINUS_Z};
+use raylab::load::cornell::{self, colors, parts};
 use raylab::render::{RenderSettings, Rendered, render, render_for_with_aovs, render_with_aovs};
-use raylab::scene::cornell::{self, colors, parts};
 use raylab::{Camera, Integrator, Scene};
 use serde_json::json;
 
@@ -414,7 +414,7 @@ fn gltf_albedo_follows_the_bsdf_and_normals_face_the_camera() {
     let mesh = g.mesh(prims);
     g.root(json!({ "mesh": mesh }));
     let path = g.write(dir.path(), "two.gltf");
-    let scene = raylab::scene::load(path.to_str().unwrap(), &Default::default())
+    let scene = raylab::load::load(path.to_str().unwrap(), &Default::default())
         .unwrap()
         .scene;
     // Orthographic, head-on (cos θo = 1): Schlick's terms are their F0, so the

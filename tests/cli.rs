@@ -157,7 +157,7 @@ fn exr_holds_the_linear_values_unchanged_and_png_the_srgb_encoding() {
         let out = raylab(&all, dir.path());
         assert!(out.status.success(), "{}", stderr(&out));
     }
-    let mut scene = raylab::scene::cornell::scene();
+    let mut scene = raylab::load::cornell::scene();
     scene.light.position = glam::Vec3A::new(0.2, -0.6, -0.5);
     scene.light.power = glam::Vec3A::splat(20.0);
     scene.ambient = glam::Vec3A::splat(0.25);
@@ -834,8 +834,8 @@ fn render_writes_aovs_as_named_exr_channels_beside_rgb() {
         seed: 5,
     };
     let set = "albedo,depth".parse().unwrap();
-    let scene = raylab::scene::cornell::scene();
-    let cam = raylab::Camera::lab(raylab::scene::cornell::CAMERA_POSITION, 0.0, 0.0, 30, 20);
+    let scene = raylab::load::cornell::scene();
+    let cam = raylab::Camera::lab(raylab::load::cornell::CAMERA_POSITION, 0.0, 0.0, 30, 20);
     let want = raylab::render::render_with_aovs(&scene, &cam, &settings, set, &|_| {});
     assert_eq!(raylab::film::read_exr(&file).unwrap(), want.film);
     for channel in want.aovs.unwrap().into_channels() {

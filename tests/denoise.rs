@@ -23,8 +23,8 @@ use raylab::aov::{Aov, AovSet};
 use raylab::camera::{Lens, Y_UP_TOWARDS_MINUS_Z};
 use raylab::denoise::{DenoiseOptions, Denoiser, GUIDES};
 use raylab::film::{read_exr, read_exr_channels, read_exr_metadata, rel_mse};
+use raylab::load::cornell;
 use raylab::render::{RenderSettings, Rendered, render_with_aovs};
-use raylab::scene::cornell;
 use raylab::{Camera, Integrator, Scene};
 use serde_json::json;
 
@@ -94,11 +94,11 @@ fn load(g: &mut Gltf, dir: &Path, extensions: &[&str]) -> Scene {
     g.extensions_used = extensions.iter().map(|e| e.to_string()).collect();
     let path = g.write(dir, "scene.gltf");
     // No default sky: what escapes sees black.
-    let options = raylab::scene::LoadOptions {
-        default_light: raylab::scene::load::DefaultLight::Off,
+    let options = raylab::load::LoadOptions {
+        default_light: raylab::load::DefaultLight::Off,
         ..Default::default()
     };
-    raylab::scene::load(path.to_str().unwrap(), &options)
+    raylab::load::load(path.to_str().unwrap(), &options)
         .unwrap_or_else(|e| panic!("{e}"))
         .scene
 }
@@ -293,14 +293,14 @@ fn the_sky_is_squashed_into_the_albedo_and_has_no_normal() {
     g.root(json!({ "mesh": mesh }));
     g.extensions_used = vec!["KHR_materials_specular".into()];
     let path = g.write(dir.path(), "sky.gltf");
-    let options = raylab::scene::LoadOptions {
-        environment: raylab::scene::load::EnvironmentOptions {
-            source: Some(raylab::scene::load::EnvSource::Color(Vec3A::splat(1.0))),
+    let options = raylab::load::LoadOptions {
+        environment: raylab::load::EnvironmentOptions {
+            source: Some(raylab::load::EnvSource::Color(Vec3A::splat(1.0))),
             ..Default::default()
         },
         ..Default::default()
     };
-    let scene = raylab::scene::load(path.to_str().unwrap(), &options)
+    let scene = raylab::load::load(path.to_str().unwrap(), &options)
         .unwrap()
         .scene;
     let aovs = render(&scene, &front_camera(), 2, GUIDES, 1).aovs.unwrap();

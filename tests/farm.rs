@@ -298,8 +298,8 @@ fn image_of(path: &Path) -> Vec<u8> {
 /// (whose sums are exact too) add up to the render's accumulator exactly.
 #[test]
 fn library_parts_with_aovs_add_up_to_the_whole_render() {
-    let scene = raylab::scene::cornell::scene();
-    let camera = Camera::lab(raylab::scene::cornell::CAMERA_POSITION, 0.0, 0.0, 40, 30);
+    let scene = raylab::load::cornell::scene();
+    let camera = Camera::lab(raylab::load::cornell::CAMERA_POSITION, 0.0, 0.0, 40, 30);
     let aovs: AovSet = "albedo,normal,depth".parse().unwrap();
     let settings = RenderSettings {
         integrator: Integrator::path(),

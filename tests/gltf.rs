@@ -16,8 +16,9 @@ use glam::{Mat3, Quat, Vec2, Vec3, Vec3A, Vec4};
 use raylab::camera::{Lens, Y_UP_TOWARDS_MINUS_Z};
 use raylab::integrators::path::PathOptions;
 use raylab::lights::Incident;
+use raylab::load::{LoadOptions, Loaded};
 use raylab::render::sample_pixel;
-use raylab::scene::{Facing, LoadOptions, Loaded};
+use raylab::scene::Facing;
 use raylab::{Camera, Hit, Integrator, LightSample, Ray, Scene};
 use serde_json::{Value, json};
 
@@ -25,7 +26,7 @@ use serde_json::{Value, json};
 // Helpers
 
 fn load_with(path: &Path, options: &LoadOptions) -> Result<Loaded, String> {
-    raylab::scene::load(path.to_str().unwrap(), options).map_err(|e| e.to_string())
+    raylab::load::load(path.to_str().unwrap(), options).map_err(|e| e.to_string())
 }
 
 fn load(path: &Path) -> Loaded {

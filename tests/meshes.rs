@@ -7,13 +7,14 @@ use std::path::Path;
 use glam::Vec3A;
 use raylab::geometry::bvh::{Bvh, brute_force};
 use raylab::geometry::ray::Ray;
+use raylab::geometry::triangle::bounds;
 use raylab::workload;
 
 fn check_mesh(name: &str, stride: usize) {
     let path = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../shared/models")
         .join(name);
-    let mesh = raylab::scene::obj::load_obj(&path)
+    let mesh = raylab::load::obj::load_obj(&path)
         .unwrap_or_else(|e| panic!("{e}: the shared folder must sit beside the project"));
     let tris = &mesh.triangles;
     let bvh = Bvh::build(tris);
@@ -21,7 +22,7 @@ fn check_mesh(name: &str, stride: usize) {
         bvh.triangle_count(),
         tris.iter().filter(|t| t.area() > 0.0).count()
     );
-    let (lo, hi) = workload::bounds(tris);
+    let (lo, hi) = bounds(tris);
     // Every stride-th ray of both standard workloads: coherent and incoherent.
     let rays: Vec<Ray> = workload::primary(lo, hi)
         .into_iter()
@@ -72,9 +73,9 @@ fn teapot_agrees_with_brute_force() {
 #[test]
 fn rays_starting_inside_the_box_and_nan_rays() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/models/teapot.obj");
-    let tris = raylab::scene::obj::load_obj(&path).unwrap().triangles;
+    let tris = raylab::load::obj::load_obj(&path).unwrap().triangles;
     let bvh = Bvh::build(&tris);
-    let (lo, hi) = workload::bounds(&tris);
+    let (lo, hi) = bounds(&tris);
     let centre = (lo + hi) / 2.0;
     for dir in [Vec3A::X, -Vec3A::Y, Vec3A::new(0.3, 0.4, -0.5).normalize()] {
         let ray = Ray::new(centre, dir);

@@ -6,9 +6,9 @@ use std::process::Command;
 
 use glam::Vec3A;
 use raylab::integrators::path::PathEvent;
+use raylab::load::cornell;
 use raylab::nan_check::first_bad_sample;
 use raylab::render::{RenderSettings, probe_sample, render};
-use raylab::scene::cornell;
 use raylab::{Camera, Integrator, PointLight, Scene};
 
 fn box_camera(w: u32, h: u32) -> Camera {

@@ -7,8 +7,8 @@ mod common;
 use std::path::Path;
 
 use glam::Vec3A;
+use raylab::load::obj::load_obj_scene;
 use raylab::render::{RenderSettings, render};
-use raylab::scene::obj::load_obj_scene;
 use raylab::textures::srgb_to_linear;
 use raylab::{Integrator, Scene};
 
@@ -200,7 +200,7 @@ fn the_scene_fingerprint_sees_every_texel_and_coordinate() {
             .build()
             .unwrap()
             .install(|| {
-                raylab::scene::load(path.to_str().unwrap(), &Default::default())
+                raylab::load::load(path.to_str().unwrap(), &Default::default())
                     .unwrap()
                     .scene
                     .fingerprint()
@@ -221,7 +221,7 @@ fn the_scene_fingerprint_sees_every_texel_and_coordinate() {
     write_obj("1.0000001");
     assert_ne!(fingerprint(2), base, "one coordinate moved by an ulp");
     assert_ne!(
-        raylab::scene::cornell::scene().fingerprint(),
-        raylab::scene::cornell::area_scene().fingerprint()
+        raylab::load::cornell::scene().fingerprint(),
+        raylab::load::cornell::area_scene().fingerprint()
     );
 }

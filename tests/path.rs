@@ -5,8 +5,8 @@ mod common;
 
 use glam::Vec3A;
 use raylab::film::{Film, rel_mse};
+use raylab::load::cornell;
 use raylab::render::{RenderSettings, Rendered, render};
-use raylab::scene::cornell;
 use raylab::{Camera, Integrator, Scene};
 
 fn lab_camera(w: u32, h: u32) -> Camera {

@@ -5,8 +5,8 @@ mod common;
 
 use glam::Vec3A;
 use raylab::film::Film;
+use raylab::load::cornell::{self, colors};
 use raylab::render::{RenderSettings, accumulate, render, sample_pixel};
-use raylab::scene::cornell::{self, colors};
 use raylab::{Camera, Integrator, Scene};
 
 /// The seven reflectances of the box.
@@ -37,7 +37,7 @@ fn block_boxes(scene: &Scene) -> Vec<(Vec3A, Vec3A)> {
     [cornell::parts::SHORT_BLOCK, cornell::parts::TALL_BLOCK]
         .into_iter()
         .map(|r| {
-            let (lo, hi) = raylab::workload::bounds(&scene.triangles()[r]);
+            let (lo, hi) = raylab::geometry::triangle::bounds(&scene.triangles()[r]);
             (lo - 0.01, hi + 0.01)
         })
         .collect()

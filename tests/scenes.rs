@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 
 use glam::Vec3A;
 use raylab::film::Film;
-use raylab::scene::{LoadOptions, Loaded, load};
+use raylab::load::{LoadOptions, Loaded, load};
 use raylab::{Camera, Scene};
 
 fn project(rel: &str) -> PathBuf {
@@ -162,8 +162,8 @@ fn material_overrides_change_the_named_parts() {
     .unwrap();
     let loaded = load_file(&path);
     let scene = &loaded.scene;
-    let tall = raylab::scene::cornell::part("tall").unwrap();
-    let floor = raylab::scene::cornell::part("floor").unwrap();
+    let tall = raylab::load::cornell::part("tall").unwrap();
+    let floor = raylab::load::cornell::part("floor").unwrap();
     for prim in tall {
         assert!(matches!(
             scene.material(prim as u32).kind,
@@ -291,10 +291,10 @@ fn the_documented_example_composes() {
     let start = section.find("```toml\n").expect("a toml block") + 8;
     let text = &section[start..start + section[start..].find("```").unwrap()];
     let path = project("scenes/readme-example.toml");
-    let file = raylab::scene::shot::parse(text, &path).unwrap_or_else(|e| panic!("{e}"));
+    let file = raylab::load::shot::parse(text, &path).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(file.models.len(), 3);
     assert_eq!(file.lights.len(), 4);
-    let shot = raylab::scene::shot::compose(file, &path).unwrap_or_else(|e| panic!("{e}"));
+    let shot = raylab::load::shot::compose(file, &path).unwrap_or_else(|e| panic!("{e}"));
     // The box's point light and the file's first point light: the box's is the key.
     assert!(shot.parts.light.power.max_element() > 0.0);
     assert_eq!(shot.settings.max_depth, Some(16));

@@ -112,7 +112,7 @@ def ensure_mitsuba(args):
 
 
 # ----------------------------------------------------------------------------------
-# The lab box, as src/scene/cornell.rs builds it (y down, box [-1, 1]³, no front wall).
+# The lab box, as src/load/cornell.rs builds it (y down, box [-1, 1]³, no front wall).
 
 L = 555.0
 GREEN, PURPLE, YELLOW = (0.15, 0.75, 0.15), (0.75, 0.15, 0.75), (0.75, 0.75, 0.15)

@@ -13,7 +13,7 @@ The scene is raylab's `cornell-area --material tall=mirror,short=glass` (the box
 tools/compare_mitsuba.py also builds for Mitsuba), in glTF terms as
 ../shared/specs/scene-conventions.md reads them:
 
-- geometry: the 30 triangles of src/scene/cornell.rs (tools/compare_mitsuba.py's
+- geometry: the 30 triangles of src/load/cornell.rs (tools/compare_mitsuba.py's
   `box_triangles`: the box [-1, 1]^3 without its front wall, the short and the tall block) and
   the two triangles of the `cornell-area` ceiling patch. The lab's frame has y down; glTF's has
   +y up. The conversion is the half turn about z, (x, y, z) -> (-x, -y, z), as raylab's scene
@@ -84,7 +84,7 @@ def floats(x):
 def build(out_dir):
     tris, rho = box_triangles()
     a, b, c, d = AREA_LIGHT_CORNERS
-    light_tris = [(a, b, c), (a, c, d)]  # as src/scene/cornell.rs pushes them
+    light_tris = [(a, b, c), (a, c, d)]  # as src/load/cornell.rs pushes them
 
     parts = [(name, tris[lo:hi], rho[lo]) for name, (lo, hi) in PARTS.items()]
     parts.append(("light", light_tris, (0.0, 0.0, 0.0)))

@@ -38,8 +38,8 @@ fuzz_target!(|data: &[u8]| {
             };
             let _ = scene.load_options();
             for kind in [
-                raylab::scene::load::SceneKind::Lab,
-                raylab::scene::load::SceneKind::Gltf,
+                raylab::load::SceneKind::Lab,
+                raylab::load::SceneKind::Gltf,
             ] {
                 for aspect in [None, Some(0.0), Some(1.5), Some(f32::MAX)] {
                     if let Ok((w, h)) = scene.size(kind, aspect) {

@@ -3,7 +3,7 @@
 //!
 //! Every target writes its input where raylab would find a user's file and
 //! goes through the same public entry point the command line uses
-//! (`raylab::scene::load`), so the fuzzers see the real code path, with the
+//! (`raylab::load::load`), so the fuzzers see the real code path, with the
 //! file names and extensions that select it. What loads is then rendered, tiny,
 //! with every integrator, so that the BVH build, tangent generation, light and
 //! environment sampling and the materials run on whatever the parser let
@@ -19,8 +19,8 @@ use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
 use glam::Vec3A;
+use raylab::load::{EnvSource, LoadOptions};
 use raylab::render::{RenderSettings, render};
-use raylab::scene::load::{EnvSource, LoadOptions};
 use raylab::{Camera, Integrator};
 
 /// The per-process scratch folder (in `/dev/shm` when there is one: every
@@ -181,7 +181,7 @@ pub fn split_nul(data: &[u8]) -> (&[u8], &[u8]) {
 pub fn load_and_render(path: &Path, options: &LoadOptions) {
     let name = path.to_str().expect("scratch paths are UTF-8");
     let verbose = std::env::var_os("RAYLAB_FUZZ_VERBOSE").is_some();
-    match raylab::scene::load(name, options) {
+    match raylab::load::load(name, options) {
         Err(e) => {
             if verbose {
                 eprintln!("error: {e}");
@@ -226,7 +226,7 @@ pub fn load_and_render(path: &Path, options: &LoadOptions) {
 /// Loads the fixture OBJ lit by the environment map `env`.
 pub fn load_with_env(env: &Path) {
     let options = LoadOptions {
-        environment: raylab::scene::load::EnvironmentOptions {
+        environment: raylab::load::EnvironmentOptions {
             source: Some(EnvSource::File(env.to_path_buf())),
             strength: None,
             rotation: None,

@@ -1,7 +1,7 @@
 //! The targets' bodies, callable from the fuzz targets and from the
 //! regression test that replays committed findings (`tests/fuzz_regressions.rs`).
 
-use raylab::scene::load::LoadOptions;
+use raylab::load::LoadOptions;
 
 use super::{load_and_render, load_with_env, put, scratch, split_nul};
 
@@ -42,7 +42,7 @@ pub fn glb(data: &[u8]) {
 /// and the scene loaded and rendered.
 pub fn scene_toml(data: &[u8]) {
     let path = put("in.toml", data);
-    if let Err(e) = raylab::scene::shot::read_settings(&path) {
+    if let Err(e) = raylab::load::shot::read_settings(&path) {
         super::check_message(&e.to_string());
     }
     load_and_render(&path, &LoadOptions::default());
@@ -111,7 +111,7 @@ pub fn bvh(data: &[u8]) {
 /// A render checkpoint (`--checkpoint FILE`), its checksum appended so that
 /// inputs get past it to the header and the sums: read as a resume reads it.
 pub fn checkpoint(data: &[u8]) {
-    let mut f = raylab::checkpoint::Fingerprint::new();
+    let mut f = raylab::fingerprint::Fingerprint::new();
     f.update(data);
     let mut bytes = data.to_vec();
     bytes.extend_from_slice(&f.value().to_le_bytes());

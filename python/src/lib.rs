@@ -534,7 +534,7 @@ impl Scene {
     /// or "scene file".
     #[getter]
     fn kind(&self) -> &'static str {
-        use raylab::scene::load::SceneKind;
+        use raylab::load::SceneKind;
         match self.session.kind {
             SceneKind::Lab => "lab",
             SceneKind::Mesh => "mesh",

@@ -8,7 +8,7 @@
 //!
 //! ```no_run
 //! use raylab::denoise::{DenoiseOptions, Denoiser};
-//! use raylab::scene::cornell;
+//! use raylab::load::cornell;
 //! # fn main() -> Result<(), Box<dyn std::error::Error>> {
 //! let scene = cornell::scene();
 //! let camera = raylab::Camera::lab(cornell::CAMERA_POSITION, 0.0, 0.0, 256, 256);
@@ -99,7 +99,7 @@ pub struct DenoiseOptions {
     /// otherwise they are taken as clean as they are (raylab's are).
     pub prefilter: Prefilter,
     /// Blend the denoised image back towards the noisy one where the noisy
-    /// pixels are already as good ([`blend`]).
+    /// pixels are already as good ([`blend()`]).
     pub blend: bool,
 }
 

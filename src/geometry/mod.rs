@@ -2,6 +2,7 @@
 //! answers the scene's ray queries.
 
 pub mod bvh;
+pub(crate) mod packet;
 pub mod ray;
 pub mod triangle;
 

@@ -9,11 +9,15 @@
 //! computes each triangle's barycentrics from its own edge vectors, so rounding can
 //! let a ray slip between two neighbours.
 
+#[cfg(target_arch = "x86_64")]
+use std::arch::x86_64::{_mm256_andnot_ps, _mm256_set1_ps};
 use std::ops::{Add, Div, Mul};
 
 use glam::{Mat3A, Vec3A, Vec4};
 
 use crate::geometry::ray::{Ray, gamma};
+#[cfg(target_arch = "x86_64")]
+use crate::simd::F8;
 
 /// A triangle given by its three vertices, in the winding the scene defines.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -178,6 +182,14 @@ const ORDER_OF_KEY: [[usize; 3]; 6] = [
     [1, 0, 2],
 ];
 
+/// Componentwise minimum and maximum of all vertices.
+pub fn bounds(triangles: &[Triangle]) -> (Vec3A, Vec3A) {
+    triangles.iter().fold(
+        (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY)),
+        |(lo, hi), t| (lo.min(t.min()), hi.max(t.max())),
+    )
+}
+
 /// Numbers the error bound is computed on: `f32` for one ray, [`Vec4`] for four
 /// lanes at once, with the same operations in the same order.
 pub trait Lanes: Copy + Add<Output = Self> + Mul<Output = Self> + Div<Output = Self> {
@@ -210,6 +222,25 @@ impl Lanes for Vec4 {
     }
     fn max(self, other: Self) -> Self {
         Vec4::max(self, other)
+    }
+}
+
+// SAFETY (of the `unsafe` block): as for every operation on `F8` (see
+// `crate::simd`), which is only made and used inside AVX2 code.
+#[cfg(target_arch = "x86_64")]
+impl Lanes for F8 {
+    #[inline(always)]
+    fn splat(x: f32) -> Self {
+        F8::splat(x)
+    }
+    #[inline(always)]
+    fn abs(self) -> Self {
+        F8(unsafe { _mm256_andnot_ps(_mm256_set1_ps(-0.0), self.0) })
+    }
+    /// As `Vec4::max` (SSE `maxps`): the second operand where either is NaN.
+    #[inline(always)]
+    fn max(self, other: Self) -> Self {
+        self.max_(other)
     }
 }
 

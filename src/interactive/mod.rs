@@ -17,10 +17,11 @@ use glam::Vec3A;
 
 use crate::controls::{Action, ViewState};
 use crate::film::{Display, Film, ToneMap, write_image_with};
+use crate::integrators::Integrator;
 use crate::job::{SceneOptions, Session};
+use crate::load::SceneKind;
 use crate::render::{Accumulator, accumulate};
-use crate::scene::load::SceneKind;
-use crate::{Integrator, Scene};
+use crate::scene::Scene;
 
 pub use worker::{Done, Worker};
 

@@ -13,15 +13,19 @@ use super::options::{JobOptions, MAX_SPP};
 use super::write::{denoised_clause, write_result};
 use super::{Event, Hooks, ImageReport, NanFound, ProgressUnit, Session};
 use crate::aov::AovSet;
-use crate::checkpoint::{self, Fingerprint, Key};
+use crate::checkpoint::{self, Key};
 use crate::denoise::Denoiser;
 use crate::farm;
+use crate::fingerprint::Fingerprint;
 use crate::nan_check::first_bad_sample;
 use crate::render::{Accumulator, Ended, Passes, RenderSettings, Split, render_passes};
 
 /// The render settings of `args`: without `time`, exactly `spp` samples (1
 /// if not given); with it, at most `spp`.
-pub(super) fn settings(args: &JobOptions, integrator: crate::Integrator) -> RenderSettings {
+pub(super) fn settings(
+    args: &JobOptions,
+    integrator: crate::integrators::Integrator,
+) -> RenderSettings {
     RenderSettings {
         integrator,
         spp: match args.time {
@@ -454,9 +458,9 @@ impl Images<'_> {
 /// samples and, if it did, where the first went bad; returns whether it did.
 fn nan_check(
     args: &JobOptions,
-    scene: &crate::Scene,
+    scene: &crate::scene::Scene,
     camera: &crate::camera::Camera,
-    integrator: crate::Integrator,
+    integrator: crate::integrators::Integrator,
     acc: &Accumulator,
     hooks: &Hooks<'_>,
 ) -> anyhow::Result<bool> {
@@ -525,7 +529,7 @@ fn resume(
 /// output: a checkpoint goes on with more samples under any of those.
 fn render_key(
     args: &JobOptions,
-    scene: &crate::Scene,
+    scene: &crate::scene::Scene,
     camera: &crate::camera::Camera,
     settings: &RenderSettings,
     aovs: crate::aov::AovSet,

@@ -426,7 +426,7 @@ fn settings_warnings(args: &JobOptions, session: &Session) -> Vec<String> {
             "warning: --max-depth and --material only change `path` images; {integrator} ignores them"
         ));
     }
-    if integrator == crate::Integrator::Direct && scene.point_power() == 0.0 {
+    if integrator == crate::integrators::Integrator::Direct && scene.point_power() == 0.0 {
         said.push(
             "warning: the point light is off: `direct` shows only the ambient term (emitting triangles light the scene under --integrator path)".to_string(),
         );

@@ -3,17 +3,20 @@
 //! library and the Python package, so that names, defaults, limits and help
 //! texts cannot drift apart; the parsers of their values; and the rules that
 //! merge them with a scene file's `[render]` settings and the scene's kind.
+// The fields' doc comments are the command line's help texts, shown as
+// written (`glass[:IOR]`, `[default: ...]`), not Markdown links.
+#![allow(rustdoc::broken_intra_doc_links)]
 
 use std::path::PathBuf;
 
 use clap::Args;
 use glam::Vec3A;
 
-use crate::Integrator;
-use crate::scene::cornell::{self, MaterialChoice};
-use crate::scene::load::SceneKind;
+use crate::integrators::Integrator;
+use crate::load::SceneKind;
+use crate::load::cornell::{self, MaterialChoice};
 
-pub use crate::render::{MAX_PIXELS, MAX_SIDE, MAX_SPP, MAX_TIME};
+pub use crate::limits::{MAX_PIXELS, MAX_SIDE, MAX_SPP, MAX_TIME};
 
 /// What to render and how to light and show it: the scene, image size,
 /// camera and light options of `raylab render` and `raylab view`. Each field
@@ -46,7 +49,7 @@ pub struct SceneOptions {
     /// `auto` (when the file has no punctual light and no emitters strong enough
     /// to light it), `on` or `off`.
     #[arg(long, value_name = "WHEN", default_value = "auto", value_parser = parse_default_light)]
-    pub default_light: crate::scene::load::DefaultLight,
+    pub default_light: crate::load::DefaultLight,
     /// Tone mapping of PNG output and the viewer: `clamp`, `aces` or
     /// `khronos-pbr-neutral` [default: khronos-pbr-neutral for glTF, clamp otherwise].
     #[arg(long, value_name = "OP", value_parser = parse_tonemap)]
@@ -107,7 +110,7 @@ pub struct SceneOptions {
     /// y = 0, centred, scaled to the height). One for all meshes, or one per --add.
     /// The bunny on the lab box's floor: "fit 0.8; rotate x 180; translate 0.3 1 -0.3".
     #[arg(long, value_name = "OPS", allow_hyphen_values = true)]
-    pub transform: Vec<crate::scene::transform::Transform>,
+    pub transform: Vec<crate::load::transform::Transform>,
     /// Ambient term N added to the direct light (the lab's stand-in for indirect
     /// light) [default: 0.5 in the box, 0.15 for a mesh].
     #[arg(long, value_name = "N", allow_hyphen_values = true, value_parser = parse_non_negative)]
@@ -378,8 +381,8 @@ fn check_pixels(w: u32, h: u32) -> Result<(), String> {
 
 impl SceneOptions {
     /// The library's load options from the arguments.
-    pub fn load_options(&self) -> crate::scene::LoadOptions {
-        crate::scene::LoadOptions {
+    pub fn load_options(&self) -> crate::load::LoadOptions {
+        crate::load::LoadOptions {
             add: self.add.clone(),
             transforms: self.transform.clone(),
             materials: self.material.clone(),
@@ -388,10 +391,10 @@ impl SceneOptions {
             ambient: self.ambient,
             camera: self.camera,
             default_light: self.default_light,
-            environment: crate::scene::load::EnvironmentOptions {
+            environment: crate::load::EnvironmentOptions {
                 source: match (&self.env, self.env_color) {
-                    (Some(path), _) => Some(crate::scene::load::EnvSource::File(path.clone())),
-                    (None, Some(c)) => Some(crate::scene::load::EnvSource::Color(c)),
+                    (Some(path), _) => Some(crate::load::EnvSource::File(path.clone())),
+                    (None, Some(c)) => Some(crate::load::EnvSource::Color(c)),
                     (None, None) => None,
                 },
                 strength: self.env_strength,
@@ -433,7 +436,7 @@ impl SceneOptions {
     /// `[render]` settings. A side of the image given here replaces the
     /// file's size: the other side then follows the file's aspect ratio when
     /// the file gives both (else the camera's, see [`SceneOptions::size`]).
-    pub fn with_file_settings(&self, s: &crate::scene::shot::ShotSettings) -> Self {
+    pub fn with_file_settings(&self, s: &crate::load::shot::ShotSettings) -> Self {
         let side = |x: f64| x.round().clamp(1.0, MAX_SIDE as f64) as u32;
         let file_aspect = match (s.width, s.height) {
             (Some(w), Some(h)) => Some(f64::from(w) / f64::from(h)),
@@ -490,7 +493,7 @@ impl JobOptions {
         if !is_scene_file(&self.scene.scene) {
             return Ok(self.clone());
         }
-        let s = crate::scene::shot::read_settings(std::path::Path::new(&self.scene.scene))?;
+        let s = crate::load::shot::read_settings(std::path::Path::new(&self.scene.scene))?;
         Ok(Self {
             scene: self.scene.with_file_settings(&s),
             spp: self.spp.or(s.spp),
@@ -564,7 +567,7 @@ fn parse_camera(s: &str) -> Result<usize, String> {
         .map_err(|_| "expected a camera number from 0".to_string())
 }
 
-fn parse_default_light(s: &str) -> Result<crate::scene::load::DefaultLight, String> {
+fn parse_default_light(s: &str) -> Result<crate::load::DefaultLight, String> {
     s.parse()
 }
 

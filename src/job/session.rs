@@ -7,7 +7,7 @@ use std::sync::Arc;
 use super::Hooks;
 use super::options::SceneOptions;
 use crate::film::{Display, ToneMap};
-use crate::scene::load::{InitialView, SceneKind};
+use crate::load::{InitialView, SceneKind};
 
 /// A loaded scene with everything the commands need to show it. A clone is
 /// cheap (the scene is shared): one load serves many renders
@@ -15,7 +15,7 @@ use crate::scene::load::{InitialView, SceneKind};
 #[derive(Clone)]
 pub struct Session {
     /// The scene.
-    pub scene: Arc<crate::Scene>,
+    pub scene: Arc<crate::scene::Scene>,
     /// What it was made from.
     pub kind: SceneKind,
     /// The starting view (camera, light, integrator).
@@ -72,12 +72,14 @@ impl Session {
 /// diffuse surface under that irradiance), `flat`'s base colour as it is.
 pub fn display(
     kind: SceneKind,
-    integrator: crate::Integrator,
+    integrator: crate::integrators::Integrator,
     exposure: f32,
     tonemap: ToneMap,
 ) -> Display {
     let factor = match (kind, integrator) {
-        (k, crate::Integrator::Direct) if k.is_physical() => 1.0 / std::f32::consts::PI,
+        (k, crate::integrators::Integrator::Direct) if k.is_physical() => {
+            1.0 / std::f32::consts::PI
+        }
         (k, _) if k.is_physical() => 1.0,
         (_, i) if i.is_physical() => std::f32::consts::PI,
         _ => 1.0,
@@ -103,7 +105,7 @@ pub fn load_session(
         crate::cache::set_dir(Some(dir.clone()))
             .map_err(|e| anyhow::anyhow!("--cache {}: {e}", dir.display()))?;
     }
-    let loaded = crate::scene::load(&args.scene, &args.load_options())?;
+    let loaded = crate::load::load(&args.scene, &args.load_options())?;
     if let Some(dir) = &args.cache
         && !quiet
     {

@@ -397,7 +397,7 @@ impl Environment {
     /// Adds what decides the environment's radiance to `f`: the map's size
     /// and texels (or the constant), strength and rotation (see
     /// [`crate::Scene::fingerprint`]).
-    pub fn fingerprint_into(&self, f: &mut crate::checkpoint::Fingerprint) {
+    pub fn fingerprint_into(&self, f: &mut crate::fingerprint::Fingerprint) {
         match &self.source {
             Source::None => f.update(b"no environment"),
             Source::Constant(c) => f.floats(c.to_array()),

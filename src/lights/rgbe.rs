@@ -101,12 +101,12 @@ pub fn read_header(bytes: &[u8]) -> Result<Header, String> {
         {
             return Err(format!(
                 "pixel format '{}' is not supported (only 32-bit_rle_rgbe)",
-                crate::scene::obj::quote(f.trim())
+                crate::guard::quote(f.trim())
             ));
         }
     }
     let size = next_line(&mut pos).ok_or("no resolution line after the header")?;
-    let size = crate::scene::obj::quote(&size);
+    let size = crate::guard::quote(&size);
     let words: Vec<&str> = size.split_ascii_whitespace().collect();
     let parse = |w: &str| {
         w.parse::<usize>()

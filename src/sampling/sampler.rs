@@ -24,7 +24,7 @@ fn mix64(mut z: u64) -> u64 {
 /// `pixel` in a render seeded `seed`: one SplitMix64 hash of the three, where
 /// seeding a generator for two numbers cost three (46 instructions of a
 /// `direct` sample's 840). The key is distinct for every pixel below 2⁴⁴ and
-/// sample below 2²⁰ ([`crate::render::MAX_PIXELS`], [`crate::render::MAX_SPP`]).
+/// sample below 2²⁰ ([`crate::limits::MAX_PIXELS`], [`crate::limits::MAX_SPP`]).
 #[inline]
 pub fn pixel_jitter(seed: u64, pixel: u64, sample: u32) -> (f32, f32) {
     let h = mix64(((pixel << 20) | u64::from(sample)) ^ mix64(seed));

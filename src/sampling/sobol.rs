@@ -231,6 +231,11 @@ const PAIR_KEYS: [u32; FIRST_PAIRS] = {
 /// On AVX2 CPUs the eight pairs are one pass of eight lanes (about a hundred
 /// instructions, where one [`sample_2d`] takes about 160: its hashes and bit
 /// reversals are long chains of scalar work that vectorise lane by lane).
+// (`#[inline]`, as `first_pairs_avx2`: a path's first pairs are made inside
+// the caller's loop. Left to where the compiler's codegen units fell, the
+// AVX2 pass was once a call from the lanes' path tracer, 1 % of the box's
+// `path` instructions.)
+#[inline]
 pub fn first_pairs(index: u32, seed: u32) -> ([f32; FIRST_PAIRS], [f32; FIRST_PAIRS]) {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
@@ -252,6 +257,7 @@ pub fn first_pairs_scalar(index: u32, seed: u32) -> ([f32; FIRST_PAIRS], [f32; F
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
+#[inline]
 fn first_pairs_avx2(index: u32, seed: u32) -> ([f32; FIRST_PAIRS], [f32; FIRST_PAIRS]) {
     use std::arch::x86_64::*;
     let splat = |x: u32| _mm256_set1_epi32(x as i32);

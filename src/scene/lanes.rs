@@ -1,5 +1,5 @@
 //! The scene's answers for eight rays and their hits in the lanes of AVX2
-//! registers, for the lab's 4×2 pixel blocks (`crate::integrators::lab8`):
+//! registers, for the lab's 4×2 pixel blocks (`crate::integrators::direct::lanes`):
 //! the rays traced, the hits' surface points and base colours, bit for bit
 //! what the scalar functions give lane by lane. Everything here runs only
 //! inside functions compiled with AVX2.
@@ -10,7 +10,8 @@ use std::arch::x86_64::*;
 use std::mem::{offset_of, size_of};
 
 use super::Scene;
-use crate::geometry::bvh::{Closest8, Rays8, Singles8};
+use crate::geometry::bvh::Singles8;
+use crate::geometry::packet::{Closest8, Rays8};
 use crate::geometry::ray::{Hit, Ray, gamma};
 use crate::geometry::triangle::{Lanes, Triangle};
 use crate::materials::surface::{MaterialKind, SurfaceMaterial};
@@ -46,7 +47,7 @@ impl Scene {
     }
 
     /// Whether `path` can shade eight paths in lanes
-    /// (`crate::integrators::path8`): the conditions of
+    /// (`crate::integrators::path::lanes`): the conditions of
     /// [`Scene::lab_lanes_apply`]; every material a fixed Lambertian reflector
     /// (whose BSDF reflectance is its base colour), mirror or glass, without an
     /// emission texture; flat shading (no mesh has vertex normals); a black

@@ -5,24 +5,17 @@
 //! by the materials; lights (the key point light, other punctual lights,
 //! emitting triangles); cameras. Rays see it through one query seam
 //! ([`Scene::intersect`], [`Scene::occluded`]), which also makes alpha-masked
-//! surfaces holes.
+//! surfaces holes. The loaders that make scenes from files are in
+//! [`crate::load`], above this model.
 
 pub mod compose;
-pub mod cornell;
-pub mod framing;
-pub mod gltf;
 mod lanes;
-pub mod load;
+mod light_sampling;
 pub mod mesh;
-pub mod mtl;
-pub mod obj;
-pub mod shot;
-pub mod transform;
 
 use std::collections::HashMap;
-use std::f32::consts::PI;
 
-use glam::{Vec2, Vec3A, Vec4};
+use glam::{Vec3A, Vec4};
 use rayon::prelude::*;
 use thiserror::Error;
 
@@ -30,13 +23,13 @@ use crate::camera::SceneCamera;
 use crate::geometry::bvh::Bvh;
 use crate::geometry::ray::{Hit, Ray, SurfacePoint};
 use crate::geometry::triangle::Triangle;
+use crate::lights::Light;
 use crate::lights::environment::Environment;
-use crate::lights::{Incident, Light};
 use crate::materials::Material;
 use crate::materials::surface::{AlphaMode, HitAttributes, SurfaceMaterial};
-use crate::sampling::distribution::AliasTable;
 use crate::textures::TextureStore;
-pub use load::{LoadError, LoadOptions, Loaded, load};
+use light_sampling::{AreaLights, LightTable};
+pub use light_sampling::{Facing, LightSample, LightSelection, MAX_IMPORTANCE_LIGHTS};
 pub use mesh::{Instance, MeshData, Tangents};
 
 /// The lab's point light: position and power per colour channel.
@@ -241,7 +234,7 @@ impl Scene {
     /// texels).
     pub fn fingerprint(&self) -> u64 {
         use std::fmt::Write;
-        let mut f = crate::checkpoint::Fingerprint::new();
+        let mut f = crate::fingerprint::Fingerprint::new();
         let v3 = |v: &Vec3A| v.to_array();
         f.floats(self.triangles.iter().flat_map(|t| t.v.iter().flat_map(v3)));
         f.floats(self.normals.iter().flat_map(v3));
@@ -631,110 +624,6 @@ impl Scene {
         self.rebuild_light_table();
     }
 
-    /// How lights are chosen for next-event estimation.
-    pub fn light_selection(&self) -> LightSelection {
-        self.selection
-    }
-
-    /// Chooses lights as `selection` says (by power, the default, or uniformly:
-    /// for comparisons).
-    pub fn set_light_selection(&mut self, selection: LightSelection) {
-        self.selection = selection;
-        self.rebuild_light_table();
-    }
-
-    /// Radiance arriving from the environment along `dir` (unit, away from the
-    /// scene).
-    #[inline]
-    pub fn environment_radiance(&self, dir: Vec3A) -> Vec3A {
-        self.environment.radiance(dir)
-    }
-
-    /// The solid-angle density with which [`Scene::sample_light`] picks
-    /// direction `dir` of the environment (selection included).
-    #[inline]
-    pub fn environment_pdf(&self, dir: Vec3A) -> f32 {
-        let Some(entry) = self.light_table.environment else {
-            return 0.0;
-        };
-        self.entry_probability(entry as usize) * self.environment.pdf(dir)
-    }
-
-    /// Builds the table that chooses among the lights other than the key light:
-    /// punctual lights, the environment and the emitting triangles, weighted by
-    /// power (or equally).
-    fn rebuild_light_table(&mut self) {
-        let radius = self.radius().max(1e-3);
-        let mut entries = Vec::new();
-        let mut weights = Vec::new();
-        let weigh = |power: f32| match self.selection {
-            LightSelection::Power => power,
-            LightSelection::Uniform => 1.0,
-        };
-        for (i, l) in self.lights.iter().enumerate() {
-            let power = l.power(radius);
-            if power > 0.0 {
-                entries.push(LightRef::Punctual(i as u32));
-                weights.push(weigh(power));
-            }
-        }
-        let env_power = PI * radius * radius * self.environment.radiance_integral();
-        let mut environment = None;
-        if env_power.is_finite() && env_power > 0.0 {
-            environment = Some(entries.len() as u32);
-            entries.push(LightRef::Environment);
-            weights.push(weigh(env_power));
-        }
-        let mut prim_entry = Vec::new();
-        if !self.area_lights.prims.is_empty() {
-            prim_entry = vec![u32::MAX; self.triangles.len()];
-            for &prim in &self.area_lights.prims {
-                prim_entry[prim as usize] = entries.len() as u32;
-                entries.push(LightRef::Triangle(prim));
-                weights.push(weigh(self.area_lights.per_prim[prim as usize].0));
-            }
-        }
-        let alias = AliasTable::new(&weights);
-        let punctual_pmf = entries
-            .iter()
-            .enumerate()
-            .filter(|(_, e)| matches!(e, LightRef::Punctual(_)))
-            .map(|(k, _)| f64::from(alias.pmf(k)))
-            .sum::<f64>() as f32;
-        let by_importance = self.selection == LightSelection::Power
-            && (2..=MAX_IMPORTANCE_LIGHTS).contains(&self.lights.len());
-        self.light_table = LightTable {
-            total: alias.total() as f32,
-            alias,
-            entries,
-            environment,
-            prim_entry,
-            punctual_pmf,
-            by_importance,
-        };
-    }
-
-    /// The key light's selection weight.
-    #[inline]
-    fn key_weight(&self) -> f32 {
-        let p = self.point_power();
-        match self.selection {
-            LightSelection::Power => p,
-            LightSelection::Uniform => f32::from(p > 0.0),
-        }
-    }
-
-    /// The probability that [`Scene::sample_light`] picks table entry `entry`.
-    #[inline]
-    fn entry_probability(&self, entry: usize) -> f32 {
-        let rest = self.light_table.total;
-        let total = self.key_weight() + rest;
-        if total <= 0.0 {
-            return 0.0;
-        }
-        self.light_table.alias.pmf(entry) * (rest / total)
-    }
-
     /// Axis-aligned bounds of all triangles.
     pub fn bounds(&self) -> (Vec3A, Vec3A) {
         self.bounds
@@ -794,216 +683,6 @@ impl Scene {
         self.area_lights = AreaLights::build(self);
         self.rebuild_light_table();
         Ok(())
-    }
-
-    /// Total emitted power of the key point light, averaged over the colour
-    /// channels (`P`, since its intensity is `P/(4π)` in every direction).
-    #[inline]
-    pub fn point_power(&self) -> f32 {
-        // In f64: three channels near f32::MAX must not overflow their sum.
-        let p = (self.light.power.as_dvec3().element_sum() / 3.0) as f32;
-        if p.is_finite() && p > 0.0 { p } else { 0.0 }
-    }
-
-    /// Whether anything emits light.
-    pub fn has_lights(&self) -> bool {
-        self.point_power() > 0.0 || !self.light_table.alias.is_empty()
-    }
-
-    /// Whether [`Scene::sample_light`] reads its sample values: only when there
-    /// are lights besides the key light (area lights, the environment, the
-    /// glTF lights) to choose among or to pick a point on. Without them it
-    /// returns the key light whatever the values, and a path tracer need not
-    /// draw them.
-    #[inline]
-    pub fn light_needs_samples(&self) -> bool {
-        self.light_table.total > 0.0
-    }
-
-    /// Picks a light with `u_select` (by power: the key light `P`; other
-    /// punctual lights [`Light::power`]; the environment `π r² ∫ L dω`; each
-    /// emitting triangle `π·A·Le`, doubled for two-sided emitters; or uniformly,
-    /// see [`Scene::set_light_selection`]), then a point or direction on it with
-    /// `u` (uniform by area on a triangle, by the map's importance on the
-    /// environment), to light the point `p`. `u_select.x` chooses, `u_select.y`
-    /// settles the alias table's coin. `None` when the scene has no light or the
-    /// chosen one sends nothing to `p`.
-    ///
-    /// Punctual lights other than the key light, as a group, are picked as
-    /// often as their power says; which one of them, though, goes by what each
-    /// sends to `p` ([`Scene::punctual_importance`]: intensity over distance
-    /// squared, or irradiance, times the cosine to the shading normal,
-    /// [`Facing`]), picked with `u.x`, which punctual lights do not otherwise
-    /// use. A sun behind a wall is then not chosen for it, nor a spot whose
-    /// cone misses `p`; the environment and the emitters keep the
-    /// probabilities that multiple importance sampling weighs by.
-    /// (Inlined: as a call its sample came back through memory, 1.7 % of the
-    /// lab box's `path`.)
-    #[inline(always)]
-    pub fn sample_light(
-        &self,
-        p: Vec3A,
-        facing: Facing,
-        u_select: Vec2,
-        u: Vec2,
-    ) -> Option<LightSample> {
-        // (`light_needs_samples` must say when `u_select` and `u` are read.)
-        let key = self.key_weight();
-        let rest = self.light_table.total;
-        let total = key + rest;
-        if total <= 0.0 {
-            return None;
-        }
-        let p_key = key / total;
-        if u_select.x < p_key || rest <= 0.0 {
-            return Some(LightSample::Point {
-                position: self.light.position,
-                intensity: self.light.power * (1.0 / (4.0 * PI * p_key)),
-            });
-        }
-        let x = ((u_select.x - p_key) / (1.0 - p_key)).min(1.0 - f32::EPSILON / 2.0);
-        let table = &self.light_table;
-        let entry = table.alias.sample(Vec2::new(x, u_select.y))?;
-        let probability = table.alias.pmf(entry) * (rest / total);
-        match table.entries[entry] {
-            LightRef::Punctual(i) => {
-                let (i, probability) = if table.by_importance {
-                    let (j, share) = self.pick_punctual(p, facing, u.x)?;
-                    (j, share * table.punctual_pmf * (rest / total))
-                } else {
-                    (i, probability)
-                };
-                let scale = 1.0 / probability;
-                Some(match self.lights[i as usize].incident(p)? {
-                    Incident::FromPoint {
-                        position,
-                        intensity,
-                    } => LightSample::Point {
-                        position,
-                        intensity: intensity * scale,
-                    },
-                    Incident::FromDirection {
-                        to_light,
-                        irradiance,
-                    } => LightSample::Directional {
-                        to_light,
-                        irradiance: irradiance * scale,
-                        distance: self.escape_distance(p),
-                    },
-                })
-            }
-            LightRef::Environment => {
-                let (to_light, radiance, pdf) = self.environment.sample(u)?;
-                Some(LightSample::Environment {
-                    to_light,
-                    radiance,
-                    pdf: pdf * probability,
-                    distance: self.escape_distance(p),
-                })
-            }
-            LightRef::Triangle(prim) => {
-                let v = &self.triangles[prim as usize].v;
-                let (b1, b2) = uniform_barycentrics(u);
-                let position = (1.0 - b1 - b2) * v[0] + b1 * v[1] + b2 * v[2];
-                let area = self.area_lights.per_prim[prim as usize].1;
-                Some(LightSample::Area {
-                    position,
-                    normal: self.normals[prim as usize],
-                    radiance: self.emission_at(prim, b1, b2),
-                    two_sided: self.material(prim).emits_both_sides,
-                    pdf_area: probability / area,
-                })
-            }
-        }
-    }
-
-    /// What punctual light `light` sends to `p` for choosing among the
-    /// punctual lights: the mean over the channels of the intensity (with a
-    /// spot's falloff) over the distance squared, or of a directional light's
-    /// irradiance, times the cosine to the normal `facing` gives (none for
-    /// [`Facing::Any`]), at least a thousandth of the cosine-free value,
-    /// so that a light is never left out unless it sends nothing at all (a
-    /// spot's cone, a light at `p`). Zero means nothing arrives.
-    #[inline]
-    pub fn punctual_importance(light: &Light, p: Vec3A, facing: Facing) -> f32 {
-        let mean = |v: Vec3A| (v.x + v.y + v.z) * (1.0 / 3.0);
-        let (to_light, value) = match light.incident(p) {
-            None => return 0.0,
-            Some(Incident::FromPoint {
-                position,
-                intensity,
-            }) => {
-                let d = position - p;
-                let r2 = d.length_squared();
-                if r2.is_nan() || r2 <= 0.0 {
-                    return 0.0;
-                }
-                (d * r2.sqrt().recip(), mean(intensity) / r2)
-            }
-            Some(Incident::FromDirection {
-                to_light,
-                irradiance,
-            }) => (to_light, mean(irradiance)),
-        };
-        let cos = match facing {
-            Facing::Side(n) => n.dot(to_light),
-            Facing::Both(n) => n.dot(to_light).abs(),
-            Facing::Any => 1.0,
-        };
-        let w = value * cos.max(1e-3);
-        if w.is_finite() { w.max(0.0) } else { 0.0 }
-    }
-
-    /// One of the punctual lights (not the key light), chosen with `u` in
-    /// proportion to [`Scene::punctual_importance`] at `p`, and its share of
-    /// the choice; `None` when none sends anything to `p`.
-    #[inline]
-    fn pick_punctual(&self, p: Vec3A, facing: Facing, u: f32) -> Option<(u32, f32)> {
-        let mut weights = [0.0f32; MAX_IMPORTANCE_LIGHTS];
-        let mut total = 0.0f32;
-        for (w, light) in weights.iter_mut().zip(&self.lights) {
-            *w = Self::punctual_importance(light, p, facing);
-            total += *w;
-        }
-        if !(total > 0.0 && total.is_finite()) {
-            return None;
-        }
-        let target = u * total;
-        let mut run = 0.0f32;
-        let n = self.lights.len();
-        let mut last = None;
-        for (k, &w) in weights[..n].iter().enumerate() {
-            if w <= 0.0 {
-                continue;
-            }
-            last = Some(k);
-            run += w;
-            if target < run {
-                return Some((k as u32, w / total));
-            }
-        }
-        // Rounding left `target` at the end: the last light with weight.
-        last.map(|k| (k as u32, weights[k] / total))
-    }
-
-    /// How far a shadow ray from `p` must go to leave the scene's bounds.
-    #[inline]
-    fn escape_distance(&self, p: Vec3A) -> f32 {
-        2.0 * self.radius() + (p - self.bounds.0).length() + 1.0
-    }
-
-    /// The density per unit area with which [`Scene::sample_light`] picks a point
-    /// on emitting triangle `prim`: its selection probability over its area.
-    #[inline]
-    pub fn light_pdf_area(&self, prim: u32) -> f32 {
-        let Some(&entry) = self.light_table.prim_entry.get(prim as usize) else {
-            return 0.0;
-        };
-        if entry == u32::MAX {
-            return 0.0;
-        }
-        let area = self.area_lights.per_prim[prim as usize].1;
-        self.entry_probability(entry as usize) / area
     }
 
     /// The hit point of a ray along `dir` with its error bound, for spawning rays
@@ -1199,17 +878,6 @@ impl Scene {
                 .sum::<usize>()
             + self.bvh.memory_bytes()
     }
-
-    /// Total power emitted by the emitting triangles (the estimate they are
-    /// chosen by), W averaged over the colour channels.
-    pub fn emitted_power(&self) -> f32 {
-        self.area_lights.total
-    }
-
-    /// How many triangles emit light.
-    pub fn emitter_count(&self) -> usize {
-        self.area_lights.prims.len()
-    }
 }
 
 /// The barycentric combination of three values.
@@ -1243,14 +911,6 @@ fn attributes_of(mesh: &MeshData, idx: [u32; 3], b: [f32; 3]) -> HitAttributes {
     attrs
 }
 
-/// Barycentrics `(b1, b2)` of a point distributed uniformly by area over a
-/// triangle, from `u` in `[0, 1)²`.
-#[inline]
-fn uniform_barycentrics(u: Vec2) -> (f32, f32) {
-    let su = u.x.sqrt();
-    (1.0 - su, u.y * su)
-}
-
 /// A number in `[0, 1)` that decides whether a ray passes a blended surface:
 /// a hash of the ray and the hit, so the same ray always gets the same answer
 /// (images stay deterministic) while different samples' rays get independent
@@ -1265,196 +925,6 @@ fn coverage_number(ray: &Ray, prim: u32, p: Vec3A) -> f32 {
     (h >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
 }
 
-/// A light chosen by [`Scene::sample_light`], with its selection probability
-/// already divided out.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum LightSample {
-    /// A point light (the key light, a point or spot light).
-    Point {
-        /// Where it is.
-        position: Vec3A,
-        /// Its intensity towards the point (W/sr) divided by the probability of
-        /// choosing it.
-        intensity: Vec3A,
-    },
-    /// A directional light.
-    Directional {
-        /// Unit direction towards the light.
-        to_light: Vec3A,
-        /// Irradiance on a surface facing it, divided by the probability of
-        /// choosing it.
-        irradiance: Vec3A,
-        /// How far a shadow ray must go to leave the scene.
-        distance: f32,
-    },
-    /// A direction of the environment.
-    Environment {
-        /// Unit direction towards the sky.
-        to_light: Vec3A,
-        /// The environment's radiance.
-        radiance: Vec3A,
-        /// Solid-angle density of the direction (selection included).
-        pdf: f32,
-        /// How far a shadow ray must go to leave the scene.
-        distance: f32,
-    },
-    /// A point on an emitting triangle.
-    Area {
-        /// The point.
-        position: Vec3A,
-        /// The triangle's front normal.
-        normal: Vec3A,
-        /// Its emitted radiance `Le`.
-        radiance: Vec3A,
-        /// Whether light leaves both faces (else only the front).
-        two_sided: bool,
-        /// Probability density of this point per unit area (selection included).
-        pdf_area: f32,
-    },
-}
-
-/// How [`Scene::sample_light`] chooses among the lights.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
-pub enum LightSelection {
-    /// In proportion to each light's estimated power.
-    #[default]
-    Power,
-    /// Every light (every emitting triangle) equally: for comparisons.
-    Uniform,
-}
-
-/// A light other than the key light, as the light table names it.
-#[derive(Clone, Copy, Debug, PartialEq)]
-enum LightRef {
-    /// Punctual light `i` of [`Scene::lights`].
-    Punctual(u32),
-    /// The environment.
-    Environment,
-    /// An emitting triangle.
-    Triangle(u32),
-}
-
-/// What the surface being lit lets through, for choosing among punctual lights
-/// ([`Scene::sample_light`]).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Facing {
-    /// Nothing known: every direction counts alike.
-    Any,
-    /// A reflecting surface: light arrives from the side this unit shading
-    /// normal points to (the side the path leaves by).
-    Side(Vec3A),
-    /// A surface that also transmits: light arrives from either side of this
-    /// unit shading normal.
-    Both(Vec3A),
-}
-
-/// The most punctual lights [`Scene::sample_light`] weighs by what they send
-/// to the point being lit (the others are chosen by power alone: the weighing
-/// is a loop over them at every vertex that picks one).
-pub const MAX_IMPORTANCE_LIGHTS: usize = 32;
-
-/// The lights other than the key light and an alias table that chooses among
-/// them by weight.
-#[derive(Clone, Debug, Default)]
-struct LightTable {
-    /// The table's probability of picking one of the punctual lights.
-    punctual_pmf: f32,
-    /// Whether the punctual light picked is chosen by importance at the point
-    /// ([`Scene::pick_punctual`]).
-    by_importance: bool,
-    alias: AliasTable,
-    /// Sum of the weights (the table's, as `f32`: read per sample).
-    total: f32,
-    entries: Vec<LightRef>,
-    /// The environment's entry, if it is a light.
-    environment: Option<u32>,
-    /// Every triangle's entry (`u32::MAX` for non-emitters); empty when none
-    /// emits.
-    prim_entry: Vec<u32>,
-}
-
-/// Points per triangle at which a textured emitter's radiance is averaged to
-/// estimate its power.
-const EMISSION_ESTIMATE_POINTS: u32 = 16;
-
-/// The emitting triangles and their power, for power-proportional selection.
-#[derive(Clone, Debug, Default)]
-struct AreaLights {
-    /// Emitting triangles.
-    prims: Vec<u32>,
-    /// Sum of their powers.
-    total: f32,
-    /// Power and area of every triangle (zero power for non-emitters); empty
-    /// when none emits.
-    per_prim: Vec<(f32, f32)>,
-}
-
-impl AreaLights {
-    fn build(scene: &Scene) -> Self {
-        let emissive: Vec<bool> = scene
-            .materials
-            .iter()
-            .map(SurfaceMaterial::is_emissive)
-            .collect();
-        if !emissive.iter().any(|&e| e) {
-            return Self::default();
-        }
-        let per_prim: Vec<(f32, f32)> = (0..scene.triangles.len())
-            .into_par_iter()
-            .map(|i| {
-                let m = scene.material_of[i] as usize;
-                if !emissive[m] {
-                    return (0.0, 0.0);
-                }
-                let area = scene.triangles[i].area();
-                let le = mean_emission(scene, i as u32);
-                let sides = if scene.materials[m].emits_both_sides {
-                    2.0
-                } else {
-                    1.0
-                };
-                let power = PI * area * sides * le.element_sum() / 3.0;
-                if power > 0.0 && power.is_finite() {
-                    (power, area)
-                } else {
-                    (0.0, 0.0)
-                }
-            })
-            .collect();
-        let mut lights = Self::default();
-        for (i, &(power, _)) in per_prim.iter().enumerate() {
-            if power > 0.0 {
-                lights.total += power;
-                lights.prims.push(i as u32);
-            }
-        }
-        if !lights.prims.is_empty() {
-            lights.per_prim = per_prim;
-        }
-        lights
-    }
-}
-
-/// The mean emitted radiance over triangle `prim`: exact for untextured
-/// emission, else the average over a fixed set of points inside it.
-fn mean_emission(scene: &Scene, prim: u32) -> Vec3A {
-    let k = EMISSION_ESTIMATE_POINTS;
-    if scene.material(prim).emission_texture.is_none() {
-        return scene.material(prim).emission;
-    }
-    let mut sum = Vec3A::ZERO;
-    for s in 0..k {
-        // A stratified point of the triangle (the same warp as light sampling).
-        let u = Vec2::new(
-            (s as f32 + 0.5) / k as f32,
-            ((s * 7 % k) as f32 + 0.5) / k as f32,
-        );
-        let (b1, b2) = uniform_barycentrics(u);
-        sum += scene.emission_at(prim, b1, b2);
-    }
-    sum / k as f32
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1465,7 +935,7 @@ mod tests {
     fn surface_points_in_lanes_are_surface_points() {
         let mut rng = crate::sampling::sampler::Rng::new(8, 1);
         for two_sided in [false, true] {
-            let mut scene = crate::scene::cornell::scene();
+            let mut scene = crate::load::cornell::scene();
             scene.two_sided = two_sided;
             let n = scene.triangles().len();
             for _ in 0..5_000 {
@@ -1542,7 +1012,7 @@ mod tests {
         for tris in [vec![], vec![Triangle::new(p, p, p); 3]] {
             let n = tris.len();
             let scene = Scene::new(tris, vec![Vec3A::ONE; n], light(), Vec3A::ONE).unwrap();
-            let cam = crate::Camera::lab(Vec3A::new(0.0, 0.0, -3.0), 0.0, 0.0, 16, 16);
+            let cam = crate::camera::Camera::lab(Vec3A::new(0.0, 0.0, -3.0), 0.0, 0.0, 16, 16);
             let settings = crate::render::RenderSettings::default();
             let out = crate::render::render(&scene, &cam, &settings, &|_| {});
             assert!(out.film.pixels.iter().all(|p| *p == Vec3A::ZERO));

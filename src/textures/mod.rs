@@ -197,7 +197,7 @@ pub struct TextureStore {
 impl TextureStore {
     /// Adds every image's size, layout and texels to `f` (see
     /// [`crate::Scene::fingerprint`]).
-    pub fn fingerprint_into(&self, f: &mut crate::checkpoint::Fingerprint) {
+    pub fn fingerprint_into(&self, f: &mut crate::fingerprint::Fingerprint) {
         for image in &self.images {
             image.fingerprint_into(f);
         }

@@ -49,7 +49,7 @@ const SUBTEXEL: f64 = 65536.0;
 
 impl Image {
     /// Adds the image's size, layout and texels to `f`.
-    pub(crate) fn fingerprint_into(&self, f: &mut crate::checkpoint::Fingerprint) {
+    pub(crate) fn fingerprint_into(&self, f: &mut crate::fingerprint::Fingerprint) {
         f.words32([self.width, self.height, u32::from(self.channels)]);
         match &self.texels {
             Texels::U8(t) => {

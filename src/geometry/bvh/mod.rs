@@ -26,8 +26,6 @@ use crate::geometry::triangle::{Triangle, TriangleHit};
 use node::{BoxQuery, ChildRef, EMPTY, Isa, LEAF, NodeBoxes, WIDTH, leaf_parts};
 use packet::{Packet, PacketRay};
 #[cfg(target_arch = "x86_64")]
-pub(crate) use ray8::{Closest8, Rays8};
-#[cfg(target_arch = "x86_64")]
 pub(crate) use single8::Singles8;
 pub use stream::IN_FLIGHT;
 
@@ -1037,9 +1035,9 @@ mod tests {
     /// against 1.84 (and 7 % more instructions for `path`, 11 % for `direct`).
     #[test]
     fn rays_in_a_small_room_enter_few_leaves() {
-        let (tris, _) = crate::scene::cornell::triangles();
+        let (tris, _) = crate::load::cornell::triangles();
         let bvh = Bvh::build(&tris);
-        let room = crate::scene::cornell::parts::ROOM;
+        let room = crate::load::cornell::parts::ROOM;
         let mut leaf_boxes = Vec::new();
         for (n, kids) in bvh.children.iter().enumerate() {
             for (c, &kid) in kids.iter().enumerate() {

@@ -1,6 +1,6 @@
 //! Eight single-ray queries whose per-ray constants are made together in AVX2
 //! lanes: for rays that are already in lanes (the path tracer's bounce and
-//! shadow rays, `integrators::path8`) but too incoherent to share a packet.
+//! shadow rays, `integrators::path::lanes`) but too incoherent to share a packet.
 //!
 //! A single ray's set-up (the finiteness check, the slab test's inverse
 //! direction and plane rows, the triangle test's axis order and shear) was

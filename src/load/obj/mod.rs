@@ -12,6 +12,8 @@
 //! [`load_obj`] keeps only the triangles and `Kd` (for the lab box's `--add`
 //! and `raylab bench`).
 
+pub mod mtl;
+
 use std::collections::{BTreeMap, HashMap};
 use std::ops::Range;
 use std::path::{Path, PathBuf};
@@ -19,11 +21,12 @@ use std::path::{Path, PathBuf};
 use glam::{Affine3A, Vec2, Vec3, Vec3A, Vec4};
 use thiserror::Error;
 
-use super::mtl::{MapRef, MtlMaterial, parse_mtl, phong_roughness};
-use super::{Instance, MeshData, SceneParts, Tangents};
 use crate::geometry::triangle::Triangle;
+use crate::guard::quote;
 use crate::materials::surface::{AlphaMode, GltfMaterial, MaterialKind, SurfaceMaterial};
+use crate::scene::{Instance, MeshData, SceneParts, Tangents};
 use crate::textures::{ColorSpace, Image, TextureRef, TextureStore, TextureTransform, Wrap};
+use mtl::{MapRef, MtlMaterial, parse_mtl, phong_roughness};
 
 /// Reflectance of triangles without an MTL colour.
 pub const DEFAULT_REFLECTANCE: f32 = 0.75;
@@ -120,19 +123,6 @@ pub struct ObjFile {
     pub skipped: BTreeMap<String, usize>,
     /// `vn` lines with a NaN or infinite coordinate (kept as zero normals).
     pub bad_normals: usize,
-}
-
-/// Longest word quoted in a message, in characters: a malformed file may
-/// hold a 100 MB token, and the message must stay one readable line.
-pub const QUOTE_CHARS: usize = 40;
-
-/// `word` for an error message: cut to [`QUOTE_CHARS`] characters (with `…`
-/// and the full length) when longer.
-pub fn quote(word: &str) -> String {
-    match word.char_indices().nth(QUOTE_CHARS) {
-        None => word.to_string(),
-        Some((cut, _)) => format!("{}… ({} bytes)", &word[..cut], word.len()),
-    }
 }
 
 /// Reads `n` numbers (at least `min`) after a keyword; finite ones only unless
@@ -633,7 +623,7 @@ pub fn load_obj_scene_with(
         mesh.indices.push(idx);
     }
     if materials.iter().any(|m| m.normal_texture().is_some()) && has_uv {
-        mesh.tangents = super::gltf::tangents::generate(&mesh, 0);
+        mesh.tangents = crate::load::gltf::tangents::generate(&mesh, 0);
     } else {
         mesh.tangents = Tangents::None;
     }

@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 
 use glam::{Vec2, Vec3A};
 
-use super::obj::ObjError;
+use super::ObjError;
 
 /// A texture statement: the file and the options raylab reads.
 #[derive(Clone, Debug, PartialEq)]
@@ -103,13 +103,13 @@ pub fn parse_mtl(
                 .map_err(|_| {
                     syntax(format!(
                         "{keyword} needs {n} number(s), got '{}'",
-                        super::obj::quote(rest)
+                        crate::guard::quote(rest)
                     ))
                 })?;
             if v.len() < n || v.iter().any(|x| !x.is_finite()) {
                 return Err(syntax(format!(
                     "{keyword} needs {n} finite number(s), got '{}'",
-                    super::obj::quote(rest)
+                    crate::guard::quote(rest)
                 )));
             }
             Ok(v)
@@ -157,7 +157,7 @@ pub fn parse_mtl(
                 m.illum = Some(rest.parse::<u32>().map_err(|_| {
                     syntax(format!(
                         "illum needs a model number, got '{}'",
-                        super::obj::quote(rest)
+                        crate::guard::quote(rest)
                     ))
                 })?)
             }

@@ -38,6 +38,9 @@ pub const LIGHT_POWER: f32 = 14.0;
 pub const AMBIENT: f32 = 0.5;
 /// The lab's camera position.
 pub const CAMERA_POSITION: Vec3A = Vec3A::new(0.0, 0.0, -3.0);
+/// Camera and light travel per key press in the lab box (2 units wide); other
+/// scenes scale it with their size (see [`crate::controls::ViewState::step`]).
+pub const LAB_STEP: f32 = 0.1;
 
 /// Corners of `cornell-area`'s ceiling light, just below the ceiling, in the
 /// order that makes its lab normal point down into the box (+y).

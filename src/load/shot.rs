@@ -16,13 +16,14 @@ use serde::Deserialize;
 use thiserror::Error;
 
 use super::cornell::{self, MaterialChoice};
-use super::{PointLight, SceneParts};
-use crate::Integrator;
 use crate::camera::{Lens, SceneCamera};
 use crate::film::ToneMap;
+use crate::geometry::triangle::Triangle;
+use crate::integrators::Integrator;
 use crate::lights::Light;
 use crate::materials::Material;
 use crate::materials::surface::{GltfMaterial, MaterialKind, SurfaceMaterial};
+use crate::scene::{PointLight, SceneParts};
 
 /// Why a scene file cannot be used; the message starts with the file (and the
 /// line and column where the parser knows them).
@@ -385,7 +386,7 @@ fn check(path: &Path, what: &str, values: &[f32], non_negative: bool) -> Result<
 
 fn settings(path: &Path, r: &RenderSection) -> Result<ShotSettings, ShotError> {
     let bad = |m: String| invalid(path, format!("[render] {m}"));
-    use crate::render::{MAX_PIXELS, MAX_SIDE, MAX_SPP, MAX_TIME};
+    use crate::limits::{MAX_PIXELS, MAX_SIDE, MAX_SPP, MAX_TIME};
     for (key, v) in [("width", r.width), ("height", r.height)] {
         if let Some(v) = v
             && !(1..=MAX_SIDE).contains(&v)
@@ -955,14 +956,14 @@ pub fn compose_with(
                 all.materials.push(m);
                 let material = all.materials.len() as u32 - 1;
                 for t in [
-                    crate::Triangle::new(a, a + u, a + u + v),
-                    crate::Triangle::new(a, a + u + v, a + v),
+                    Triangle::new(a, a + u, a + u + v),
+                    Triangle::new(a, a + u + v, a + v),
                 ] {
                     all.triangles.push(t);
                     all.normals.push(normal);
                     all.material_of.push(material);
                     if !all.instance_of.is_empty() {
-                        all.instance_of.push(super::NO_INSTANCE);
+                        all.instance_of.push(crate::scene::NO_INSTANCE);
                     }
                 }
             }

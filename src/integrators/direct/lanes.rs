@@ -3,9 +3,12 @@
 //! their base colours and surface points, the shadow rays towards the light
 //! and their packet, and `ρ ∘ (D + N)`, all eight at once.
 //!
-//! Each lane does the scalar code's operations in its order (no FMA), so the
-//! values are those of [`super::Integrator::radiance8_from`] bit for bit (a
-//! unit test compares them). Kept in lanes from start to end, the block no
+//! The scalar code ([`super::scalar`]) is the reference: each lane does its
+//! operations in its order (no FMA), and the values must equal those of
+//! [`crate::integrators::Integrator::radiance8_from`] bit for bit, which the
+//! unit test
+//! `integrators::direct::lanes::tests::blocks_in_lanes_match_the_blocks_of_rays`
+//! checks. A change to the scalar code is made here too. Kept in lanes from start to end, the block no
 //! longer turns its rays, hits and shadow rays into `[Ray; 8]` and
 //! `[Option<Hit>; 8]` and back between the steps, which had taken about half
 //! of the shading's instructions.
@@ -15,7 +18,7 @@
 use std::f32::consts::PI;
 
 use crate::camera::Camera;
-use crate::geometry::bvh::{Closest8, Rays8};
+use crate::geometry::packet::{Closest8, Rays8};
 use crate::geometry::ray::SHADOW_EPSILON;
 use crate::geometry::triangle::Lanes;
 use crate::scene::Scene;
@@ -119,7 +122,7 @@ struct Shadows8 {
     lit: u32,
 }
 
-/// [`super::unshadowed_light`] of eight hits (rays along `dir`), in lanes;
+/// [`super::scalar::unshadowed_light`] of eight hits (rays along `dir`), in lanes;
 /// `None` when no lane hit, or no hit faces the light.
 #[target_feature(enable = "avx2")]
 #[inline]
@@ -196,8 +199,8 @@ mod tests {
     use super::*;
     use crate::geometry::ray::Hit;
     use crate::integrators::Integrator;
+    use crate::load::cornell;
     use crate::sampling::sampler::Rng;
-    use crate::scene::cornell;
 
     #[target_feature(enable = "avx2")]
     fn lanes(
@@ -262,7 +265,7 @@ mod tests {
     /// Forty random triangles and a wall in a two-sided scene (the form of
     /// meshes), to hit from both sides, and the lab box.
     fn scenes() -> Vec<Scene> {
-        let random = super::super::random_two_sided_scene(0, Vec3A::new(0.1, 0.2, 0.3));
+        let random = crate::integrators::random_two_sided_scene(0, Vec3A::new(0.1, 0.2, 0.3));
         vec![cornell::scene(), random]
     }
 
@@ -330,7 +333,9 @@ mod tests {
                             missed += 1;
                             continue;
                         };
-                        let want = super::super::unshadowed_light(&scene, &hit, ray.dir);
+                        let want = crate::integrators::direct::scalar::unshadowed_light(
+                            &scene, &hit, ray.dir,
+                        );
                         let bits = |v: [f32; 3]| v.map(f32::to_bits);
                         match (got, want) {
                             (None, None) => {}

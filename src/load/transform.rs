@@ -94,7 +94,7 @@ impl Transform {
                     })
                 }
                 Op::Fit(height) => {
-                    let (lo, hi) = crate::workload::bounds(triangles);
+                    let (lo, hi) = crate::geometry::triangle::bounds(triangles);
                     let s = height / (hi.y - lo.y).max(f32::MIN_POSITIVE);
                     let base = Vec3A::new((lo.x + hi.x) / 2.0, lo.y, (lo.z + hi.z) / 2.0);
                     Affine3A::from_scale(Vec3::splat(s))

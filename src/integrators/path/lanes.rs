@@ -14,10 +14,12 @@
 //! ends its lane takes the next sample, so the lanes stay full until the
 //! samples run out.
 //!
-//! Each lane does the scalar path tracer's operations in its order (no FMA),
-//! so every sample's value is that of [`super::path::radiance_from`] bit for
-//! bit (a unit test compares them); only the order in which samples finish
-//! changes, which the exact sums do not see.
+//! The scalar path tracer ([`super::scalar`]) is the reference: each lane does
+//! its operations in its order (no FMA), and every sample's value must equal
+//! that of [`super::radiance_from`] bit for bit, which the unit test
+//! `integrators::path::lanes::tests::paths_in_lanes_match_paths_one_by_one`
+//! checks; only the order in which samples finish changes, which the exact
+//! sums do not see. A change to the scalar code is made here too.
 
 #![cfg(target_arch = "x86_64")]
 
@@ -25,11 +27,12 @@ use std::f32::consts::{FRAC_1_PI, FRAC_PI_4};
 
 use glam::{Vec2, Vec3A};
 
-use super::lab8::shadow_segments8;
-use super::path::{PathSampler, RR_DEPTH, RR_SCALE, SobolSampler, light_terms, power_heuristic};
-use crate::geometry::bvh::{Closest8, Singles8};
+use super::scalar::{PathSampler, RR_DEPTH, RR_SCALE, SobolSampler, light_terms, power_heuristic};
+use crate::geometry::bvh::Singles8;
+use crate::geometry::packet::Closest8;
 use crate::geometry::ray::{Hit, Ray};
 use crate::geometry::triangle::Lanes;
+use crate::integrators::direct::lanes::shadow_segments8;
 use crate::materials::Material;
 use crate::materials::surface::HitAttributes;
 use crate::scene::{Facing, LightSample, Scene};
@@ -108,7 +111,7 @@ impl Paths {
 }
 
 /// Traces every path that `next` starts (until it returns `None`) with
-/// `max_depth` as [`super::path::PathOptions::max_depth`], and gives each
+/// `max_depth` as [`super::PathOptions::max_depth`], and gives each
 /// path's tag and value to `emit`; returns the rays cast after the camera
 /// rays. Only for scenes where [`Scene::path_lanes_apply`].
 #[target_feature(enable = "avx2")]
@@ -600,15 +603,15 @@ fn sin_cos_quarter(x: F8) -> (F8, F8) {
 mod tests {
     use super::*;
     use crate::integrators::path::{self, PathOptions, SamplerKind};
+    use crate::load::cornell;
     use crate::sampling::sampler::Rng;
-    use crate::scene::cornell;
 
     /// The lab box (one-sided); forty random triangles with a wall in a
     /// two-sided scene (the form of meshes), to hit from both sides; the
     /// same with mirrors, glass and emitting triangles; `cornell-area` with a
     /// mirror and a glass block, with and without the key light.
     fn scenes() -> Vec<Scene> {
-        let random = super::super::random_two_sided_scene(1, Vec3A::ZERO);
+        let random = crate::integrators::random_two_sided_scene(1, Vec3A::ZERO);
         let mut mixed = random.clone();
         for prim in 0..40 {
             match prim % 5 {

@@ -1,17 +1,5 @@
-//! The `path` integrator: a unidirectional path tracer in physical units.
-//!
-//! Radiance is estimated along paths from the camera. At every non-specular
-//! vertex one light is picked in proportion to its power (among punctual lights,
-//! by what each sends there: [`Scene::sample_light`]) and sampled (next-event
-//! estimation); emission found by following the BSDF sample is weighted against
-//! it with the power heuristic (multiple importance sampling), so area lights get
-//! the better of both strategies. The point light can only be reached by
-//! next-event estimation. Russian roulette ([`RR_SCALE`]) ends paths after
-//! [`RR_DEPTH`] bounces; `max_depth` can cut them earlier.
-//!
-//! Units: a point light of power `P` has intensity `P/(4π)` W/sr, emitting
-//! triangles radiance `Le`, diffuse surfaces reflect `ρ/π`. Nothing is added for
-//! ambient light: the path tracer computes it.
+//! The scalar path tracer, one path at a time: the reference that
+//! [`super::lanes`] equals bit for bit.
 
 use glam::{Vec2, Vec3A};
 

@@ -2,6 +2,18 @@
 //! 2.0, with what the command line can add (meshes placed in the box, light
 //! overrides, box materials). A program using the crate gets exactly what
 //! `raylab render` gets.
+//!
+//! The loaders sit above the scene model ([`crate::scene`]), which knows
+//! nothing of files: [`cornell`] (the lab's boxes), [`obj`] with its MTL,
+//! [`gltf`], the scene files of [`shot`], and what they share: the default
+//! view of a mesh ([`framing`]) and the placing of one ([`transform`]).
+
+pub mod cornell;
+pub mod framing;
+pub mod gltf;
+pub mod obj;
+pub mod shot;
+pub mod transform;
 
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -9,17 +21,16 @@ use std::time::{Duration, Instant};
 use glam::{Mat3A, Vec3A};
 use thiserror::Error;
 
-use super::cornell::{self, MaterialChoice};
-use super::framing;
-use super::gltf::{GltfError, load_gltf_with};
-use super::obj::{ObjError, load_obj, load_obj_scene_with};
-use super::shot::{ShotCamera, ShotError, ShotSettings, load_shot_with};
-use super::transform::Transform;
-use super::{PointLight, Scene, SceneError};
 use crate::camera::{Lens, SceneCamera, Y_UP_TOWARDS_MINUS_Z};
 use crate::geometry::triangle::Triangle;
 use crate::lights::environment::{EnvError, Environment};
 use crate::memory::{GEOMETRY_BYTES_PER_TRIANGLE, Ledger, MemoryBudget, MemoryError, Needs};
+use crate::scene::{PointLight, Scene, SceneError};
+use cornell::MaterialChoice;
+use gltf::{GltfError, load_gltf_with};
+use obj::{ObjError, load_obj, load_obj_scene_with};
+use shot::{ShotCamera, ShotError, ShotSettings, load_shot_with};
+use transform::Transform;
 
 /// What a scene was made from; decides defaults (integrator, image size, tone
 /// mapping) that differ between the lab's scenes and real ones.
@@ -391,7 +402,7 @@ pub fn load(name: &str, options: &LoadOptions) -> Result<Loaded, LoadError> {
                 rotation: Mat3A::IDENTITY,
                 lens: Lens::LAB,
                 aspect_ratio: None,
-                step: crate::controls::LAB_STEP,
+                step: cornell::LAB_STEP,
             };
             (scene, view)
         }
@@ -403,7 +414,7 @@ pub fn load(name: &str, options: &LoadOptions) -> Result<Loaded, LoadError> {
             // An empty OBJ (a warning) is framed as a point at the origin.
             let (lo, hi) = match parts.triangles.is_empty() {
                 true => (Vec3A::ZERO, Vec3A::ZERO),
-                false => crate::workload::bounds(&parts.triangles),
+                false => crate::geometry::triangle::bounds(&parts.triangles),
             };
             let framing = framing::frame(lo, hi);
             parts.light = framing.light;

@@ -20,13 +20,13 @@ use thiserror::Error;
 
 use accessor::{Buffers, read_floats, read_indices};
 
-use super::mesh::{Instance, MeshData, Tangents};
-use super::{NO_INSTANCE, PointLight, SceneParts};
 use crate::camera::{Lens, SceneCamera};
 use crate::geometry::triangle::Triangle;
 use crate::lights::Light;
 use crate::materials::surface::{AlphaMode, GltfMaterial, MaterialKind, SurfaceMaterial};
 use crate::memory::{GEOMETRY_BYTES_PER_TRIANGLE, Ledger, Needs};
+use crate::scene::mesh::{Instance, MeshData, Tangents};
+use crate::scene::{NO_INSTANCE, PointLight, SceneParts};
 use crate::textures::{TextureError, TextureRef, TextureStore, TextureTransform, Wrap};
 
 /// Extensions raylab reads; a file that requires any other is refused.

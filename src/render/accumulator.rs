@@ -1,0 +1,384 @@
+//! A render's exact per-pixel sums ([`Accumulator`]), the parts of an image
+//! that are rendered apart and merged ([`Split`]), and what a call cost
+//! ([`Tally`]).
+
+use glam::Vec3A;
+use rayon::prelude::*;
+use thiserror::Error;
+
+use super::tile::{Target, accumulate_into};
+use super::{Rendered, TILE_ROWS};
+use crate::aov::{Aov, AovSet, AovSums, Layout};
+use crate::camera::Camera;
+use crate::film::Film;
+use crate::fixed::{self, Fixed3};
+use crate::integrators::Integrator;
+use crate::scene::Scene;
+
+/// What a call of [`accumulate`](super::accumulate) cost and found.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Tally {
+    /// Rays cast (closest-hit and shadow rays).
+    pub rays: u64,
+    /// Samples that came out NaN or infinite: counted here and left out of the
+    /// sums (so they count as black).
+    pub dropped: u64,
+}
+
+impl std::ops::Add for Tally {
+    type Output = Tally;
+    fn add(self, o: Tally) -> Tally {
+        Tally {
+            rays: self.rays + o.rays,
+            dropped: self.dropped + o.dropped,
+        }
+    }
+}
+
+impl std::iter::Sum for Tally {
+    fn sum<I: Iterator<Item = Tally>>(iter: I) -> Tally {
+        iter.fold(Tally::default(), |a, b| a + b)
+    }
+}
+
+/// Which rows of the image a render takes: the `index`-th of `count` parts,
+/// made of the image's row tiles ([`TILE_ROWS`] rows each, from the top)
+/// `index`, `index + count`, `index + 2·count`, ...: interleaved, so that every
+/// part has rows from all over the image and costs about the same. The whole
+/// image is part 0 of 1.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Split {
+    /// Which part (from 0).
+    pub index: u32,
+    /// Parts in all (at least 1).
+    pub count: u32,
+}
+
+impl Split {
+    /// The whole image.
+    pub const WHOLE: Split = Split { index: 0, count: 1 };
+
+    /// Row tiles of an image `height` pixels high.
+    pub fn row_tiles(height: u32) -> u32 {
+        height.div_ceil(TILE_ROWS as u32)
+    }
+
+    /// Part `index` of `count` of an image `height` rows high, if every part
+    /// gets at least one row tile.
+    pub fn new(index: u32, count: u32, height: u32) -> Result<Split, String> {
+        if count == 0 || index >= count {
+            return Err(format!(
+                "tile {index}/{count}: the tile number must be below the number of tiles"
+            ));
+        }
+        let tiles = Self::row_tiles(height);
+        if count > tiles {
+            return Err(format!(
+                "tile {index}/{count}: an image {height} pixels high has at most {tiles} tiles (one per {TILE_ROWS} rows)"
+            ));
+        }
+        Ok(Split { index, count })
+    }
+
+    /// Whether row tile `tile` is in this part.
+    pub fn has_tile(&self, tile: u32) -> bool {
+        tile % self.count == self.index
+    }
+
+    /// Whether this is the whole image.
+    pub fn is_whole(&self) -> bool {
+        self.count == 1
+    }
+}
+
+impl std::fmt::Display for Split {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}/{}", self.index, self.count)
+    }
+}
+
+/// The per-pixel sums of a render in progress: samples `first..first + spp` of
+/// every pixel in its [`Split`] (the whole image unless made by
+/// [`Accumulator::part`]), summed exactly in fixed point ([`crate::fixed`]),
+/// so that any split of the samples into calls of [`Accumulator::add`]
+/// (passes, a render stopped, saved and resumed) or into parts rendered apart
+/// and merged gives the same sums bit for bit. 48 bytes a pixel, and 16 per
+/// AOV channel.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Accumulator {
+    width: u32,
+    height: u32,
+    split: Split,
+    first: u32,
+    pub(super) spp: u32,
+    image: Vec<Fixed3>,
+    aovs: Option<(AovSet, Vec<i128>)>,
+    tally: Tally,
+}
+
+/// Why [`Accumulator::from_parts`] refused its parts.
+#[derive(Clone, Debug, PartialEq, Eq, Error)]
+#[error("{0}")]
+pub struct PartsError(String);
+
+impl Accumulator {
+    /// No samples yet of a `width × height` image, with the AOVs `aovs`.
+    pub fn new(width: u32, height: u32, aovs: AovSet) -> Self {
+        Self::part(width, height, aovs, Split::WHOLE, 0)
+    }
+
+    /// No samples yet of the rows of `split`, whose samples start at `first`
+    /// (a part of a render, to be merged with the others: see
+    /// [`crate::farm`]). The sums of rows outside `split` stay zero.
+    pub fn part(width: u32, height: u32, aovs: AovSet, split: Split, first: u32) -> Self {
+        let pixels = width as usize * height as usize;
+        let aovs = (!aovs.is_empty()).then(|| (aovs, zeroed(pixels * Self::aov_stride(aovs))));
+        Self {
+            width,
+            height,
+            split,
+            first,
+            spp: 0,
+            image: vec![[0; 3]; pixels],
+            aovs,
+            tally: Tally::default(),
+        }
+    }
+
+    /// Sums read back (e.g. from a checkpoint) of samples `0..spp` of the
+    /// whole image: `image` holds `width × height` RGB sums, `aov_sums` the AOV
+    /// records (see [`Accumulator::aov_sums`]). [`Accumulator::into_part`]
+    /// makes them a part's.
+    pub fn from_parts(
+        width: u32,
+        height: u32,
+        aovs: AovSet,
+        spp: u32,
+        tally: Tally,
+        image: Vec<Fixed3>,
+        aov_sums: Vec<i128>,
+    ) -> Result<Self, PartsError> {
+        let mut acc = Self {
+            width,
+            height,
+            split: Split::WHOLE,
+            first: 0,
+            spp,
+            image,
+            aovs: None,
+            tally,
+        };
+        let pixels = width as usize * height as usize;
+        if acc.image.len() != pixels {
+            return Err(PartsError(format!(
+                "{} image sums for {width}×{height} pixels",
+                acc.image.len()
+            )));
+        }
+        let want = pixels * Self::aov_stride(aovs);
+        if aov_sums.len() != want {
+            return Err(PartsError(format!(
+                "{} AOV sums where {aovs} need {want}",
+                aov_sums.len()
+            )));
+        }
+        acc.aovs = (!aovs.is_empty()).then_some((aovs, aov_sums));
+        Ok(acc)
+    }
+
+    /// AOV values per pixel that [`Accumulator::aov_sums`] holds for `aovs`:
+    /// their channels in the set's order, then the number of samples that hit.
+    pub fn aov_stride(aovs: AovSet) -> usize {
+        if aovs.is_empty() {
+            0
+        } else {
+            Layout::new(aovs).stride
+        }
+    }
+
+    /// Image width in pixels.
+    pub fn width(&self) -> u32 {
+        self.width
+    }
+
+    /// Image height in pixels.
+    pub fn height(&self) -> u32 {
+        self.height
+    }
+
+    /// Samples per pixel summed: samples `first..first + spp` of every pixel
+    /// (see [`Accumulator::first_sample`]).
+    pub fn spp(&self) -> u32 {
+        self.spp
+    }
+
+    /// The first sample summed (0 but for a part of a render).
+    pub fn first_sample(&self) -> u32 {
+        self.first
+    }
+
+    /// The rows summed.
+    pub fn split(&self) -> Split {
+        self.split
+    }
+
+    /// These sums as those of samples `first..first + spp` of the rows of
+    /// `split` (which they must be: the rows outside it zero).
+    pub fn into_part(mut self, split: Split, first: u32) -> Self {
+        self.split = split;
+        self.first = first;
+        self
+    }
+
+    /// Rays cast and samples dropped so far.
+    pub fn tally(&self) -> Tally {
+        self.tally
+    }
+
+    /// The AOVs gathered.
+    pub fn aov_set(&self) -> AovSet {
+        self.aovs.as_ref().map_or(AovSet::NONE, |(set, _)| *set)
+    }
+
+    /// The image's per-pixel sums ([`crate::fixed`]), row-major from the
+    /// top-left.
+    pub fn image_sums(&self) -> &[Fixed3] {
+        &self.image
+    }
+
+    /// The AOVs' per-pixel records ([`Accumulator::aov_stride`] fixed-point
+    /// values each), row-major; empty without AOVs.
+    pub fn aov_sums(&self) -> &[i128] {
+        self.aovs.as_ref().map_or(&[], |(_, s)| s)
+    }
+
+    /// Adds `other`'s sums, rays and dropped samples to these (parts of one
+    /// render; [`crate::farm::merge`] checks that they are). Exact: the result
+    /// does not depend on the order of the parts.
+    pub(crate) fn add_sums(&mut self, other: &Accumulator) -> Result<(), String> {
+        let overflow = || "its sums overflow those of the other parts".to_string();
+        for (a, b) in self.image.iter_mut().zip(&other.image) {
+            for c in 0..3 {
+                a[c] = a[c].checked_add(b[c]).ok_or_else(overflow)?;
+            }
+        }
+        if let (Some((_, a)), Some((_, b))) = (&mut self.aovs, &other.aovs) {
+            for (a, b) in a.iter_mut().zip(b) {
+                *a = a.checked_add(*b).ok_or_else(overflow)?;
+            }
+        }
+        self.tally = Tally {
+            rays: self.tally.rays.saturating_add(other.tally.rays),
+            dropped: self.tally.dropped.saturating_add(other.tally.dropped),
+        };
+        Ok(())
+    }
+
+    /// Sets the samples these sums hold (after [`Accumulator::add_sums`]).
+    pub(crate) fn set_samples(&mut self, split: Split, first: u32, spp: u32) {
+        (self.split, self.first, self.spp) = (split, first, spp);
+    }
+
+    /// Adds samples `spp..spp + n` of every pixel (see [`accumulate`](super::accumulate) for what a
+    /// sample is) and returns what they cost. `progress` as for [`render`](super::render).
+    pub fn add(
+        &mut self,
+        scene: &Scene,
+        camera: &Camera,
+        integrator: Integrator,
+        seed: u64,
+        n: u32,
+        progress: &(dyn Fn(u64) + Sync),
+    ) -> Tally {
+        assert_eq!((self.width, self.height), (camera.width, camera.height));
+        let start = self.first + self.spp;
+        let samples = start..start.saturating_add(n);
+        let k = samples.len() as u64;
+        let aovs = self
+            .aovs
+            .as_mut()
+            .map(|(set, sums)| (Layout::new(*set), &mut sums[..]));
+        let tally = accumulate_into(
+            scene,
+            camera,
+            integrator,
+            seed,
+            samples.clone(),
+            Target::Wide {
+                image: &mut self.image,
+                aovs,
+                split: self.split,
+            },
+            &|rows| progress(rows * k),
+        );
+        self.spp = samples.end - self.first;
+        self.tally = self.tally + tally;
+        tally
+    }
+
+    /// The image and AOVs averaged over the samples taken. The sums are rounded
+    /// to f32 and then averaged, as a render in one call always did, so that
+    /// renders keep their values bit for bit.
+    pub fn rendered(&self) -> Rendered {
+        let film = self.film();
+        let aovs = self.aovs.as_ref().map(|(set, wide)| {
+            let mut sums = AovSums::new(*set, self.width, self.height);
+            sums.sums
+                .par_iter_mut()
+                .zip(wide.par_iter())
+                .for_each(|(s, w)| *s = 0.0 + fixed::to_f64(*w) as f32);
+            if let Some(at) = Layout::new(*set).offset(Aov::Variance) {
+                // The estimate from the exact sums, in f64 (Σ L² − (Σ L)²/n
+                // cancels where a pixel's noise is small), kept in the record.
+                let stride = Layout::new(*set).stride;
+                let n = f64::from(self.spp);
+                sums.sums
+                    .par_chunks_mut(stride)
+                    .zip(wide.par_chunks(stride))
+                    .zip(self.image.par_iter())
+                    .for_each(|((record, exact), image)| {
+                        record[at] = if self.spp < 2 {
+                            f32::INFINITY
+                        } else {
+                            let sum = image.map(fixed::to_f64);
+                            let l = 0.2126 * sum[0] + 0.7152 * sum[1] + 0.0722 * sum[2];
+                            let squares = fixed::to_f64(exact[at]);
+                            ((squares - l * l / n).max(0.0) / (n * (n - 1.0))) as f32
+                        };
+                    });
+            }
+            sums.average(self.spp)
+        });
+        Rendered {
+            film,
+            rays: self.tally.rays,
+            dropped: self.tally.dropped,
+            aovs,
+        }
+    }
+}
+
+impl Accumulator {
+    /// The image averaged over the samples taken, as [`Accumulator::rendered`]
+    /// gives it (without the AOVs).
+    pub fn film(&self) -> Film {
+        let mut film = Film::new(self.width, self.height);
+        film.pixels
+            .par_iter_mut()
+            .zip(self.image.par_iter())
+            // `0 + x`, not `x`: what adding the sum to a zeroed f32 film gave.
+            .for_each(|(p, w)| {
+                *p = Vec3A::ZERO + Vec3A::from_array(w.map(|c| fixed::to_f64(c) as f32))
+            });
+        film.average(self.spp);
+        film
+    }
+}
+
+/// `len` zeros, written rather than lazily zeroed (see [`AovSums::new`]).
+#[allow(clippy::slow_vector_initialization)]
+fn zeroed(len: usize) -> Vec<i128> {
+    let mut v = Vec::with_capacity(len);
+    v.resize(len, 0);
+    v
+}

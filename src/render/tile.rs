@@ -1,0 +1,784 @@
+//! The tiles' loops: one tile's rows traced sample by sample, the camera
+//! rays of 4×2 pixel blocks (then 2×2 quads, then single pixels) traced
+//! together, and each value handed to a [`Sink`]: the accumulator's exact
+//! sums or an f32 film.
+
+use std::ops::Range;
+
+use glam::{DVec3, Vec3A};
+use rayon::prelude::*;
+
+use super::{Split, TILE_ROWS, Tally};
+use crate::aov::{FirstHit, Layout};
+use crate::camera::Camera;
+use crate::film::Film;
+use crate::fixed::{self, Fixed3};
+use crate::geometry::ray::{Hit, Ray};
+use crate::integrators::Integrator;
+#[cfg(target_arch = "x86_64")]
+use crate::integrators::direct;
+use crate::integrators::path::{self, PathOptions, PathSampler, SamplerKind};
+use crate::materials::Material;
+#[cfg(target_arch = "x86_64")]
+use crate::sampling::sampler::pixel_jitter8;
+use crate::sampling::sampler::{Rng, pixel_jitter};
+use crate::scene::{Scene, SurfaceHit};
+#[cfg(target_arch = "x86_64")]
+use crate::simd::F8;
+
+/// Where [`accumulate_into`] adds its samples.
+pub(super) enum Target<'a> {
+    /// An f32 film (the viewer's refinement): one sample is added to it
+    /// straight, several are summed in f64 per tile first.
+    Narrow(&'a mut Film),
+    /// Exact sums kept across calls ([`super::Accumulator`]), with the AOVs' if
+    /// any, of the row tiles of `split`.
+    Wide {
+        image: &'a mut [Fixed3],
+        aovs: Option<(Layout, &'a mut [i128])>,
+        split: Split,
+    },
+}
+
+/// One tile's part of a [`Target`].
+enum TileSums<'a> {
+    Narrow(&'a mut [Vec3A]),
+    Wide(&'a mut [Fixed3]),
+}
+
+/// [`accumulate`] into `target`, gathering the AOVs (if any) from the same
+/// camera rays and their closest hits, which the render finds anyway: the
+/// image does not change, and no ray is added.
+pub(super) fn accumulate_into(
+    scene: &Scene,
+    camera: &Camera,
+    integrator: Integrator,
+    seed: u64,
+    samples: Range<u32>,
+    target: Target<'_>,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Tally {
+    let width = camera.width as usize;
+    let tile_pixels = width * TILE_ROWS;
+    // Each tile's slice of the sums and of the AOV sums (empty ones without
+    // AOVs, so that the tiles still zip with them).
+    let mut split = Split::WHOLE;
+    let (tiles, layout, aov_tiles): (Vec<TileSums>, _, Vec<&mut [i128]>) = match target {
+        Target::Narrow(film) => {
+            assert_eq!((film.width, film.height), (camera.width, camera.height));
+            let tiles: Vec<_> = film
+                .pixels
+                .chunks_mut(tile_pixels)
+                .map(TileSums::Narrow)
+                .collect();
+            let empty = (0..tiles.len()).map(|_| &mut [][..]).collect();
+            (tiles, None, empty)
+        }
+        Target::Wide {
+            image,
+            aovs,
+            split: s,
+        } => {
+            split = s;
+            assert_eq!(image.len(), width * camera.height as usize);
+            let tiles: Vec<_> = image.chunks_mut(tile_pixels).map(TileSums::Wide).collect();
+            match aovs {
+                Some((layout, sums)) => {
+                    let aov_tiles = sums.chunks_mut(tile_pixels * layout.stride).collect();
+                    (tiles, Some(layout), aov_tiles)
+                }
+                None => {
+                    let empty = (0..tiles.len()).map(|_| &mut [][..]).collect();
+                    (tiles, None, empty)
+                }
+            }
+        }
+    };
+    tiles
+        .into_par_iter()
+        .zip(aov_tiles)
+        .enumerate()
+        .filter(|(tile, _)| split.has_tile(*tile as u32))
+        .map(|(tile, (sums, aov_rows))| {
+            let y0 = tile * TILE_ROWS;
+            let mut dropped = 0u64;
+            // The AOVs are summed exactly, into the accumulator's sums.
+            let mut gather =
+                |i: usize, ray: &Ray, hit: Option<Hit>, shaded: Option<&FirstHit>, value: Vec3A| {
+                    if let Some(layout) = &layout {
+                        let record = &mut aov_rows[i * layout.stride..(i + 1) * layout.stride];
+                        layout.gather(scene, camera, ray, hit, shaded, value, record);
+                    }
+                };
+            let n_rows = match &sums {
+                TileSums::Wide(w) => w.len(),
+                TileSums::Narrow(r) => r.len(),
+            } / width;
+            let tile = Tile {
+                scene,
+                camera,
+                integrator,
+                seed,
+                samples: samples.clone(),
+                width,
+                y0,
+                n_rows,
+            };
+            // Each target with its own copy of the loop (no per-sample test of
+            // which target it is).
+            let rays = match sums {
+                // Into the accumulator's exact sums.
+                TileSums::Wide(exact) => {
+                    let mut add = ExactSums {
+                        sums: exact,
+                        dropped: &mut dropped,
+                    };
+                    match &layout {
+                        Some(layout) => tile.trace::<true>(Some(layout), &mut add, &mut gather),
+                        None => tile.trace::<false>(None, &mut add, &mut gather),
+                    }
+                }
+                // Into an f32 film: many samples are summed in f64 in one
+                // buffer per tile first, so that even 2^20 of them lose nothing
+                // to f32 rounding, while one sample goes straight into the
+                // film, which keeps progressive refinement exact.
+                TileSums::Narrow(rows) => {
+                    let mut local = if samples.len() > 1 {
+                        vec![DVec3::ZERO; rows.len()]
+                    } else {
+                        Vec::new()
+                    };
+                    let mut add = FilmSums {
+                        rows,
+                        local: &mut local,
+                        dropped: &mut dropped,
+                    };
+                    let rays = tile.trace::<false>(None, &mut add, &mut gather);
+                    let FilmSums { rows, local, .. } = add;
+                    for (sum, w) in rows.iter_mut().zip(local.iter()) {
+                        *sum += w.as_vec3a();
+                    }
+                    rays
+                }
+            };
+            progress(n_rows as u64);
+            Tally { rays, dropped }
+        })
+        .sum()
+}
+
+/// Where [`Tile::trace`] hands its samples: each with its pixel's index in the
+/// tile, one at a time or the eight of a 4×2 block of the lab's integrators
+/// at once. Non-finite samples are dropped and counted.
+trait Sink {
+    /// Adds sample value `v` to pixel `i`.
+    fn add(&mut self, i: usize, v: Vec3A);
+    /// Adds `v[k]` to pixel `i[k]`, as eight [`Sink::add`] calls would.
+    fn add8(&mut self, i: [usize; 8], v: [Vec3A; 8]) {
+        for (i, v) in i.into_iter().zip(v) {
+            self.add(i, v);
+        }
+    }
+    /// [`Sink::add8`] of values given channel by channel (`v[c][k]` is
+    /// channel `c` of sample `k`).
+    fn add8_channels(&mut self, i: [usize; 8], v: &[[f32; 8]; 3]) {
+        let at = |k: usize| Vec3A::new(v[0][k], v[1][k], v[2][k]);
+        self.add8(i, [at(0), at(1), at(2), at(3), at(4), at(5), at(6), at(7)]);
+    }
+}
+
+/// A tile's exact sums (see [`super::Accumulator`]).
+struct ExactSums<'a> {
+    sums: &'a mut [Fixed3],
+    dropped: &'a mut u64,
+}
+
+impl Sink for ExactSums<'_> {
+    #[inline]
+    fn add(&mut self, i: usize, v: Vec3A) {
+        if v.is_finite() {
+            fixed::add3(&mut self.sums[i], v);
+        } else {
+            *self.dropped += 1;
+        }
+    }
+
+    /// The eight conversions in one call when all are finite (the usual case):
+    /// one at a time they were an eighth of a `direct` frame's instructions.
+    #[inline]
+    fn add8(&mut self, i: [usize; 8], v: [Vec3A; 8]) {
+        if v.iter().all(|v| v.is_finite()) {
+            fixed::add8(self.sums, i, v);
+        } else {
+            for (i, v) in i.into_iter().zip(v) {
+                self.add(i, v);
+            }
+        }
+    }
+
+    #[inline]
+    fn add8_channels(&mut self, i: [usize; 8], v: &[[f32; 8]; 3]) {
+        // (A fold, not `all`: without the early exit it is compiled to lanes.)
+        let finite = v.iter().flatten().fold(true, |all, x| all & x.is_finite());
+        if finite {
+            fixed::add8_channels(self.sums, i, v);
+        } else {
+            for (k, &i) in i.iter().enumerate() {
+                self.add(i, Vec3A::new(v[0][k], v[1][k], v[2][k]));
+            }
+        }
+    }
+}
+
+/// A tile's rows of an f32 film: many samples are summed in f64 in `local`
+/// first (when it is not empty), one goes straight into the film.
+struct FilmSums<'a> {
+    rows: &'a mut [Vec3A],
+    local: &'a mut [DVec3],
+    dropped: &'a mut u64,
+}
+
+impl Sink for FilmSums<'_> {
+    #[inline]
+    fn add(&mut self, i: usize, v: Vec3A) {
+        if !v.is_finite() {
+            *self.dropped += 1;
+        } else if let Some(w) = self.local.get_mut(i) {
+            *w += v.as_dvec3();
+        } else {
+            self.rows[i] += v;
+        }
+    }
+}
+
+/// The one walk over a tile's pixels, for one sample: rows in pairs, each
+/// pair as 4×2 blocks (`block(qx, qy)`: the block's top-left pixel), then its
+/// last columns as 2×2 quads (`quad(quad)`: the four pixels, row by row); a
+/// last odd row or column pixel by pixel (`pixel(x, y)`). Pixels are in the
+/// tile's coordinates; `continue` in `block` goes on to the next block.
+///
+/// A macro, not a function taking closures: both loops that use it inline
+/// their bodies into it, and the lab's copy is compiled with AVX2 inside
+/// [`Tile::trace_lab_avx2`], which closures are not (see `crate::simd`); the
+/// notes in the bodies measure what a call left in them costs.
+macro_rules! for_each_block {
+    (
+        $width:ident, $n_rows:ident,
+        block($qx:ident, $qy:ident) $block:block
+        quad($quad:ident) $quad_body:block
+        pixel($x:ident, $y:ident) $pixel:block
+    ) => {
+        for $qy in (0..$n_rows).step_by(2) {
+            let blocks_end = if $qy + 1 < $n_rows { $width / 4 * 4 } else { 0 };
+            for $qx in (0..blocks_end).step_by(4) $block
+            for qx in (blocks_end..$width).step_by(2) {
+                if $qy + 1 < $n_rows && qx + 1 < $width {
+                    let $quad = [(qx, $qy), (qx + 1, $qy), (qx, $qy + 1), (qx + 1, $qy + 1)];
+                    $quad_body
+                } else {
+                    for $y in $qy..($qy + 2).min($n_rows) {
+                        for $x in qx..(qx + 2).min($width) $pixel
+                    }
+                }
+            }
+        }
+    };
+}
+
+/// One tile's share of a call of [`accumulate_into`]: its rows and the samples.
+struct Tile<'a> {
+    scene: &'a Scene,
+    camera: &'a Camera,
+    integrator: Integrator,
+    seed: u64,
+    samples: Range<u32>,
+    /// Image width in pixels.
+    width: usize,
+    /// First row.
+    y0: usize,
+    /// Rows.
+    n_rows: usize,
+}
+
+impl Tile<'_> {
+    /// Traces the tile's samples in sample order, handing each value to `add`
+    /// (with the pixel's index in the tile) and, when `aovs` is given, each
+    /// camera ray with its hit to `gather` (with the hit's shading where `path`
+    /// found it); returns the rays cast. `AOVS` says whether `aovs` is given:
+    /// the loop without AOVs is then compiled free of their code, which even
+    /// as an untaken branch slowed the lab's cheap integrators by 5 %.
+    fn trace<const AOVS: bool>(
+        &self,
+        aovs: Option<&Layout>,
+        add: &mut impl Sink,
+        gather: &mut impl FnMut(usize, &Ray, Option<Hit>, Option<&FirstHit>, Vec3A),
+    ) -> u64 {
+        if let Integrator::Path(options) = self.integrator {
+            return self.trace_path::<AOVS>(options, aovs, add, gather);
+        }
+        // The lab's loop compiled twice, and with AVX2 where the CPU has it:
+        // three-operand instructions and fewer register copies took 6 % off a
+        // `direct` frame's instructions (the same values: no fused
+        // multiply-adds are made, and the library calls are the same).
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU has AVX2.
+            return unsafe { self.trace_lab_avx2::<AOVS>(add, gather) };
+        }
+        self.trace_lab::<AOVS, false>(add, gather)
+    }
+
+    /// [`Tile::trace`] for `path`.
+    fn trace_path<const AOVS: bool>(
+        &self,
+        options: PathOptions,
+        aovs: Option<&Layout>,
+        add: &mut impl Sink,
+        gather: &mut impl FnMut(usize, &Ray, Option<Hit>, Option<&FirstHit>, Vec3A),
+    ) -> u64 {
+        // Eight paths shaded at once where the scene allows (fixed materials,
+        // no textures): the same values, a fifth to a quarter less time on the
+        // lab box, less on `cornell-area` (docs/performance.md).
+        #[cfg(target_arch = "x86_64")]
+        if !AOVS
+            && options.sampler == SamplerKind::Sobol
+            && std::arch::is_x86_feature_detected!("avx2")
+            && self.scene.path_lanes_apply()
+        {
+            // SAFETY: the CPU has AVX2.
+            return unsafe { self.trace_path_lanes(options, add) };
+        }
+        let (scene, camera, seed, samples) = (self.scene, self.camera, self.seed, &self.samples);
+        let (width, y0, n_rows) = (self.width, self.y0, self.n_rows);
+        let mut rays = 0u64;
+        // One path from its camera ray's hit into pixel `i`, its AOVs
+        // gathered from the first hit as the path shades it.
+        // (It returns the value, which the caller adds: a block's eight in
+        // one `add8`.)
+        let mut path_sample = |i: usize, start: &mut PathStart, hit, rays: &mut u64| {
+            let layout = match aovs {
+                Some(layout) if AOVS => layout,
+                // Without AOVs the path alone, observed by nothing.
+                _ => return start.trace(scene, hit, &options, rays, &mut |_, _| {}),
+            };
+            // The path only copies what it shaded the hit with; the AOVs
+            // are made of it afterwards, outside the path tracer's loop.
+            let mut seen = None;
+            let v = start.trace(scene, hit, &options, rays, &mut |s, b| {
+                seen = Some((*s, *b))
+            });
+            let shaded = seen.map(|(s, b)| layout.first_hit(scene, &start.ray, &s, || b));
+            gather(i, &start.ray, hit, shaded.as_ref(), v);
+            v
+        };
+        for s in samples.clone() {
+            // Camera rays of 4×2 pixel blocks traced together (eight AVX2
+            // lanes), then each path on its own; the last columns as 2×2
+            // quads, a last odd row or column alone.
+            for_each_block!(width, n_rows,
+                block(qx, qy) {
+                    let block: [(usize, usize); 8] =
+                        std::array::from_fn(|i| (qx + i % 4, qy + i / 4));
+                    // (Written out: `block.map` here was left as a call, its
+                    // eight samplers copied out of it, 0.4 % of the box's `path`.)
+                    macro_rules! start {
+                        ($i:expr) => {
+                            PathStart::new(
+                                camera,
+                                &options,
+                                seed,
+                                (block[$i].0, y0 + block[$i].1),
+                                s,
+                            )
+                        };
+                    }
+                    let mut starts = [
+                        start!(0),
+                        start!(1),
+                        start!(2),
+                        start!(3),
+                        start!(4),
+                        start!(5),
+                        start!(6),
+                        start!(7),
+                    ];
+                    let primary = starts.each_ref().map(|p| p.ray);
+                    rays += 8;
+                    let hits = scene.intersect8(&primary, f32::INFINITY);
+                    let mut pixels = [0; 8];
+                    let mut values = [Vec3A::ZERO; 8];
+                    for (k, (((x, y), start), hit)) in
+                        block.into_iter().zip(&mut starts).zip(hits).enumerate()
+                    {
+                        pixels[k] = y * width + x;
+                        values[k] = path_sample(pixels[k], start, hit, &mut rays);
+                    }
+                    add.add8(pixels, values);
+                }
+                quad(quad) {
+                    let mut starts = quad
+                        .map(|(x, y)| PathStart::new(camera, &options, seed, (x, y0 + y), s));
+                    let primary = starts.each_ref().map(|p| p.ray);
+                    rays += 4;
+                    let hits = scene.intersect4(&primary, f32::INFINITY);
+                    for (((x, y), start), hit) in quad.into_iter().zip(&mut starts).zip(hits) {
+                        let v = path_sample(y * width + x, start, hit, &mut rays);
+                        add.add(y * width + x, v);
+                    }
+
+                }
+                pixel(x, y) {
+                    let mut start = PathStart::new(camera, &options, seed, (x, y0 + y), s);
+                    rays += 1;
+                    let hit = scene.intersect(&start.ray, f32::INFINITY);
+                    let v = path_sample(y * width + x, &mut start, hit, &mut rays);
+                    add.add(y * width + x, v);
+                }
+            );
+        }
+        rays
+    }
+
+    /// [`Tile::trace_path`] with eight paths in AVX2 lanes ([`path::lanes`]): the
+    /// tile's samples in sample order, each lane taking the next when its path
+    /// ends. Only for scenes where [`Scene::path_lanes_apply`].
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn trace_path_lanes(&self, options: PathOptions, add: &mut impl Sink) -> u64 {
+        let (scene, camera, seed) = (self.scene, self.camera, self.seed);
+        let (width, y0, n_rows) = (self.width, self.y0, self.n_rows);
+        let mut rays = 0u64;
+        // The camera rays of eight pixels of a row are traced as one packet
+        // (the last pixels of a row one by one), then handed out in turn.
+        let mut samples = self.samples.clone();
+        let mut sample = if width > 0 && n_rows > 0 {
+            samples.next()
+        } else {
+            None
+        };
+        let (mut x, mut y) = (0, 0);
+        let mut ready: [Option<path::lanes::Start>; 8] = [const { None }; 8];
+        let (mut taken, mut made) = (0, 0);
+        let mut next = || {
+            if taken == made {
+                let s = sample?;
+                let n = (width - x).min(8);
+                let mut primary = [Ray::new(Vec3A::ZERO, Vec3A::Z); 8];
+                for (k, (slot, ray)) in ready.iter_mut().zip(&mut primary).take(n).enumerate() {
+                    let px = x + k;
+                    let start = PathStart::new(camera, &options, seed, (px, y0 + y), s);
+                    let AnySampler::Sobol(sampler) = start.sampler else {
+                        unreachable!("the lanes take Sobol' samples only");
+                    };
+                    *ray = start.ray;
+                    *slot = Some(path::lanes::Start {
+                        tag: y * width + px,
+                        sampler,
+                        ray: start.ray,
+                        hit: None,
+                    });
+                }
+                if n == 8 {
+                    let hits = scene.intersect8(&primary, f32::INFINITY);
+                    for (slot, hit) in ready.iter_mut().zip(hits) {
+                        if let Some(start) = slot {
+                            start.hit = hit;
+                        }
+                    }
+                } else {
+                    for (slot, ray) in ready.iter_mut().zip(&primary).take(n) {
+                        if let Some(start) = slot {
+                            start.hit = scene.intersect(ray, f32::INFINITY);
+                        }
+                    }
+                }
+                rays += n as u64;
+                (taken, made) = (0, n);
+                x += n;
+                if x == width {
+                    x = 0;
+                    y += 1;
+                    if y == n_rows {
+                        y = 0;
+                        sample = samples.next();
+                    }
+                }
+            }
+            taken += 1;
+            ready[taken - 1].take()
+        };
+        let traced = path::lanes::trace(scene, options.max_depth, &mut next, &mut |i, v| {
+            add.add(i, v)
+        });
+        rays + traced
+    }
+
+    /// [`Tile::trace_lab`] compiled with AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn trace_lab_avx2<const AOVS: bool>(
+        &self,
+        add: &mut impl Sink,
+        gather: &mut impl FnMut(usize, &Ray, Option<Hit>, Option<&FirstHit>, Vec3A),
+    ) -> u64 {
+        self.trace_lab::<AOVS, true>(add, gather)
+    }
+
+    /// [`Tile::trace`] for the lab's integrators (`flat`, `direct`); with
+    /// `LANES` (only in [`Tile::trace_lab_avx2`]) its 4×2 blocks are shaded in
+    /// AVX2 lanes from the camera rays to the values (`integrators::direct::lanes`)
+    /// where the scene allows it.
+    #[inline(always)]
+    fn trace_lab<const AOVS: bool, const LANES: bool>(
+        &self,
+        add: &mut impl Sink,
+        gather: &mut impl FnMut(usize, &Ray, Option<Hit>, Option<&FirstHit>, Vec3A),
+    ) -> u64 {
+        let &Tile {
+            scene,
+            camera,
+            integrator,
+            seed,
+            ref samples,
+            width,
+            y0,
+            n_rows,
+        } = self;
+        let mut rays = 0u64;
+        // Whether the blocks are shaded in lanes (checked once a tile; pixel
+        // coordinates below 2²⁴, which `block_points` counts on being exact
+        // in f32).
+        #[cfg(target_arch = "x86_64")]
+        let lanes =
+            LANES && !AOVS && width < 1 << 24 && y0 + n_rows < 1 << 24 && scene.lab_lanes_apply();
+        for s in samples.clone() {
+            // 4×2 pixel blocks traced together (eight AVX2 lanes), then the last
+            // columns as 2×2 quads; a last odd row or column alone.
+            for_each_block!(width, n_rows,
+                block(qx, qy) {
+                    // (Written out: `array::from_fn` here was left as a call
+                    // in the AVX2 copy of this loop.)
+                    let block: [(usize, usize); 8] = [
+                        (qx, qy),
+                        (qx + 1, qy),
+                        (qx + 2, qy),
+                        (qx + 3, qy),
+                        (qx, qy + 1),
+                        (qx + 1, qy + 1),
+                        (qx + 2, qy + 1),
+                        (qx + 3, qy + 1),
+                    ];
+                    // (Written out: `block.map` here was left as a call.)
+                    let (top, below) = (qy * width + qx, (qy + 1) * width + qx);
+                    let pixels = [
+                        top,
+                        top + 1,
+                        top + 2,
+                        top + 3,
+                        below,
+                        below + 1,
+                        below + 2,
+                        below + 3,
+                    ];
+                    // The image points, their jitter in lanes where the block is.
+                    #[cfg(target_arch = "x86_64")]
+                    let (px, py) = if lanes {
+                        // SAFETY: `lanes` is only set in `trace_lab_avx2`
+                        // (`LANES`), called only when the CPU has AVX2.
+                        unsafe { block_points(seed, s, (qx, y0 + qy), width) }
+                    } else {
+                        block_points_one_by_one(seed, s, &block, y0, width)
+                    };
+                    #[cfg(not(target_arch = "x86_64"))]
+                    let (px, py) = block_points_one_by_one(seed, s, &block, y0, width);
+                    #[cfg(target_arch = "x86_64")]
+                    if lanes {
+                        let direct = integrator == Integrator::Direct;
+                        // SAFETY: as above.
+                        let shaded =
+                            unsafe { direct::lanes::radiance8(scene, camera, &px, &py, direct) };
+                        if let Some((values, shadow_rays)) = shaded {
+                            rays += 8 + u64::from(shadow_rays);
+                            add.add8_channels(pixels, &values);
+                            continue;
+                        }
+                    }
+                    let top_rays =
+                        camera.rays4([px[0], px[1], px[2], px[3]], [py[0], py[1], py[2], py[3]]);
+                    let bottom_rays =
+                        camera.rays4([px[4], px[5], px[6], px[7]], [py[4], py[5], py[6], py[7]]);
+                    let (t, b) = (top_rays, bottom_rays);
+                    let primary: [Ray; 8] = [t[0], t[1], t[2], t[3], b[0], b[1], b[2], b[3]];
+                    rays += 8;
+                    let hits = scene.intersect8(&primary, f32::INFINITY);
+                    let values = integrator.radiance8_from(scene, &primary, hits, &mut rays);
+                    if AOVS {
+                        for (k, ((x, y), ray)) in block.into_iter().zip(&primary).enumerate() {
+                            gather(y * width + x, ray, hits[k], None, values[k]);
+                        }
+                    }
+                    add.add8(pixels, values);
+                }
+                quad(quad) {
+                    // Four plain calls, not `quad.map`: the compiler did not
+                    // always inline the closure through it (3 % of `flat`).
+                    let ray = |(x, y): (usize, usize)| pixel_ray(camera, seed, s, x, y0 + y, width);
+                    let primary = [ray(quad[0]), ray(quad[1]), ray(quad[2]), ray(quad[3])];
+                    let values = if !AOVS {
+                        integrator.radiance4(scene, &primary, &mut rays)
+                    } else {
+                        rays += 4;
+                        let hits = scene.intersect4(&primary, f32::INFINITY);
+                        let values = integrator.radiance4_from(scene, &primary, hits, &mut rays);
+                        for (k, ((x, y), ray)) in quad.into_iter().zip(&primary).enumerate() {
+                            gather(y * width + x, ray, hits[k], None, values[k]);
+                        }
+                        values
+                    };
+                    for ((x, y), v) in quad.into_iter().zip(values) {
+                        add.add(y * width + x, v);
+                    }
+
+                }
+                pixel(x, y) {
+                    let ray = pixel_ray(camera, seed, s, x, y0 + y, width);
+                    let v = if !AOVS {
+                        integrator.radiance(scene, &ray, &mut rays)
+                    } else {
+                        rays += 1;
+                        let hit = scene.intersect(&ray, f32::INFINITY);
+                        let v = integrator.radiance_from(scene, &ray, hit, &mut rays);
+                        gather(y * width + x, &ray, hit, None, v);
+                        v
+                    };
+                    add.add(y * width + x, v);
+                }
+            );
+        }
+        rays
+    }
+}
+
+/// The sampler of one `path` sample.
+pub(super) enum AnySampler {
+    Sobol(path::SobolSampler),
+    Independent(Rng),
+}
+
+/// One sample of the `path` integrator for pixel number `pixel`: its sampler and
+/// its camera ray, through a uniformly chosen point of the pixel.
+pub(super) struct PathStart {
+    pub(super) sampler: AnySampler,
+    pub(super) ray: Ray,
+}
+
+impl PathStart {
+    /// (Inlined: as a call it copied the sampler's sixteen pairs out again,
+    /// 0.7 % of the box's `path`.)
+    #[inline(always)]
+    pub(super) fn new(
+        camera: &Camera,
+        options: &PathOptions,
+        seed: u64,
+        (x, y): (usize, usize),
+        s: u32,
+    ) -> Self {
+        // (The pixel's column and row given, not divided out of its index: a
+        // 64-bit division per sample.)
+        let pixel = (y * camera.width as usize + x) as u64;
+        let (x, y) = (x as f32, y as f32);
+        let mut sampler = match options.sampler {
+            SamplerKind::Sobol => AnySampler::Sobol(path::SobolSampler::new(pixel, s, seed)),
+            SamplerKind::Independent => AnySampler::Independent(Rng::for_sample(seed, pixel, s)),
+        };
+        let d = match &mut sampler {
+            AnySampler::Sobol(smp) => smp.next_2d(),
+            AnySampler::Independent(rng) => rng.next_2d(),
+        };
+        let ray = camera.ray(x + d.x, y + d.y);
+        Self { sampler, ray }
+    }
+
+    /// The path's radiance given the camera ray's closest hit; `observe` sees
+    /// the first hit's shading (see [`path::radiance_observed`]).
+    #[inline]
+    fn trace(
+        &mut self,
+        scene: &Scene,
+        hit: Option<Hit>,
+        options: &PathOptions,
+        rays: &mut u64,
+        observe: &mut impl FnMut(&SurfaceHit, &Material),
+    ) -> Vec3A {
+        let ray = &self.ray;
+        match &mut self.sampler {
+            AnySampler::Sobol(smp) => {
+                path::radiance_observed(scene, ray, hit, options, smp, rays, observe)
+            }
+            AnySampler::Independent(rng) => {
+                path::radiance_observed(scene, ray, hit, options, rng, rays, observe)
+            }
+        }
+    }
+}
+
+/// The camera ray of sample `s` of pixel `(x, y)`: through the centre for sample
+/// 0, uniformly jittered by the (seed, pixel, sample) generator otherwise.
+#[inline]
+pub(super) fn pixel_ray(
+    camera: &Camera,
+    seed: u64,
+    s: u32,
+    x: usize,
+    y: usize,
+    width: usize,
+) -> Ray {
+    let (px, py) = pixel_point(seed, s, x, y, width);
+    camera.ray(px, py)
+}
+
+/// [`pixel_point`] of the 4×2 block of pixels from `(x, y)`, its jitter in
+/// AVX2 lanes (`pixel_jitter8`), bit for bit.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+fn block_points(seed: u64, s: u32, (x, y): (usize, usize), width: usize) -> ([f32; 8], [f32; 8]) {
+    // Pixel coordinates below 2²⁴ are exact in f32, and so are their sums
+    // with 1, 2 and 3.
+    let column = F8::splat(x as f32) + F8::from_array([0.0, 1.0, 2.0, 3.0, 0.0, 1.0, 2.0, 3.0]);
+    let row = F8::splat(y as f32) + F8::from_array([0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0, 1.0]);
+    let (dx, dy) = if s == 0 {
+        (F8::splat(0.5), F8::splat(0.5))
+    } else {
+        let first = (y * width + x) as u64;
+        pixel_jitter8(seed, [first, first + width as u64], s)
+    };
+    ((column + dx).to_array(), (row + dy).to_array())
+}
+
+/// [`pixel_point`] of the pixels of `block` (rows from `y0`), one by one.
+#[inline(always)]
+fn block_points_one_by_one(
+    seed: u64,
+    s: u32,
+    block: &[(usize, usize); 8],
+    y0: usize,
+    width: usize,
+) -> ([f32; 8], [f32; 8]) {
+    let (mut px, mut py) = ([0.0; 8], [0.0; 8]);
+    for (i, &(x, y)) in block.iter().enumerate() {
+        (px[i], py[i]) = pixel_point(seed, s, x, y0 + y, width);
+    }
+    (px, py)
+}
+
+/// The image point of [`pixel_ray`].
+#[inline]
+fn pixel_point(seed: u64, s: u32, x: usize, y: usize, width: usize) -> (f32, f32) {
+    let (dx, dy) = if s == 0 {
+        (0.5, 0.5)
+    } else {
+        pixel_jitter(seed, (y * width + x) as u64, s)
+    };
+    (x as f32 + dx, y as f32 + dy)
+}
