@@ -249,6 +249,17 @@ impl Images<'_> {
         (hooks.on_event)(Event::Finished);
         let stopped = ended == Ended::Stopped;
 
+        // What this run did, once the image is (or is not) denoised.
+        let report = |denoise_time| ImageReport {
+            output: output.clone(),
+            spp: acc.spp(),
+            resumed_spp,
+            ended,
+            rays: acc.tally().rays - tally_before.rays,
+            dropped: acc.tally().dropped,
+            elapsed,
+            denoise_time,
+        };
         if acc.spp() == 0 {
             // Stopped before the first sample: nothing to write or to keep.
             if !args.quiet {
@@ -257,16 +268,7 @@ impl Images<'_> {
                     output.display()
                 ));
             }
-            return Ok(ImageReport {
-                output,
-                spp: 0,
-                resumed_spp,
-                ended,
-                rays: 0,
-                dropped: 0,
-                elapsed,
-                denoise_time: None,
-            });
+            return Ok(report(None));
         }
         // A stopped render keeps its samples (unless the checkpoint on disk
         // already holds them all).
@@ -292,16 +294,7 @@ impl Images<'_> {
         );
         if let Some(kept) = self.kept.as_mut() {
             let finished = super::write::finish(&acc, self.layers, self.denoiser.as_deref_mut())?;
-            let report = ImageReport {
-                output: output.clone(),
-                spp: acc.spp(),
-                resumed_spp,
-                ended,
-                rays: acc.tally().rays - tally_before.rays,
-                dropped: acc.tally().dropped,
-                elapsed,
-                denoise_time: finished.denoise_time,
-            };
+            let report = report(finished.denoise_time);
             *kept = Some(finished);
             // In memory the finding is said, and the image kept all the same.
             if args.nan_check {
@@ -437,16 +430,7 @@ impl Images<'_> {
                 ));
             }
         }
-        let report = ImageReport {
-            output: output.clone(),
-            spp: acc.spp(),
-            resumed_spp,
-            ended,
-            rays: acc.tally().rays - tally_before.rays,
-            dropped: acc.tally().dropped,
-            elapsed,
-            denoise_time: denoised,
-        };
+        let report = report(denoised);
         if args.nan_check && nan_check(args, scene, &camera, integrator, &acc, hooks)? {
             return Err(NanFound.into());
         }

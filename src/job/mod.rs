@@ -247,13 +247,7 @@ impl Job {
     pub fn run_with(&mut self, hooks: &Hooks<'_>) -> anyhow::Result<Report> {
         let args = &self.options;
         let output = self.output();
-        // The AOVs gathered: those asked for, and the denoiser's.
-        let layers = args.aov.unwrap_or_default();
-        let aovs = if args.denoise() {
-            layers.with(crate::denoise::GUIDES)
-        } else {
-            layers
-        };
+        let (aovs, layers) = args.aov_sets();
         // Refuse an unsupported format or a missing folder before spending
         // time on the render (of the first frame's file: the pattern is
         // checked by `JobOptions::validate`).
@@ -291,12 +285,7 @@ impl Job {
                 "frames and parts (--frames, --tile, --samples) are rendered to files: run the job instead"
             );
         }
-        let layers = args.aov.unwrap_or_default();
-        let aovs = if args.denoise() {
-            layers.with(crate::denoise::GUIDES)
-        } else {
-            layers
-        };
+        let (aovs, layers) = args.aov_sets();
         let output = self.output();
         let session = self.take_session(aovs, hooks)?;
         let result = self.render_kept(&session, &output, aovs, layers, hooks);
@@ -438,5 +427,17 @@ impl JobOptions {
     /// Whether the image is denoised (`denoise`, or the scene file's).
     pub fn denoise(&self) -> bool {
         self.scene.denoise.unwrap_or(false)
+    }
+
+    /// The AOVs a render gathers (those asked for, and the denoiser's
+    /// guides) and those written as layers (those asked for).
+    pub fn aov_sets(&self) -> (AovSet, AovSet) {
+        let layers = self.aov.unwrap_or_default();
+        let gathered = if self.denoise() {
+            layers.with(crate::denoise::GUIDES)
+        } else {
+            layers
+        };
+        (gathered, layers)
     }
 }
