@@ -4,8 +4,8 @@ denoised, each renderer judged against its own converged image.
 
 Usage (from the project folder; the raylab binary must be built, ../shared beside the project):
 
-    python3 tools/compare_cycles.py [--scenes helmet-venice,showcase,cornell-glass] [--spp 16,64]
-                                    [--rounds 1] [--threads 2] [--ref-spp 1024]
+    python3 tools/compare_cycles.py [--scenes helmet-venice,showcase,cornell-glass,street]
+                                    [--spp 16,64] [--rounds 1] [--threads 2] [--ref-spp 1024]
                                     [--size 320x240] [--box-size 256x256] [--json PATH]
                                     [--raylab PATH] [--venv DIR] [--shared DIR] [--cache DIR]
                                     [--previews DIR] [--fresh-refs] [--timeout S]
@@ -20,7 +20,10 @@ Scenes (glTF 2.0, read by both renderers under ../shared/specs/scene-conventions
   showcase       scenes/showcase/showcase.gltf (spot, sun, point and emissive lights, metals, glass,
                  textures), --size;
   cornell-glass  scenes/cornell-glass/cornell-glass.gltf (the lab box under its ceiling patch with a
-                 mirror and a glass block, tools/make_cornell_glass.py), --box-size (default 256×256).
+                 mirror and a glass block, tools/make_cornell_glass.py), --box-size (default 256×256);
+  street         scenes/street/street.gltf (a night street and plaza: about 2,000 small emissive
+                 lamps, 50 spot and 2 point lights, five DamagedHelmets, no environment;
+                 tools/make_street.py), --size.
 
 Renderers, same size, same threads (--threads, default 2), same seeds:
   raylab  `raylab render SCENE --spp N --threads T --seed S --width W --height H
@@ -119,6 +122,7 @@ SCENES = {
                       "envmaps/venice_sunset_1k.hdr", 200.0, False),
     "showcase": ("scenes/showcase/showcase.gltf", None, 0.0, False),
     "cornell-glass": ("scenes/cornell-glass/cornell-glass.gltf", None, 0.0, True),
+    "street": ("scenes/street/street.gltf", None, 0.0, False),
 }
 REF_SEED = 1 << 20
 # --curve: a denoised error at most this fraction above the noisy one is a tie, not worse.
@@ -387,7 +391,8 @@ class Scene:
         if not os.path.isfile(self.file):
             hint = {"cornell-glass": " (python3 tools/make_cornell_glass.py makes it)",
                     "helmet-venice": " (python3 tools/make_helmet_venice.py makes it)",
-                    "showcase": " (python3 tools/make_showcase.py makes it)"}[name]
+                    "showcase": " (python3 tools/make_showcase.py makes it)",
+                    "street": " (python3 tools/make_street.py makes it)"}[name]
             raise Fail(f"scene file {rel} not found{hint}")
         self.env = os.path.join(os.path.abspath(args.shared), env) if env else None
         if self.env and not os.path.isfile(self.env):
@@ -1025,7 +1030,7 @@ def main():
     ap.add_argument("--ref-spp", type=int, default=1024,
                     help="spp of each renderer's own converged render (default 1024)")
     ap.add_argument("--size", type=parse_size, default=(320, 240),
-                    help="WxH of helmet-venice and showcase (default 320x240)")
+                    help="WxH of helmet-venice, showcase and street (default 320x240)")
     ap.add_argument("--box-size", type=parse_size, default=(256, 256),
                     help="WxH of cornell-glass (default 256x256)")
     ap.add_argument("--raylab", default=default_raylab(),
