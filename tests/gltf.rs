@@ -1434,9 +1434,23 @@ fn emitters_light_their_front_face_or_both() {
             assert_near(scene.emission(prim), le, 1e-6, &what);
             assert_near(scene.normal(prim), front, 1e-6, &what);
         }
-        // A light sample seen from below the square.
-        let p = Vec3A::new(0.1, 0.0, 0.2);
-        let sample = scene.sample_light(p, Facing::Any, Vec2::new(0.3, 0.5), Vec2::new(0.4, 0.7));
+        // A light sample seen from the square's front (below it, or above
+        // the mirrored one); from behind a one-sided square the light tree
+        // chooses nothing, as nothing arrives.
+        let (below, above) = (Vec3A::new(0.1, 0.0, 0.2), Vec3A::new(0.1, 4.0, 0.2));
+        let (p, behind) = if mirror {
+            (above, below)
+        } else {
+            (below, above)
+        };
+        let (u_select, u) = (Vec2::new(0.3, 0.5), Vec2::new(0.4, 0.7));
+        let from_behind = scene.sample_light(behind, Facing::Any, u_select, u);
+        assert_eq!(
+            from_behind.is_some(),
+            double_sided,
+            "{what}: {from_behind:?}"
+        );
+        let sample = scene.sample_light(p, Facing::Any, u_select, u);
         let Some(LightSample::Area {
             position,
             normal,
@@ -1452,7 +1466,8 @@ fn emitters_light_their_front_face_or_both() {
         assert_near(normal, front, 1e-6, &what);
         assert_near(radiance, le, 1e-6, &what);
         assert_eq!(two_sided, double_sided, "{what}");
-        // One light: the density is 1 over the square's area.
+        // One light (two triangles of equal area and distance, each chosen
+        // half the time): the density is 1 over the square's area.
         assert!((pdf_area - 0.25).abs() < 1e-6, "{what}: pdf {pdf_area}");
         // Rays from below (up) and above (down) through the square.
         let mut rays = 0;

@@ -50,6 +50,11 @@ pub struct SceneOptions {
     /// to light it), `on` or `off`.
     #[arg(long, value_name = "WHEN", default_value = "auto", value_parser = parse_default_light)]
     pub default_light: crate::load::DefaultLight,
+    /// How `path` chooses a light for each shading point: `tree` (a light tree
+    /// that weighs distance, orientation and the surface's side), `power` (by
+    /// each light's power) or `uniform` (for comparisons).
+    #[arg(long, value_name = "HOW", default_value = "tree", value_parser = parse_light_selection)]
+    pub light_selection: crate::scene::LightSelection,
     /// Tone mapping of PNG output and the viewer: `clamp`, `aces` or
     /// `khronos-pbr-neutral` [default: khronos-pbr-neutral for glTF, clamp otherwise].
     #[arg(long, value_name = "OP", value_parser = parse_tonemap)]
@@ -391,6 +396,7 @@ impl SceneOptions {
             ambient: self.ambient,
             camera: self.camera,
             default_light: self.default_light,
+            light_selection: self.light_selection,
             environment: crate::load::EnvironmentOptions {
                 source: match (&self.env, self.env_color) {
                     (Some(path), _) => Some(crate::load::EnvSource::File(path.clone())),
@@ -565,6 +571,16 @@ fn parse_frames(s: &str) -> Result<(u32, u32), String> {
 fn parse_camera(s: &str) -> Result<usize, String> {
     s.parse::<usize>()
         .map_err(|_| "expected a camera number from 0".to_string())
+}
+
+fn parse_light_selection(s: &str) -> Result<crate::scene::LightSelection, String> {
+    use crate::scene::LightSelection;
+    match s {
+        "tree" => Ok(LightSelection::Tree),
+        "power" => Ok(LightSelection::Power),
+        "uniform" => Ok(LightSelection::Uniform),
+        _ => Err(format!("expected tree, power or uniform, not {s:?}")),
+    }
 }
 
 fn parse_default_light(s: &str) -> Result<crate::load::DefaultLight, String> {

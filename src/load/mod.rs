@@ -81,6 +81,8 @@ pub struct LoadOptions {
     /// (default: unlimited; `raylab` passes `--max-memory`, by default
     /// [`MemoryBudget::machine_default`]).
     pub max_memory: MemoryBudget,
+    /// How `path` chooses among the lights (default: the light tree).
+    pub light_selection: crate::scene::LightSelection,
 }
 
 /// Where an environment's radiance comes from.
@@ -556,6 +558,9 @@ pub fn load(name: &str, options: &LoadOptions) -> Result<Loaded, LoadError> {
         time: start.elapsed(),
         needs: ledger.needs(),
     };
+    if options.light_selection != scene.light_selection() {
+        scene.set_light_selection(options.light_selection);
+    }
     Ok(Loaded {
         scene,
         kind,

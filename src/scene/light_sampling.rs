@@ -1,8 +1,8 @@
 //! Choosing a light for next-event estimation, and the densities multiple
 //! importance sampling weighs by: the key light, the other punctual lights,
-//! the environment and the emitting triangles of a [`Scene`], picked by power
-//! (the punctual lights among themselves by what each sends to the point
-//! being lit) or uniformly.
+//! the environment and the emitting triangles of a [`Scene`], picked by what
+//! each can send to the point being lit (a light tree, the default), by
+//! power, or uniformly.
 
 use std::f32::consts::PI;
 
@@ -10,6 +10,7 @@ use glam::{Vec2, Vec3A};
 use rayon::prelude::*;
 
 use super::Scene;
+use super::light_tree::{LightBounds, LightTree, TreeLight};
 use crate::lights::{Incident, Light};
 use crate::materials::surface::SurfaceMaterial;
 use crate::sampling::distribution::AliasTable;
@@ -34,14 +35,27 @@ impl Scene {
         self.environment.radiance(dir)
     }
 
-    /// The solid-angle density with which [`Scene::sample_light`] picks
-    /// direction `dir` of the environment (selection included).
+    /// The solid-angle density with which [`Scene::sample_light`], lighting
+    /// a surface at `from` that `facing` describes, picks direction `dir` of
+    /// the environment (selection included).
     #[inline]
-    pub fn environment_pdf(&self, dir: Vec3A) -> f32 {
+    pub fn environment_pdf(&self, dir: Vec3A, from: Vec3A, facing: Facing) -> f32 {
         let Some(entry) = self.light_table.environment else {
             return 0.0;
         };
-        self.entry_probability(entry as usize) * self.environment.pdf(dir)
+        let choice = if self.uses_tree() {
+            self.top_level(from, facing).share(TopLevel::Environment)
+        } else {
+            self.entry_probability(entry as usize)
+        };
+        choice * self.environment.pdf(dir)
+    }
+
+    /// Whether lights are chosen by the light tree (the default, when there is
+    /// anything to choose besides the key light).
+    #[inline]
+    fn uses_tree(&self) -> bool {
+        self.selection == LightSelection::Tree && self.light_table.total > 0.0
     }
 
     /// Builds the table that chooses among the lights other than the key light:
@@ -52,7 +66,7 @@ impl Scene {
         let mut entries = Vec::new();
         let mut weights = Vec::new();
         let weigh = |power: f32| match self.selection {
-            LightSelection::Power => power,
+            LightSelection::Tree | LightSelection::Power => power,
             LightSelection::Uniform => 1.0,
         };
         for (i, l) in self.lights.iter().enumerate() {
@@ -87,6 +101,11 @@ impl Scene {
             .sum::<f64>() as f32;
         let by_importance = self.selection == LightSelection::Power
             && (2..=MAX_IMPORTANCE_LIGHTS).contains(&self.lights.len());
+        let (tree, directional, env_importance) = if self.selection == LightSelection::Tree {
+            self.build_tree(environment.is_some())
+        } else {
+            (LightTree::default(), Vec::new(), 0.0)
+        };
         self.light_table = LightTable {
             total: alias.total() as f32,
             alias,
@@ -95,7 +114,203 @@ impl Scene {
             prim_entry,
             punctual_pmf,
             by_importance,
+            tree,
+            directional,
+            env_importance,
         };
+    }
+
+    /// The light tree over the emitting triangles and the point and spot
+    /// lights; the directional lights (chosen beside it); the environment's
+    /// importance (`π` times its mean radiance: the irradiance it would give
+    /// if it were uniform).
+    fn build_tree(&self, environment: bool) -> (LightTree, Vec<u32>, f32) {
+        let mean = |v: Vec3A| (v.as_dvec3().element_sum() / 3.0) as f32;
+        let mut lights = Vec::new();
+        let mut directional = Vec::new();
+        for (i, l) in self.lights.iter().enumerate() {
+            let bounds = match *l {
+                Light::Point {
+                    position,
+                    intensity,
+                } => LightBounds::point(position, mean(intensity)),
+                Light::Spot {
+                    position,
+                    direction,
+                    intensity,
+                    cos_inner,
+                    cos_outer,
+                } => LightBounds::spot(position, direction, mean(intensity), cos_inner, cos_outer),
+                Light::Directional { irradiance, .. } => {
+                    if mean(irradiance) > 0.0 {
+                        directional.push(i as u32);
+                    }
+                    continue;
+                }
+            };
+            lights.push((bounds, TreeLight::Punctual(i as u32)));
+        }
+        for &prim in &self.area_lights.prims {
+            let power = self.area_lights.per_prim[prim as usize].0;
+            let two_sided = self.material(prim).emits_both_sides;
+            // `power = π A Le` per side: the intensity along the normal is `A Le`.
+            let phi = power / (PI * if two_sided { 2.0 } else { 1.0 });
+            lights.push((
+                LightBounds::triangle(
+                    &self.triangles[prim as usize].v,
+                    self.normals[prim as usize],
+                    phi,
+                    two_sided,
+                ),
+                TreeLight::Triangle(prim),
+            ));
+        }
+        let env_importance = if environment {
+            0.25 * self.environment.radiance_integral()
+        } else {
+            0.0
+        };
+        (
+            LightTree::build(lights, self.triangles.len()),
+            directional,
+            env_importance,
+        )
+    }
+
+    /// What each kind of light the tree mode chooses among first can send to
+    /// a surface at `p` (as `facing` says).
+    #[inline]
+    fn top_level(&self, p: Vec3A, facing: Facing) -> TopLevelWeights {
+        let table = &self.light_table;
+        let key = self.point_power() * (0.25 / PI);
+        let key = if key > 0.0 {
+            point_importance(self.light.position, key, p, facing)
+        } else {
+            0.0
+        };
+        let root = table.tree.root_importances(p, facing);
+        let tree = LightTree::sum(root);
+        let environment = table.env_importance;
+        let mut total = key + tree + environment;
+        for &i in &table.directional {
+            total += directional_importance(&self.lights[i as usize], facing);
+        }
+        TopLevelWeights {
+            key,
+            tree,
+            root,
+            environment,
+            total,
+        }
+    }
+
+    /// [`Scene::sample_light`] by the light tree.
+    #[inline]
+    fn sample_light_by_tree(
+        &self,
+        p: Vec3A,
+        facing: Facing,
+        u_select: Vec2,
+        u: Vec2,
+    ) -> Option<LightSample> {
+        let weights = self.top_level(p, facing);
+        let total = weights.total;
+        if !(total > 0.0 && total.is_finite()) {
+            return None;
+        }
+        // Walk the kinds in order (key light, tree, environment, directional
+        // lights) to the one `target` falls in; rounding past the end takes
+        // the last one with weight.
+        let target = u_select.x * total;
+        let mut chosen = None;
+        let mut start = 0.0f32;
+        let mut consider = |kind: TopLevel, w: f32| {
+            if w <= 0.0 {
+                return false;
+            }
+            chosen = Some((kind, start, w));
+            start += w;
+            target < start
+        };
+        let _ = consider(TopLevel::Key, weights.key)
+            || consider(TopLevel::Tree, weights.tree)
+            || consider(TopLevel::Environment, weights.environment)
+            || self.light_table.directional.iter().any(|&i| {
+                consider(
+                    TopLevel::Directional(i),
+                    directional_importance(&self.lights[i as usize], facing),
+                )
+            });
+        let (kind, start, w) = chosen?;
+        let probability = w / total;
+        match kind {
+            TopLevel::Key => Some(LightSample::Point {
+                position: self.light.position,
+                intensity: self.light.power * (1.0 / (4.0 * PI * probability)),
+            }),
+            TopLevel::Tree => {
+                let u_tree = ((target - start) / w).clamp(0.0, ONE_BELOW);
+                let (light, pmf) = self
+                    .light_table
+                    .tree
+                    .sample(weights.root, p, facing, u_tree)?;
+                let probability = pmf * probability;
+                match light {
+                    TreeLight::Punctual(i) => self.punctual_sample(i, p, probability),
+                    TreeLight::Triangle(prim) => Some(self.triangle_sample(prim, u, probability)),
+                }
+            }
+            TopLevel::Environment => {
+                let (to_light, radiance, pdf) = self.environment.sample(u)?;
+                Some(LightSample::Environment {
+                    to_light,
+                    radiance,
+                    pdf: pdf * probability,
+                    distance: self.escape_distance(p),
+                })
+            }
+            TopLevel::Directional(i) => self.punctual_sample(i, p, probability),
+        }
+    }
+
+    /// Punctual light `i`'s sample for `p`, chosen with `probability`.
+    #[inline]
+    fn punctual_sample(&self, i: u32, p: Vec3A, probability: f32) -> Option<LightSample> {
+        let scale = 1.0 / probability;
+        Some(match self.lights[i as usize].incident(p)? {
+            Incident::FromPoint {
+                position,
+                intensity,
+            } => LightSample::Point {
+                position,
+                intensity: intensity * scale,
+            },
+            Incident::FromDirection {
+                to_light,
+                irradiance,
+            } => LightSample::Directional {
+                to_light,
+                irradiance: irradiance * scale,
+                distance: self.escape_distance(p),
+            },
+        })
+    }
+
+    /// A point on emitting triangle `prim`, uniform by area with `u`, chosen
+    /// with `probability`.
+    #[inline]
+    fn triangle_sample(&self, prim: u32, u: Vec2, probability: f32) -> LightSample {
+        let v = &self.triangles[prim as usize].v;
+        let (b1, b2) = uniform_barycentrics(u);
+        let position = (1.0 - b1 - b2) * v[0] + b1 * v[1] + b2 * v[2];
+        let area = self.area_lights.per_prim[prim as usize].1;
+        LightSample::Area {
+            position,
+            normal: self.normals[prim as usize],
+            radiance: self.emission_at(prim, b1, b2),
+            two_sided: self.material(prim).emits_both_sides,
+            pdf_area: probability / area,
+        }
     }
 
     /// The key light's selection weight.
@@ -103,7 +318,7 @@ impl Scene {
     fn key_weight(&self) -> f32 {
         let p = self.point_power();
         match self.selection {
-            LightSelection::Power => p,
+            LightSelection::Tree | LightSelection::Power => p,
             LightSelection::Uniform => f32::from(p > 0.0),
         }
     }
@@ -171,6 +386,9 @@ impl Scene {
         u: Vec2,
     ) -> Option<LightSample> {
         // (`light_needs_samples` must say when `u_select` and `u` are read.)
+        if self.uses_tree() {
+            return self.sample_light_by_tree(p, facing, u_select, u);
+        }
         let key = self.key_weight();
         let rest = self.light_table.total;
         let total = key + rest;
@@ -315,10 +533,11 @@ impl Scene {
         2.0 * self.radius() + (p - self.bounds.0).length() + 1.0
     }
 
-    /// The density per unit area with which [`Scene::sample_light`] picks a point
-    /// on emitting triangle `prim`: its selection probability over its area.
+    /// The density per unit area with which [`Scene::sample_light`], lighting
+    /// a surface at `from` that `facing` describes, picks a point on emitting
+    /// triangle `prim`: its selection probability there over its area.
     #[inline]
-    pub fn light_pdf_area(&self, prim: u32) -> f32 {
+    pub fn light_pdf_area(&self, prim: u32, from: Vec3A, facing: Facing) -> f32 {
         let Some(&entry) = self.light_table.prim_entry.get(prim as usize) else {
             return 0.0;
         };
@@ -326,6 +545,14 @@ impl Scene {
             return 0.0;
         }
         let area = self.area_lights.per_prim[prim as usize].1;
+        if self.uses_tree() {
+            let weights = self.top_level(from, facing);
+            let pmf = self
+                .light_table
+                .tree
+                .triangle_pmf(weights.root, prim, from, facing);
+            return pmf * weights.share(TopLevel::Tree) / area;
+        }
         self.entry_probability(entry as usize) / area
     }
 
@@ -400,8 +627,14 @@ pub enum LightSample {
 /// How [`Scene::sample_light`] chooses among the lights.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum LightSelection {
-    /// In proportion to each light's estimated power.
+    /// By a bound on what each light can send to the point being lit
+    /// (distance, orientation, the surface's side), through a light tree over
+    /// the emitting triangles and the point and spot lights, beside the key
+    /// light, the environment and the directional lights.
     #[default]
+    Tree,
+    /// In proportion to each light's estimated power (the punctual lights
+    /// among themselves by what each sends to the point).
     Power,
     /// Every light (every emitting triangle) equally: for comparisons.
     Uniform,
@@ -455,7 +688,96 @@ pub(super) struct LightTable {
     /// Every triangle's entry (`u32::MAX` for non-emitters); empty when none
     /// emits.
     prim_entry: Vec<u32>,
+    /// [`LightSelection::Tree`]: the emitting triangles, point and spot lights.
+    tree: LightTree,
+    /// [`LightSelection::Tree`]: the directional lights (indices of
+    /// [`Scene::lights`]).
+    directional: Vec<u32>,
+    /// [`LightSelection::Tree`]: the environment's weight (0: none).
+    env_importance: f32,
 }
+
+/// What [`LightSelection::Tree`] first chooses among.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum TopLevel {
+    Key,
+    Tree,
+    Environment,
+    /// Light `i` of [`Scene::lights`].
+    Directional(u32),
+}
+
+/// The weights of [`TopLevel`]'s kinds at a point (the directional lights'
+/// only in the total).
+#[derive(Clone, Copy, Debug)]
+struct TopLevelWeights {
+    key: f32,
+    tree: f32,
+    /// The importances of the tree root's children (their sum is `tree`).
+    root: glam::Vec4,
+    environment: f32,
+    total: f32,
+}
+
+impl TopLevelWeights {
+    /// The probability of choosing `kind` (the key light, the tree or the
+    /// environment).
+    #[inline]
+    fn share(&self, kind: TopLevel) -> f32 {
+        let w = match kind {
+            TopLevel::Key => self.key,
+            TopLevel::Tree => self.tree,
+            TopLevel::Environment => self.environment,
+            TopLevel::Directional(_) => 0.0,
+        };
+        if self.total > 0.0 && self.total.is_finite() {
+            w / self.total
+        } else {
+            0.0
+        }
+    }
+}
+
+/// What a point light of intensity `phi` at `position` sends to a surface at
+/// `p` that `facing` describes: `phi cos θ / d²`, zero from below the
+/// surface's horizon (the light tree's bound for a point, exact).
+#[inline]
+fn point_importance(position: Vec3A, phi: f32, p: Vec3A, facing: Facing) -> f32 {
+    let to_p = p - position;
+    let d2 = to_p.length_squared();
+    let cos = match facing {
+        Facing::Any => 1.0,
+        Facing::Side(n) => -n.dot(to_p) * d2.sqrt().recip(),
+        Facing::Both(n) => n.dot(to_p).abs() * d2.sqrt().recip(),
+    };
+    let w = phi / d2 * cos;
+    if w.is_finite() && w > 0.0 { w } else { 0.0 }
+}
+
+/// What directional light `light` sends to a surface facing as `facing`
+/// says: its irradiance (the mean over the channels) times the cosine, zero
+/// from below the surface's horizon.
+#[inline]
+fn directional_importance(light: &Light, facing: Facing) -> f32 {
+    let Light::Directional {
+        direction,
+        irradiance,
+    } = *light
+    else {
+        return 0.0;
+    };
+    let e = (irradiance.x + irradiance.y + irradiance.z) * (1.0 / 3.0);
+    let cos = match facing {
+        Facing::Any => 1.0,
+        Facing::Side(n) => -n.dot(direction),
+        Facing::Both(n) => n.dot(direction).abs(),
+    };
+    let w = e * cos;
+    if w.is_finite() { w.max(0.0) } else { 0.0 }
+}
+
+/// The largest `f32` below 1.
+const ONE_BELOW: f32 = 1.0 - f32::EPSILON / 2.0;
 
 /// Points per triangle at which a textured emitter's radiance is averaged to
 /// estimate its power.

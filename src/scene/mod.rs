@@ -11,6 +11,7 @@
 pub mod compose;
 mod lanes;
 mod light_sampling;
+mod light_tree;
 pub mod mesh;
 
 use std::collections::HashMap;
@@ -270,6 +271,11 @@ impl Scene {
         );
         self.textures.fingerprint_into(&mut f);
         self.environment.fingerprint_into(&mut f);
+        // (Only when not the default, so that fingerprints made before there
+        // was a choice stay the same.)
+        if self.selection != LightSelection::default() {
+            let _ = write!(f, "|light selection {:?}", self.selection);
+        }
         f.value()
     }
 
@@ -389,7 +395,7 @@ impl Scene {
             area_lights: AreaLights::default(),
             has_alpha,
             environment: Environment::none(),
-            selection: LightSelection::Power,
+            selection: LightSelection::Tree,
             light_table: LightTable::default(),
             bounds,
             bvh,

@@ -78,6 +78,10 @@ struct Paths {
     /// bit each, and each lane's last BSDF sample's pdf: MIS for emission.
     specular: u32,
     bsdf_pdf: [f32; 8],
+    /// Each lane's last vertex and the normal of the side it was lit from
+    /// (`Facing::Side`), where that MIS weighs the light's choice.
+    from: [[f32; 8]; 3],
+    from_n: [[f32; 8]; 3],
 }
 
 impl Paths {
@@ -171,6 +175,8 @@ pub(crate) fn trace(
         l: [[0.0; 8]; 3],
         specular: 0,
         bsdf_pdf: [0.0; 8],
+        from: [[0.0; 8]; 3],
+        from_n: [[0.0; 8]; 3],
     };
     let mut exhausted = false;
     loop {
@@ -281,6 +287,7 @@ impl Vertex<'_> {
             [p[0].to_array(), p[1].to_array(), p[2].to_array()],
             cos_out.to_array(),
         );
+        let ng_at = [ng[0].to_array(), ng[1].to_array(), ng[2].to_array()];
 
         // Lane by lane: emission seen at the hit; the end of paths of
         // `max_depth` segments (Mitsuba's convention); the sample values; the
@@ -311,7 +318,12 @@ impl Vertex<'_> {
                         1.0
                     } else {
                         let t = lanes.t[i];
-                        let pdf = scene.light_pdf_area(lanes.prim[i]) * t * t / cos_out.abs();
+                        let from = Facing::Side(Paths::vec(&lanes.from_n, i));
+                        let pdf =
+                            scene.light_pdf_area(lanes.prim[i], Paths::vec(&lanes.from, i), from)
+                                * t
+                                * t
+                                / cos_out.abs();
                         power_heuristic(lanes.bsdf_pdf[i], pdf)
                     };
                     let l = Paths::vec(&lanes.l, i) + Paths::vec(&lanes.beta, i) * le * weight;
@@ -335,11 +347,20 @@ impl Vertex<'_> {
                 Vec2::ZERO
             };
             (ub.0[i], ub.1[i], u_lobe[i]) = (u_bsdf.x, u_bsdf.y, u_choice.y);
-            if LAB || self.key.is_some() || !light_sampled {
+            if LAB || self.key.is_some() {
                 continue;
             }
+            // The side the path leaves by, as the scalar code's `Facing`
+            // (these scenes have no shading normals).
             let at = Paths::vec(&p_at, i);
-            if let Some(light) = scene.sample_light(at, Facing::Any, u_choice, u_light) {
+            let ng = Paths::vec(&ng_at, i);
+            let side = if cos_out < 0.0 { -ng } else { ng };
+            Paths::set(&mut lanes.from, i, at);
+            Paths::set(&mut lanes.from_n, i, side);
+            if !light_sampled {
+                continue;
+            }
+            if let Some(light) = scene.sample_light(at, Facing::Side(side), u_choice, u_light) {
                 let (to, radiance, pdf) = light_terms(at, light);
                 if radiance != Vec3A::ZERO {
                     lights |= 1 << i;

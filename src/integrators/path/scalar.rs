@@ -280,6 +280,10 @@ pub fn radiance_traced(
     // been sampled by next-event estimation: it counts in full.
     let mut specular = true;
     let mut bsdf_pdf = 0.0f32;
+    // The last vertex's point and side, where the light's choice that MIS
+    // weighs against the BSDF sample was made.
+    let mut from = ray.origin;
+    let mut from_facing = Facing::Any;
     let mut depth = 0u32;
     // Beer–Lambert attenuation per unit length of the medium the ray is in.
     let mut medium = Vec3A::ZERO;
@@ -294,7 +298,7 @@ pub fn radiance_traced(
                 let weight = if specular {
                     1.0
                 } else {
-                    power_heuristic(bsdf_pdf, scene.environment_pdf(ray.dir))
+                    power_heuristic(bsdf_pdf, scene.environment_pdf(ray.dir, from, from_facing))
                 };
                 tracer.event(
                     depth,
@@ -332,7 +336,8 @@ pub fn radiance_traced(
             let weight = if specular {
                 1.0
             } else {
-                let light_pdf = scene.light_pdf_area(hit.prim) * hit.t * hit.t / cos_out.abs();
+                let light_pdf = scene.light_pdf_area(hit.prim, from, from_facing) * hit.t * hit.t
+                    / cos_out.abs();
                 power_heuristic(bsdf_pdf, light_pdf)
             };
             tracer.event(depth, beta, PathEvent::Emission { le, weight });
@@ -386,6 +391,7 @@ pub fn radiance_traced(
         } else {
             Facing::Side(n)
         };
+        (from, from_facing) = (sp.p, facing);
         if light_sampled
             && let Some(light) = scene.sample_light(sp.p, facing, u_choice, u_light_pos)
         {
