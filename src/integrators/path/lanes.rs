@@ -159,6 +159,7 @@ pub(crate) fn trace(
         kinds: &kinds,
         key,
         max_depth,
+        by_point: scene.light_choice_depends_on_point(),
     };
     let mut rays = 0u64;
     let mut lanes = Paths {
@@ -256,6 +257,9 @@ struct Vertex<'a> {
     /// (`None`: it has no power).
     key: Option<Option<(Vec3A, Vec3A)>>,
     max_depth: u32,
+    /// Whether the lights' choice depends on the point and its side (then
+    /// each lane keeps its last vertex for MIS).
+    by_point: bool,
 }
 
 impl Vertex<'_> {
@@ -287,7 +291,9 @@ impl Vertex<'_> {
             [p[0].to_array(), p[1].to_array(), p[2].to_array()],
             cos_out.to_array(),
         );
-        let ng_at = [ng[0].to_array(), ng[1].to_array(), ng[2].to_array()];
+        let ng_at = self
+            .by_point
+            .then(|| [ng[0].to_array(), ng[1].to_array(), ng[2].to_array()]);
 
         // Lane by lane: emission seen at the hit; the end of paths of
         // `max_depth` segments (Mitsuba's convention); the sample values; the
@@ -350,17 +356,24 @@ impl Vertex<'_> {
             if LAB || self.key.is_some() {
                 continue;
             }
-            // The side the path leaves by, as the scalar code's `Facing`
-            // (these scenes have no shading normals).
             let at = Paths::vec(&p_at, i);
-            let ng = Paths::vec(&ng_at, i);
-            let side = if cos_out < 0.0 { -ng } else { ng };
-            Paths::set(&mut lanes.from, i, at);
-            Paths::set(&mut lanes.from_n, i, side);
+            // With the light tree: the side the path leaves by, as the scalar
+            // code's `Facing` (these scenes have no shading normals), kept
+            // for the next hit's MIS. (Else the choice does not depend on it.)
+            let facing = match &ng_at {
+                Some(ng_at) => {
+                    let ng = Paths::vec(ng_at, i);
+                    let side = if cos_out < 0.0 { -ng } else { ng };
+                    Paths::set(&mut lanes.from, i, at);
+                    Paths::set(&mut lanes.from_n, i, side);
+                    Facing::Side(side)
+                }
+                None => Facing::Any,
+            };
             if !light_sampled {
                 continue;
             }
-            if let Some(light) = scene.sample_light(at, Facing::Side(side), u_choice, u_light) {
+            if let Some(light) = scene.sample_light(at, facing, u_choice, u_light) {
                 let (to, radiance, pdf) = light_terms(at, light);
                 if radiance != Vec3A::ZERO {
                     lights |= 1 << i;
