@@ -78,6 +78,7 @@ def render(
     integrator: Optional[Literal["flat", "direct", "path"]] = None,
     camera: Union[None, int, Camera] = None,
     default_light: Literal["auto", "on", "off"] = "auto",
+    light_selection: Literal["tree", "power", "uniform"] = "tree",
     tonemap: Optional[Literal["clamp", "aces", "khronos-pbr-neutral"]] = None,
     max_depth: Optional[int] = None,
     sampler: Literal["sobol", "independent"] = "sobol",
