@@ -1,10 +1,77 @@
-"""Helpers shared by the scene generators (make_showcase.py, make_helmet_grid.py): a minimal
-PNG writer and the vector and quaternion arithmetic that glTF node rotations need.
-Standard library only."""
+"""Helpers shared by the scene generators (make_showcase.py, make_helmet_grid.py,
+make_street.py): a minimal PNG writer, the vector and quaternion arithmetic that glTF node
+rotations need, a builder of one binary buffer with its views and accessors, and reading the
+DamagedHelmet's glTF. Standard library only."""
 
+import json
 import math
+import os
 import struct
+import sys
+import urllib.parse
 import zlib
+
+FLOAT, U16, U32 = 5126, 5123, 5125
+ARRAY_BUFFER, ELEMENT_ARRAY_BUFFER = 34962, 34963
+
+
+class BufferBuilder:
+    """One glTF binary buffer: 4-byte aligned buffer views, and accessors over them."""
+
+    def __init__(self):
+        self.bin = bytearray()
+        self.views = []
+        self.accessors = []
+
+    def view(self, data, target):
+        while len(self.bin) % 4:
+            self.bin.append(0)
+        self.views.append({"buffer": 0, "byteOffset": len(self.bin), "byteLength": len(data),
+                           "target": target})
+        self.bin += data
+        return len(self.views) - 1
+
+    def floats(self, rows, kind, with_bounds=False):
+        n = len(rows[0])
+        data = struct.pack("<%df" % (n * len(rows)), *[c for r in rows for c in r])
+        acc = {"bufferView": self.view(data, ARRAY_BUFFER), "componentType": FLOAT,
+               "count": len(rows), "type": kind}
+        if with_bounds:
+            # bounds of the float32 values actually stored (exact: f32 -> f64 is exact)
+            stored = struct.unpack("<%df" % (n * len(rows)), data)
+            cols = [stored[k::n] for k in range(n)]
+            acc["min"] = [min(c) for c in cols]
+            acc["max"] = [max(c) for c in cols]
+        self.accessors.append(acc)
+        return len(self.accessors) - 1
+
+    def indices(self, tris, vertex_count):
+        flat = [i for t in tris for i in t]
+        assert max(flat) < vertex_count
+        if vertex_count <= 65535:
+            ctype, data = U16, struct.pack("<%dH" % len(flat), *flat)
+        else:
+            ctype, data = U32, struct.pack("<%dI" % len(flat), *flat)
+        self.accessors.append({"bufferView": self.view(data, ELEMENT_ARRAY_BUFFER),
+                               "componentType": ctype, "count": len(flat), "type": "SCALAR",
+                               "min": [min(flat)], "max": [max(flat)]})
+        return len(self.accessors) - 1
+
+
+def read_helmet(gltf_path):
+    """The DamagedHelmet's glTF JSON, the path of its buffer (checked against the byte length
+    the file gives; exits with one line if it differs), its one primitive and its triangle
+    count."""
+    with open(gltf_path, encoding="utf-8") as f:
+        helmet = json.load(f)
+    (hbuf,) = helmet["buffers"]
+    bin_path = os.path.join(os.path.dirname(gltf_path), urllib.parse.unquote(hbuf["uri"]))
+    if os.path.getsize(bin_path) != hbuf["byteLength"]:
+        sys.exit("%s: %d bytes, the glTF says %d" % (bin_path, os.path.getsize(bin_path),
+                                                      hbuf["byteLength"]))
+    (hmesh,) = helmet["meshes"]
+    (hprim,) = hmesh["primitives"]
+    return helmet, bin_path, hprim, helmet["accessors"][hprim["indices"]]["count"] // 3
 
 
 def _png_chunk(kind, data):

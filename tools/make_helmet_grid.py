@@ -38,7 +38,7 @@ import sys
 import time
 import urllib.parse
 
-from gltfgen import look_along, normalize, png_bytes, quat_mul, r6
+from gltfgen import look_along, normalize, png_bytes, quat_mul, r6, read_helmet
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 DEFAULT_SHARED = os.path.join(os.path.dirname(ROOT), "shared")
@@ -275,18 +275,9 @@ def uri_from(out_dir, target):
 def build(out_dir, shared, cols, rows):
     helmet_dir = os.path.join(shared, HELMET_DIR)
     helmet_path = os.path.join(helmet_dir, HELMET_GLTF)
-    with open(helmet_path, encoding="utf-8") as f:
-        helmet = json.load(f)
+    helmet, bin_path, hprim, helmet_tris = read_helmet(helmet_path)
+    hbuf = helmet["buffers"][0]
     os.makedirs(out_dir, exist_ok=True)
-
-    (hbuf,) = helmet["buffers"]
-    bin_path = os.path.join(helmet_dir, urllib.parse.unquote(hbuf["uri"]))
-    if os.path.getsize(bin_path) != hbuf["byteLength"]:
-        sys.exit("%s: %d bytes, the glTF says %d" % (bin_path, os.path.getsize(bin_path),
-                                                      hbuf["byteLength"]))
-    (hmesh,) = helmet["meshes"]
-    (hprim,) = hmesh["primitives"]
-    helmet_tris = helmet["accessors"][hprim["indices"]]["count"] // 3
     (hmat,) = helmet["materials"]
 
     # --- images: the helmet's five, then five generated per variant -----------------------

@@ -35,13 +35,11 @@ import os
 import struct
 import sys
 
-from gltfgen import dot, look_along, normalize, png_bytes, quat_axis_angle, quat_mul, r6, sub
+from gltfgen import BufferBuilder, dot, look_along, normalize, png_bytes, quat_axis_angle, quat_mul, r6, sub
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 DEFAULT_OUT = os.path.join(ROOT, "scenes", "showcase")
 
-FLOAT, U16, U32 = 5126, 5123, 5125
-ARRAY_BUFFER, ELEMENT_ARRAY_BUFFER = 34962, 34963
 REPEAT, CLAMP_TO_EDGE = 10497, 33071
 LINEAR, LINEAR_MIPMAP_LINEAR = 9729, 9987
 
@@ -365,45 +363,8 @@ def backdrop(arc_steps=24):
 # ---------------------------------------------------------------------------------------------
 # glTF assembly
 
-class Builder:
-    def __init__(self):
-        self.bin = bytearray()
-        self.views = []
-        self.accessors = []
-
-    def view(self, data, target):
-        while len(self.bin) % 4:
-            self.bin.append(0)
-        self.views.append({"buffer": 0, "byteOffset": len(self.bin), "byteLength": len(data),
-                           "target": target})
-        self.bin += data
-        return len(self.views) - 1
-
-    def floats(self, rows, kind, with_bounds=False):
-        n = len(rows[0])
-        data = struct.pack("<%df" % (n * len(rows)), *[c for r in rows for c in r])
-        acc = {"bufferView": self.view(data, ARRAY_BUFFER), "componentType": FLOAT,
-               "count": len(rows), "type": kind}
-        if with_bounds:
-            # bounds of the float32 values actually stored (exact: f32 -> f64 is exact)
-            stored = struct.unpack("<%df" % (n * len(rows)), data)
-            cols = [stored[k::n] for k in range(n)]
-            acc["min"] = [min(c) for c in cols]
-            acc["max"] = [max(c) for c in cols]
-        self.accessors.append(acc)
-        return len(self.accessors) - 1
-
-    def indices(self, tris, vertex_count):
-        flat = [i for t in tris for i in t]
-        assert max(flat) < vertex_count
-        if vertex_count <= 65535:
-            ctype, data = U16, struct.pack("<%dH" % len(flat), *flat)
-        else:
-            ctype, data = U32, struct.pack("<%dI" % len(flat), *flat)
-        self.accessors.append({"bufferView": self.view(data, ELEMENT_ARRAY_BUFFER),
-                               "componentType": ctype, "count": len(flat), "type": "SCALAR",
-                               "min": [min(flat)], "max": [max(flat)]})
-        return len(self.accessors) - 1
+class Builder(BufferBuilder):
+    """The buffer, and meshes of positions, normals and UVs."""
 
     def geometry(self, mesh):
         pos, nor, uv, tris = mesh

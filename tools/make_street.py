@@ -44,12 +44,12 @@ import json
 import math
 import os
 import random
-import struct
 import sys
 import urllib.parse
 
 sys.dont_write_bytecode = True  # leave no tools/__pycache__ behind
-from gltfgen import cross, look_along, normalize, quat_axis_angle, quat_mul, r6, sub  # noqa: E402
+from gltfgen import (BufferBuilder, cross, look_along, normalize, quat_axis_angle,  # noqa: E402
+                     quat_mul, r6, read_helmet, sub)
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 DEFAULT_OUT = os.path.join(ROOT, "scenes", "street")
@@ -57,8 +57,6 @@ DEFAULT_SHARED = os.path.join(os.path.dirname(ROOT), "shared")
 HELMET_DIR = os.path.join("models", "DamagedHelmet")
 HELMET_GLTF = "DamagedHelmet.gltf"
 
-FLOAT, U16, U32 = 5126, 5123, 5125
-ARRAY_BUFFER, ELEMENT_ARRAY_BUFFER = 34962, 34963
 
 # Layout (metres). The street: facades at |x| = FACADE_X, from z = STREET_Z0 down to STREET_Z1;
 # the plaza beyond, |x| <= PLAZA_X, down to PLAZA_Z1.
@@ -177,45 +175,6 @@ class Batches:
                         b, cc = cc, b
                     tris.append((base + a, base + b, base + cc))
         self.lamps += 1
-
-
-class Builder:
-    def __init__(self):
-        self.bin = bytearray()
-        self.views = []
-        self.accessors = []
-
-    def view(self, data, target):
-        while len(self.bin) % 4:
-            self.bin.append(0)
-        self.views.append({"buffer": 0, "byteOffset": len(self.bin), "byteLength": len(data),
-                           "target": target})
-        self.bin += data
-        return len(self.views) - 1
-
-    def floats(self, rows, kind, with_bounds=False):
-        n = len(rows[0])
-        data = struct.pack("<%df" % (n * len(rows)), *[c for r in rows for c in r])
-        acc = {"bufferView": self.view(data, ARRAY_BUFFER), "componentType": FLOAT,
-               "count": len(rows), "type": kind}
-        if with_bounds:
-            stored = struct.unpack("<%df" % (n * len(rows)), data)
-            cols = [stored[k::n] for k in range(n)]
-            acc["min"] = [min(c) for c in cols]
-            acc["max"] = [max(c) for c in cols]
-        self.accessors.append(acc)
-        return len(self.accessors) - 1
-
-    def indices(self, tris, vertex_count):
-        flat = [i for t in tris for i in t]
-        if vertex_count <= 65535:
-            ctype, data = U16, struct.pack("<%dH" % len(flat), *flat)
-        else:
-            ctype, data = U32, struct.pack("<%dI" % len(flat), *flat)
-        self.accessors.append({"bufferView": self.view(data, ELEMENT_ARRAY_BUFFER),
-                               "componentType": ctype, "count": len(flat), "type": "SCALAR",
-                               "min": [min(flat)], "max": [max(flat)]})
-        return len(self.accessors) - 1
 
 
 def uri_from(out_dir, target):
@@ -420,16 +379,8 @@ def build(out_dir, shared):
 
     # --- helmets ---------------------------------------------------------------------------
     helmet_dir = os.path.join(shared, HELMET_DIR)
-    with open(os.path.join(helmet_dir, HELMET_GLTF), encoding="utf-8") as f:
-        helmet = json.load(f)
-    (hbuf,) = helmet["buffers"]
-    hbin = os.path.join(helmet_dir, urllib.parse.unquote(hbuf["uri"]))
-    if os.path.getsize(hbin) != hbuf["byteLength"]:
-        sys.exit("%s: %d bytes, the glTF says %d" % (hbin, os.path.getsize(hbin),
-                                                      hbuf["byteLength"]))
-    (hmesh,) = helmet["meshes"]
-    (hprim,) = hmesh["primitives"]
-    helmet_tris = helmet["accessors"][hprim["indices"]]["count"] // 3
+    helmet, hbin, hprim, helmet_tris = read_helmet(os.path.join(helmet_dir, HELMET_GLTF))
+    hbuf = helmet["buffers"][0]
     helmet_rot = tuple(helmet["nodes"][0].get("rotation", (0.0, 0.0, 0.0, 1.0)))
     # (x, z, scale, yaw in degrees, base height); the helmet reaches 0.901 below its centre
     plinth = (-7.0, -82.0)
@@ -440,7 +391,7 @@ def build(out_dir, shared):
                      (plinth[0], plinth[1], 1.4, 25.0, 1.0)]
 
     # --- assemble ---------------------------------------------------------------------------
-    b = Builder()
+    b = BufferBuilder()
     materials = []
     for (name, base, metallic, rough, emissive, strength) in MATERIALS:
         m = {"name": name,
