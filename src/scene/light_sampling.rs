@@ -10,7 +10,7 @@ use glam::{Vec2, Vec3A};
 use rayon::prelude::*;
 
 use super::Scene;
-use super::light_tree::{LightBounds, LightTree, TreeLight};
+use super::light_tree::{self, LightBounds, LightTree, TreeLight};
 use crate::lights::{Incident, Light};
 use crate::materials::surface::SurfaceMaterial;
 use crate::sampling::distribution::AliasTable;
@@ -44,7 +44,10 @@ impl Scene {
             return 0.0;
         };
         let choice = if self.uses_tree() {
-            self.top_level(from, facing).share(TopLevel::Environment)
+            {
+                let weights = self.top_level(from, facing);
+                weights.share(weights.environment)
+            }
         } else {
             self.entry_probability(entry as usize)
         };
@@ -226,7 +229,7 @@ impl Scene {
             0.0
         };
         let root = table.tree.root_importances(p, facing);
-        let tree = LightTree::sum(root);
+        let tree = light_tree::sum(root);
         let environment = table.env_importance;
         let mut total = key + tree + environment;
         for &i in &table.directional {
@@ -281,10 +284,7 @@ impl Scene {
         let (kind, start, w) = chosen?;
         let probability = w / total;
         match kind {
-            TopLevel::Key => Some(LightSample::Point {
-                position: self.light.position,
-                intensity: self.light.power * (1.0 / (4.0 * PI * probability)),
-            }),
+            TopLevel::Key => Some(self.key_sample(probability)),
             TopLevel::Tree => {
                 let u_tree = ((target - start) / w).clamp(0.0, ONE_BELOW);
                 let (light, pmf) = self
@@ -297,17 +297,31 @@ impl Scene {
                     TreeLight::Triangle(prim) => Some(self.triangle_sample(prim, u, probability)),
                 }
             }
-            TopLevel::Environment => {
-                let (to_light, radiance, pdf) = self.environment.sample(u)?;
-                Some(LightSample::Environment {
-                    to_light,
-                    radiance,
-                    pdf: pdf * probability,
-                    distance: self.escape_distance(p),
-                })
-            }
+            TopLevel::Environment => self.environment_sample(p, u, probability),
             TopLevel::Directional(i) => self.punctual_sample(i, p, probability),
         }
+    }
+
+    /// The key light's sample, chosen with `probability`.
+    #[inline]
+    fn key_sample(&self, probability: f32) -> LightSample {
+        LightSample::Point {
+            position: self.light.position,
+            intensity: self.light.power * (1.0 / (4.0 * PI * probability)),
+        }
+    }
+
+    /// A direction of the environment for `p`, by the map's importance with
+    /// `u`, chosen with `probability`.
+    #[inline]
+    fn environment_sample(&self, p: Vec3A, u: Vec2, probability: f32) -> Option<LightSample> {
+        let (to_light, radiance, pdf) = self.environment.sample(u)?;
+        Some(LightSample::Environment {
+            to_light,
+            radiance,
+            pdf: pdf * probability,
+            distance: self.escape_distance(p),
+        })
     }
 
     /// Punctual light `i`'s sample for `p`, chosen with `probability`.
@@ -434,10 +448,7 @@ impl Scene {
         }
         let p_key = key / total;
         if u_select.x < p_key || rest <= 0.0 {
-            return Some(LightSample::Point {
-                position: self.light.position,
-                intensity: self.light.power * (1.0 / (4.0 * PI * p_key)),
-            });
+            return Some(self.key_sample(p_key));
         }
         let x = ((u_select.x - p_key) / (1.0 - p_key)).min(1.0 - f32::EPSILON / 2.0);
         let table = &self.light_table;
@@ -451,47 +462,10 @@ impl Scene {
                 } else {
                     (i, probability)
                 };
-                let scale = 1.0 / probability;
-                Some(match self.lights[i as usize].incident(p)? {
-                    Incident::FromPoint {
-                        position,
-                        intensity,
-                    } => LightSample::Point {
-                        position,
-                        intensity: intensity * scale,
-                    },
-                    Incident::FromDirection {
-                        to_light,
-                        irradiance,
-                    } => LightSample::Directional {
-                        to_light,
-                        irradiance: irradiance * scale,
-                        distance: self.escape_distance(p),
-                    },
-                })
+                self.punctual_sample(i, p, probability)
             }
-            LightRef::Environment => {
-                let (to_light, radiance, pdf) = self.environment.sample(u)?;
-                Some(LightSample::Environment {
-                    to_light,
-                    radiance,
-                    pdf: pdf * probability,
-                    distance: self.escape_distance(p),
-                })
-            }
-            LightRef::Triangle(prim) => {
-                let v = &self.triangles[prim as usize].v;
-                let (b1, b2) = uniform_barycentrics(u);
-                let position = (1.0 - b1 - b2) * v[0] + b1 * v[1] + b2 * v[2];
-                let area = self.area_lights.per_prim[prim as usize].1;
-                Some(LightSample::Area {
-                    position,
-                    normal: self.normals[prim as usize],
-                    radiance: self.emission_at(prim, b1, b2),
-                    two_sided: self.material(prim).emits_both_sides,
-                    pdf_area: probability / area,
-                })
-            }
+            LightRef::Environment => self.environment_sample(p, u, probability),
+            LightRef::Triangle(prim) => Some(self.triangle_sample(prim, u, probability)),
         }
     }
 
@@ -523,12 +497,7 @@ impl Scene {
                 irradiance,
             }) => (to_light, mean(irradiance)),
         };
-        let cos = match facing {
-            Facing::Side(n) => n.dot(to_light),
-            Facing::Both(n) => n.dot(to_light).abs(),
-            Facing::Any => 1.0,
-        };
-        let w = value * cos.max(1e-3);
+        let w = value * facing.cosine(to_light).max(1e-3);
         if w.is_finite() { w.max(0.0) } else { 0.0 }
     }
 
@@ -588,7 +557,7 @@ impl Scene {
                 .light_table
                 .tree
                 .triangle_pmf(weights.root, prim, from, facing);
-            return pmf * weights.share(TopLevel::Tree) / area;
+            return pmf * weights.share(weights.tree) / area;
         }
         self.entry_probability(entry as usize) / area
     }
@@ -702,6 +671,20 @@ pub enum Facing {
     Both(Vec3A),
 }
 
+impl Facing {
+    /// How much a surface so facing takes of light arriving along `to_light`
+    /// (towards the light): `n · to_light`, its absolute value for a surface
+    /// that transmits, 1 for [`Facing::Any`]; a cosine when `to_light` is unit.
+    #[inline]
+    pub fn cosine(self, to_light: Vec3A) -> f32 {
+        match self {
+            Facing::Any => 1.0,
+            Facing::Side(n) => n.dot(to_light),
+            Facing::Both(n) => n.dot(to_light).abs(),
+        }
+    }
+}
+
 /// The most punctual lights [`Scene::sample_light`] weighs by what they send
 /// to the point being lit (the others are chosen by power alone: the weighing
 /// is a loop over them at every vertex that picks one).
@@ -764,16 +747,10 @@ struct TopLevelWeights {
 }
 
 impl TopLevelWeights {
-    /// The probability of choosing `kind` (the key light, the tree or the
-    /// environment).
+    /// The probability of choosing a kind of weight `w` (one of these
+    /// weights).
     #[inline]
-    fn share(&self, kind: TopLevel) -> f32 {
-        let w = match kind {
-            TopLevel::Key => self.key,
-            TopLevel::Tree => self.tree,
-            TopLevel::Environment => self.environment,
-            TopLevel::Directional(_) => 0.0,
-        };
+    fn share(&self, w: f32) -> f32 {
         if self.total > 0.0 && self.total.is_finite() {
             w / self.total
         } else {
@@ -791,8 +768,7 @@ fn point_importance(position: Vec3A, phi: f32, p: Vec3A, facing: Facing) -> f32 
     let d2 = to_p.length_squared();
     let cos = match facing {
         Facing::Any => 1.0,
-        Facing::Side(n) => -n.dot(to_p) * d2.sqrt().recip(),
-        Facing::Both(n) => n.dot(to_p).abs() * d2.sqrt().recip(),
+        _ => facing.cosine(-to_p) * d2.sqrt().recip(),
     };
     let w = phi / d2 * cos;
     if w.is_finite() && w > 0.0 { w } else { 0.0 }
@@ -811,12 +787,7 @@ fn directional_importance(light: &Light, facing: Facing) -> f32 {
         return 0.0;
     };
     let e = (irradiance.x + irradiance.y + irradiance.z) * (1.0 / 3.0);
-    let cos = match facing {
-        Facing::Any => 1.0,
-        Facing::Side(n) => -n.dot(direction),
-        Facing::Both(n) => n.dot(direction).abs(),
-    };
-    let w = e * cos;
+    let w = e * facing.cosine(-direction);
     if w.is_finite() { w.max(0.0) } else { 0.0 }
 }
 

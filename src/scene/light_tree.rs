@@ -160,12 +160,11 @@ impl Importance4 {
     /// The bounds `b` in the lanes they fill (the others empty).
     pub(super) fn of(b: &[LightBounds]) -> Self {
         debug_assert!(b.len() <= 4);
-        let lane = |f: &dyn Fn(&LightBounds) -> f32| {
-            Vec4::from_array(std::array::from_fn(|k| b.get(k).map_or(0.0, f)))
-        };
+        // (Empty lanes: zero, but a unit axis and a point cone.)
         let lane_or = |f: &dyn Fn(&LightBounds) -> f32, empty: f32| {
             Vec4::from_array(std::array::from_fn(|k| b.get(k).map_or(empty, f)))
         };
+        let lane = |f: &dyn Fn(&LightBounds) -> f32| lane_or(f, 0.0);
         Self {
             centre: [
                 lane(&|b| b.centre().x),
@@ -184,12 +183,6 @@ impl Importance4 {
             cos_e: lane(&|b| b.cos_e),
             two_sided: lane(&|b| f32::from(u8::from(b.two_sided))),
         }
-    }
-
-    /// The lanes' intensities.
-    #[inline]
-    fn phi(&self) -> Vec4 {
-        self.phi
     }
 
     /// A bound, per lane, on what its lights send to a surface at `p` that
@@ -375,7 +368,7 @@ impl LightTree {
             tree.prim_trail = vec![u64::MAX; triangles];
         }
         let mut binary = Vec::with_capacity(2 * lights.len() - 1);
-        let root = build_binary(&mut binary, &mut lights, 0);
+        let root = build_binary(&mut binary, &mut lights, 0, 0);
         tree.lights = lights.iter().map(|&(_, l)| l).collect();
         // A lone light is the root's only child.
         let top = match binary[root].kind {
@@ -436,12 +429,6 @@ impl LightTree {
         self.nodes
             .first()
             .map_or(Vec4::ZERO, |root| root.bounds.at(p, facing))
-    }
-
-    /// The lanes' sum, in a fixed order.
-    #[inline]
-    pub(super) fn sum(v: Vec4) -> f32 {
-        sum(v)
     }
 
     /// A light chosen with `u` in `[0, 1)` for a surface at `p` (as `facing`
@@ -531,7 +518,7 @@ impl LightTree {
         if total > 0.0 {
             return Some((w.to_array(), total));
         }
-        let phi = node.bounds.phi();
+        let phi = node.bounds.phi;
         let total = sum(phi);
         (total > 0.0).then(|| (phi.to_array(), total))
     }
@@ -571,22 +558,14 @@ fn sqrt4(v: Vec4) -> Vec4 {
 
 /// The lanes' sum, in a fixed order.
 #[inline]
-fn sum(v: Vec4) -> f32 {
+pub(super) fn sum(v: Vec4) -> f32 {
     (v.x + v.y) + (v.z + v.w)
 }
 
-/// Appends the binary subtree over `lights` (reordering them) to `nodes`;
-/// returns its index. A leaf's light index is its place in `lights` after
-/// the build.
+/// Appends the binary subtree over `lights` (reordering them; they are
+/// lights `offset..` of the tree) to `nodes`, `depth` deep; returns its index.
+/// A leaf's light index is its place in `lights` after the build.
 fn build_binary(
-    nodes: &mut Vec<BinaryNode>,
-    lights: &mut [(LightBounds, TreeLight)],
-    depth: u32,
-) -> usize {
-    build_range(nodes, lights, 0, depth)
-}
-
-fn build_range(
     nodes: &mut Vec<BinaryNode>,
     lights: &mut [(LightBounds, TreeLight)],
     offset: u32,
@@ -613,8 +592,8 @@ fn build_range(
         kind: BinaryKind::Inner(0, 0),
     });
     let (first, second) = lights.split_at_mut(mid);
-    let a = build_range(nodes, first, offset, depth + 1);
-    let b = build_range(nodes, second, offset + mid as u32, depth + 1);
+    let a = build_binary(nodes, first, offset, depth + 1);
+    let b = build_binary(nodes, second, offset + mid as u32, depth + 1);
     nodes[index].kind = BinaryKind::Inner(a as u32, b as u32);
     index
 }
