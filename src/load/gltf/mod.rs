@@ -287,14 +287,15 @@ fn read_uri(
     }
     if uri.contains("://") {
         return Err(GltfError::invalid(format!(
-            "{what}: URI {uri} is not a local file"
+            "{what}: URI {} is not a local file",
+            crate::guard::one_line(uri)
         )));
     }
     let file = base.join(percent_decode(uri));
     match read_file(&file, ledger, held) {
         Err(GltfError::Io { cause, .. }) => Err(GltfError::invalid(format!(
             "{what}: cannot read {}: {cause}",
-            file.display()
+            crate::guard::one_line(&file.display().to_string())
         ))),
         other => other,
     }
