@@ -19,7 +19,8 @@ use thiserror::Error;
 pub const GEOMETRY_BYTES_PER_TRIANGLE: u64 = 160;
 
 /// Bytes per environment-map texel: RGB as `f32` (12) and the sampling
-/// tables (luminance, row and column distributions: about 12).
+/// tables (running sums of rows and columns, their guides and the
+/// luminance used while building them: about 12).
 pub const ENVIRONMENT_BYTES_PER_TEXEL: u64 = 24;
 
 /// Film bytes per pixel without AOVs: the image (`Vec3A`, 16) and the
