@@ -28,8 +28,10 @@
 //! guides do not show. A chain that escapes adds no normal.
 //!
 //! The guides use no random numbers: a camera ray always gets the same
-//! guides, so a pixel's guides are antialiased over its samples exactly as
-//! its colour is and are otherwise free of noise (OIDN's `cleanAux`).
+//! guides, so a pixel's guides, the mean over its first
+//! [`GUIDE_SAMPLES`](super::GUIDE_SAMPLES) samples, are antialiased over
+//! those sample positions and are otherwise free of noise (OIDN's
+//! `cleanAux`).
 
 use glam::Vec3A;
 

@@ -35,8 +35,9 @@
 //!
 //! A pixel's value is the mean over its samples, so that noise-free geometry
 //! gives noise-free AOVs and edges are antialiased as in the image: `albedo`
-//! and `normal` over all samples (a miss counts, so an edge pixel
-//! blends towards the background and its normal is shorter than 1, as OIDN expects);
+//! and `normal` over the pixel's first [`GUIDE_SAMPLES`] samples (a miss
+//! counts, so an edge pixel blends towards the background and its normal is
+//! shorter than 1, as OIDN expects);
 //! `depth` and `position` over the samples that hit (a mean with a miss's
 //! infinity would be infinite, one with zero meaningless), and `+∞` (every
 //! component) where no sample hits. Sums are kept per pixel in sample order, so
@@ -57,6 +58,22 @@ use crate::scene::{Scene, SurfaceHit};
 pub mod guides;
 
 pub use guides::Guides;
+
+/// The samples of a pixel (its first ones, by index) that the `albedo` and
+/// `normal` guides are the mean of. A camera ray's guides have no noise, only
+/// its position in the pixel varies, and the first eight of a pixel's
+/// Owen-scrambled Sobol' points already cover it evenly: more would refine
+/// the antialiasing of edges that the denoiser does not see, at the full
+/// price of the guides' chains through mirrors and glass (on the helmet under
+/// the HDRI, guides for every sample of 16 made `--denoise`'s path tracing
+/// about 30 % slower; see docs/denoising.md).
+pub const GUIDE_SAMPLES: u32 = 8;
+
+/// Whether sample `sample` (its index in the pixel) adds to the guides.
+#[inline]
+pub(crate) fn adds_guides(sample: u32) -> bool {
+    sample < GUIDE_SAMPLES
+}
 
 /// Each sample's luminance is clamped to this in the sums of squares of
 /// [`Aov::Variance`], so that 2²⁰ samples (the most a render takes) cannot
@@ -296,20 +313,21 @@ impl Layout {
         self.offset[aov as usize]
     }
 
-    /// What the AOVs need of a camera ray's hit, from its shading: the surface
-    /// `s` and (if the guides are wanted) its BSDF, which `bsdf` gives. `path`
-    /// passes the ones it shades the hit with, so that the textures are not
-    /// looked up twice.
+    /// What the AOVs need of sample `sample`'s camera-ray hit, from its
+    /// shading: the surface `s` and (if the guides are wanted) its BSDF, which
+    /// `bsdf` gives. `path` passes the ones it shades the hit with, so that
+    /// the textures are not looked up twice.
     #[inline]
     pub(crate) fn first_hit(
         &self,
         scene: &Scene,
         ray: &Ray,
         s: &SurfaceHit,
+        sample: u32,
         bsdf: impl FnOnce() -> Material,
     ) -> FirstHit {
         let [albedo, normal, ..] = self.offset;
-        let guides = if albedo.is_some() || normal.is_some() {
+        let guides = if (albedo.is_some() || normal.is_some()) && adds_guides(sample) {
             guides::guides(scene, ray, s, &bsdf())
         } else {
             Guides::default()
@@ -320,8 +338,9 @@ impl Layout {
         }
     }
 
-    /// Adds the AOVs of one camera ray `ray` with closest hit `hit` and
-    /// sample value `value` to a pixel's record `out` (a miss adds the
+    /// Adds the AOVs of one camera ray `ray` (the pixel's sample `sample`)
+    /// with closest hit `hit` and sample value `value` to a pixel's record
+    /// `out` (the guides only from the first [`GUIDE_SAMPLES`]; a miss adds the
     /// environment to the albedo and nothing to the normal, and depth and
     /// position only count hits; a value that is not finite, which the image
     /// drops, adds nothing to the variance). `shaded` is what
@@ -340,9 +359,13 @@ impl Layout {
         hit: Option<Hit>,
         shaded: Option<&FirstHit>,
         value: Vec3A,
+        sample: u32,
         out: &mut [i128],
     ) {
-        let [albedo, normal, depth, position, variance] = self.offset;
+        let [mut albedo, mut normal, depth, position, variance] = self.offset;
+        if !adds_guides(sample) {
+            (albedo, normal) = (None, None);
+        }
         if let Some(at) = variance
             && value.is_finite()
         {
@@ -369,7 +392,7 @@ impl Layout {
             },
             None => {
                 let s = scene.surface(&hit);
-                self.first_hit(scene, ray, &s, || {
+                self.first_hit(scene, ray, &s, sample, || {
                     let material = &scene.materials()[s.material as usize];
                     material.bsdf(&s.attrs, scene.textures())
                 })
@@ -451,6 +474,7 @@ impl AovSums {
         let layout = self.layout;
         let stride = layout.stride;
         let n = f64::from(samples.max(1));
+        let guide_n = f64::from(samples.clamp(1, GUIDE_SAMPLES));
         // The records hold the AOVs' channels in the set's order.
         let mut next = 0;
         let layers = self
@@ -477,6 +501,7 @@ impl AovSums {
                                 // (see `AovSums::sums`).
                                 Aov::Variance => 1.0,
                                 a if a.over_hits() => hits,
+                                Aov::Albedo | Aov::Normal => guide_n,
                                 _ => n,
                             };
                             for (v, &sum) in pixel.iter_mut().zip(&record[at..at + k]) {

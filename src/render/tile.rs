@@ -103,13 +103,17 @@ pub(super) fn accumulate_into(
             let y0 = tile * TILE_ROWS;
             let mut dropped = 0u64;
             // The AOVs are summed exactly, into the accumulator's sums.
-            let mut gather =
-                |i: usize, ray: &Ray, hit: Option<Hit>, shaded: Option<&FirstHit>, value: Vec3A| {
-                    if let Some(layout) = &layout {
-                        let record = &mut aov_rows[i * layout.stride..(i + 1) * layout.stride];
-                        layout.gather(scene, camera, ray, hit, shaded, value, record);
-                    }
-                };
+            let mut gather = |i: usize,
+                              ray: &Ray,
+                              hit: Option<Hit>,
+                              shaded: Option<&FirstHit>,
+                              value: Vec3A,
+                              sample: u32| {
+                if let Some(layout) = &layout {
+                    let record = &mut aov_rows[i * layout.stride..(i + 1) * layout.stride];
+                    layout.gather(scene, camera, ray, hit, shaded, value, sample, record);
+                }
+            };
             let n_rows = match &sums {
                 TileSums::Wide(w) => w.len(),
                 TileSums::Narrow(r) => r.len(),
@@ -311,7 +315,7 @@ impl Tile<'_> {
         &self,
         aovs: Option<&Layout>,
         add: &mut impl Sink,
-        gather: &mut impl FnMut(usize, &Ray, Option<Hit>, Option<&FirstHit>, Vec3A),
+        gather: &mut impl FnMut(usize, &Ray, Option<Hit>, Option<&FirstHit>, Vec3A, u32),
     ) -> u64 {
         if let Integrator::Path(options) = self.integrator {
             return self.trace_path::<AOVS>(options, aovs, add, gather);
@@ -334,7 +338,7 @@ impl Tile<'_> {
         options: PathOptions,
         aovs: Option<&Layout>,
         add: &mut impl Sink,
-        gather: &mut impl FnMut(usize, &Ray, Option<Hit>, Option<&FirstHit>, Vec3A),
+        gather: &mut impl FnMut(usize, &Ray, Option<Hit>, Option<&FirstHit>, Vec3A, u32),
     ) -> u64 {
         // Eight paths shaded at once where the scene allows (fixed materials,
         // no textures): the same values, a fifth to a quarter less time on the
@@ -355,22 +359,24 @@ impl Tile<'_> {
         // gathered from the first hit as the path shades it.
         // (It returns the value, which the caller adds: a block's eight in
         // one `add8`.)
-        let mut path_sample = |i: usize, start: &mut PathStart, hit, rays: &mut u64| {
-            let layout = match aovs {
-                Some(layout) if AOVS => layout,
-                // Without AOVs the path alone, observed by nothing.
-                _ => return start.trace(scene, hit, &options, rays, &mut |_, _| {}),
+        let mut path_sample =
+            |i: usize, start: &mut PathStart, hit, sample: u32, rays: &mut u64| {
+                let layout = match aovs {
+                    Some(layout) if AOVS => layout,
+                    // Without AOVs the path alone, observed by nothing.
+                    _ => return start.trace(scene, hit, &options, rays, &mut |_, _| {}),
+                };
+                // The path only copies what it shaded the hit with; the AOVs
+                // are made of it afterwards, outside the path tracer's loop.
+                let mut seen = None;
+                let v = start.trace(scene, hit, &options, rays, &mut |s, b| {
+                    seen = Some((*s, *b))
+                });
+                let shaded =
+                    seen.map(|(s, b)| layout.first_hit(scene, &start.ray, &s, sample, || b));
+                gather(i, &start.ray, hit, shaded.as_ref(), v, sample);
+                v
             };
-            // The path only copies what it shaded the hit with; the AOVs
-            // are made of it afterwards, outside the path tracer's loop.
-            let mut seen = None;
-            let v = start.trace(scene, hit, &options, rays, &mut |s, b| {
-                seen = Some((*s, *b))
-            });
-            let shaded = seen.map(|(s, b)| layout.first_hit(scene, &start.ray, &s, || b));
-            gather(i, &start.ray, hit, shaded.as_ref(), v);
-            v
-        };
         for s in samples.clone() {
             // Camera rays of 4×2 pixel blocks traced together (eight AVX2
             // lanes), then each path on its own; the last columns as 2×2
@@ -411,7 +417,7 @@ impl Tile<'_> {
                         block.into_iter().zip(&mut starts).zip(hits).enumerate()
                     {
                         pixels[k] = y * width + x;
-                        values[k] = path_sample(pixels[k], start, hit, &mut rays);
+                        values[k] = path_sample(pixels[k], start, hit, s, &mut rays);
                     }
                     add.add8(pixels, values);
                 }
@@ -422,7 +428,7 @@ impl Tile<'_> {
                     rays += 4;
                     let hits = scene.intersect4(&primary, f32::INFINITY);
                     for (((x, y), start), hit) in quad.into_iter().zip(&mut starts).zip(hits) {
-                        let v = path_sample(y * width + x, start, hit, &mut rays);
+                        let v = path_sample(y * width + x, start, hit, s, &mut rays);
                         add.add(y * width + x, v);
                     }
 
@@ -431,7 +437,7 @@ impl Tile<'_> {
                     let mut start = PathStart::new(camera, &options, seed, (x, y0 + y), s);
                     rays += 1;
                     let hit = scene.intersect(&start.ray, f32::INFINITY);
-                    let v = path_sample(y * width + x, &mut start, hit, &mut rays);
+                    let v = path_sample(y * width + x, &mut start, hit, s, &mut rays);
                     add.add(y * width + x, v);
                 }
             );
@@ -519,7 +525,7 @@ impl Tile<'_> {
     fn trace_lab_avx2<const AOVS: bool>(
         &self,
         add: &mut impl Sink,
-        gather: &mut impl FnMut(usize, &Ray, Option<Hit>, Option<&FirstHit>, Vec3A),
+        gather: &mut impl FnMut(usize, &Ray, Option<Hit>, Option<&FirstHit>, Vec3A, u32),
     ) -> u64 {
         self.trace_lab::<AOVS, true>(add, gather)
     }
@@ -532,7 +538,7 @@ impl Tile<'_> {
     fn trace_lab<const AOVS: bool, const LANES: bool>(
         &self,
         add: &mut impl Sink,
-        gather: &mut impl FnMut(usize, &Ray, Option<Hit>, Option<&FirstHit>, Vec3A),
+        gather: &mut impl FnMut(usize, &Ray, Option<Hit>, Option<&FirstHit>, Vec3A, u32),
     ) -> u64 {
         let &Tile {
             scene,
@@ -614,7 +620,7 @@ impl Tile<'_> {
                     let values = integrator.radiance8_from(scene, &primary, hits, &mut rays);
                     if AOVS {
                         for (k, ((x, y), ray)) in block.into_iter().zip(&primary).enumerate() {
-                            gather(y * width + x, ray, hits[k], None, values[k]);
+                            gather(y * width + x, ray, hits[k], None, values[k], s);
                         }
                     }
                     add.add8(pixels, values);
@@ -631,7 +637,7 @@ impl Tile<'_> {
                         let hits = scene.intersect4(&primary, f32::INFINITY);
                         let values = integrator.radiance4_from(scene, &primary, hits, &mut rays);
                         for (k, ((x, y), ray)) in quad.into_iter().zip(&primary).enumerate() {
-                            gather(y * width + x, ray, hits[k], None, values[k]);
+                            gather(y * width + x, ray, hits[k], None, values[k], s);
                         }
                         values
                     };
@@ -648,7 +654,7 @@ impl Tile<'_> {
                         rays += 1;
                         let hit = scene.intersect(&ray, f32::INFINITY);
                         let v = integrator.radiance_from(scene, &ray, hit, &mut rays);
-                        gather(y * width + x, &ray, hit, None, v);
+                        gather(y * width + x, &ray, hit, None, v, s);
                         v
                     };
                     add.add(y * width + x, v);
