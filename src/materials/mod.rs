@@ -565,6 +565,21 @@ impl Material {
         }
     }
 
+    /// [`Material::eval`], and [`Material::pdf`] where it comes almost free
+    /// with it (the glTF BSDF shares its lobe weights and half vector between
+    /// the two; `None` elsewhere, where the pdf costs no more on its own and
+    /// is only worth computing once a shadow ray has found the light).
+    #[inline]
+    pub fn eval_and_pdf(&self, wo: Vec3A, wi: Vec3A) -> (Vec3A, Option<f32>) {
+        match self {
+            Material::Pbr(p) => {
+                let (f, pdf) = p.eval_pdf(wo, wi);
+                (f, Some(pdf))
+            }
+            _ => (self.eval(wo, wi), None),
+        }
+    }
+
     /// Solid-angle density with which [`Material::sample`] produces `wi` (zero for
     /// delta lobes and wherever [`Material::eval`] is zero).
     pub fn pdf(&self, wo: Vec3A, wi: Vec3A) -> f32 {

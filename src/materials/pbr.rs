@@ -497,6 +497,33 @@ impl PbrBsdf {
         }
     }
 
+    /// [`PbrBsdf::eval_local`] and [`PbrBsdf::pdf_local`] together, the
+    /// reflection's half vector and `D` computed once: the same two values
+    /// bit for bit.
+    #[inline]
+    fn eval_pdf_local(&self, l: &Local, wi: Vec3A) -> (Vec3A, f32) {
+        if wi.z <= 0.0 {
+            return (self.eval_local(l, wi), self.pdf_local(l, wi));
+        }
+        let (wo, a) = (l.wo, self.alpha);
+        let (m, s, c) = (self.metallic, self.specular, self.base_color);
+        let h = (wo + wi).normalize();
+        let cos_oh = wo.dot(h).min(1.0);
+        let fd = self.fresnel_d(l.f0, cos_oh, l.inside);
+        let kd = 1.0 - s * fd.max_element();
+        let mut f = c * (self.diffuse_scale() * kd * FRAC_1_PI * wi.z);
+        let mut p = l.p_diff * FRAC_1_PI * wi.z;
+        if !l.smooth {
+            let d = ggx_d(a, h);
+            let spec = (d * g2(a, wo, wi)) / (4.0 * wo.z);
+            f += (m * schlick(c, cos_oh) + (1.0 - m) * s * fd) * spec;
+            if l.p_spec > 0.0 {
+                p += l.p_spec * ((g1(a, wo) * d) / (4.0 * wo.z));
+            }
+        }
+        (f, p)
+    }
+
     /// The mixture density of the non-delta lobes in the canonical frame.
     fn pdf_local(&self, l: &Local, wi: Vec3A) -> f32 {
         let (wo, a) = (l.wo, self.alpha);
@@ -549,6 +576,23 @@ impl PbrBsdf {
             return Vec3A::ZERO;
         }
         finite_or_zero(self.eval_local(&l, l.map(wi)))
+    }
+
+    /// [`PbrBsdf::eval`] and [`PbrBsdf::pdf`] of one pair of directions, the
+    /// lobes' probabilities and the half vector worked out once (next-event
+    /// estimation needs both): the same values bit for bit.
+    pub fn eval_pdf(&self, wo: Vec3A, wi: Vec3A) -> (Vec3A, f32) {
+        if self.nothing_between(wo, wi) {
+            return (Vec3A::ZERO, 0.0);
+        }
+        let Some(l) = self.local(wo) else {
+            return (Vec3A::ZERO, 0.0);
+        };
+        if !wi.is_finite() {
+            return (Vec3A::ZERO, 0.0);
+        }
+        let (f, p) = self.eval_pdf_local(&l, l.map(wi));
+        (finite_or_zero(f), if p.is_finite() { p } else { 0.0 })
     }
 
     /// Solid-angle density with which [`PbrBsdf::sample`] produces `wi` from its
@@ -810,6 +854,34 @@ mod tests {
             thin(COLOR, 0.0, 0.0, 0.5),
             volume(COLOR, 0.0, 0.0, 0.5),
         ]
+    }
+
+    #[test]
+    fn eval_pdf_equals_eval_and_pdf_bit_for_bit() {
+        // Random pairs on both sides, grazing and degenerate ones: the shared
+        // computation must give exactly what the two separate calls give.
+        let mut r = rng(17);
+        let mut nonzero = 0;
+        for p in test_materials() {
+            for k in 0..5_000 {
+                let wo = sphere(&mut r);
+                let wi = match k % 50 {
+                    0 => Vec3A::new(wo.x, wo.y, 0.0),
+                    1 => -wo,
+                    2 => Vec3A::new(f32::NAN, 0.0, 1.0),
+                    _ => sphere(&mut r),
+                };
+                let (f, pdf) = p.eval_pdf(wo, wi);
+                let (f_alone, pdf_alone) = (p.eval(wo, wi), p.pdf(wo, wi));
+                assert_eq!(
+                    (f.to_array().map(f32::to_bits), pdf.to_bits()),
+                    (f_alone.to_array().map(f32::to_bits), pdf_alone.to_bits()),
+                    "{p:?} wo {wo:?} wi {wi:?}"
+                );
+                nonzero += usize::from(pdf > 0.0 && f != Vec3A::ZERO);
+            }
+        }
+        assert!(nonzero > 10_000, "only {nonzero} pairs with a value");
     }
 
     #[test]

@@ -399,13 +399,14 @@ pub fn radiance_traced(
             if li != Vec3A::ZERO {
                 let wi_world = (target - sp.p).normalize();
                 let wi = frame.to_local(wi_world);
-                let f = bsdf.eval(wo, wi);
+                let (f, pdf_here) = bsdf.eval_and_pdf(wo, wi);
                 if f != Vec3A::ZERO && same_side(wi_world) {
                     let (shadow, t_max) = sp.ray_to(target);
                     *rays += 1;
                     if !scene.occluded(&shadow, t_max) {
-                        let weight =
-                            light_pdf.map_or(1.0, |pdf| power_heuristic(pdf, bsdf.pdf(wo, wi)));
+                        let weight = light_pdf.map_or(1.0, |pdf| {
+                            power_heuristic(pdf, pdf_here.unwrap_or_else(|| bsdf.pdf(wo, wi)))
+                        });
                         tracer.event(depth, beta, PathEvent::Light { f, li, weight });
                         l += beta * f * li * weight;
                     }
