@@ -199,6 +199,50 @@ pub enum Material {
     Pbr(PbrBsdf),
 }
 
+/// A material seen from one direction `wo` ([`Material::at`]): its
+/// evaluations and samples equal [`Material::eval`], [`Material::pdf`] and
+/// [`Material::sample`] at that `wo` bit for bit; the glTF BSDF's lobe
+/// probabilities ([`pbr::Local`]) are worked out once for all of them.
+#[derive(Clone, Copy, Debug)]
+pub struct BsdfAt<'a> {
+    material: &'a Material,
+    wo: Vec3A,
+    /// For [`Material::Pbr`], `PbrBsdf::local(wo)`.
+    pbr: Option<Option<pbr::Local>>,
+}
+
+impl BsdfAt<'_> {
+    /// [`Material::eval`] towards `wi`, and [`Material::pdf`] where it comes
+    /// almost free with it (the glTF BSDF shares its half vector between the
+    /// two; `None` elsewhere, where the pdf costs no more on its own and is
+    /// only worth computing once a shadow ray has found the light).
+    #[inline]
+    pub fn eval_and_pdf(&self, wi: Vec3A) -> (Vec3A, Option<f32>) {
+        match (self.material, &self.pbr) {
+            (Material::Pbr(p), Some(local)) => {
+                let (f, pdf) = p.eval_pdf_at(local.as_ref(), self.wo, wi);
+                (f, Some(pdf))
+            }
+            _ => (self.material.eval(self.wo, wi), None),
+        }
+    }
+
+    /// [`Material::pdf`] towards `wi`.
+    #[inline]
+    pub fn pdf(&self, wi: Vec3A) -> f32 {
+        self.material.pdf(self.wo, wi)
+    }
+
+    /// [`Material::sample`].
+    #[inline(always)]
+    pub fn sample(&self, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
+        match (self.material, &self.pbr) {
+            (Material::Pbr(p), Some(local)) => p.sample_at(*local, u_lobe, u),
+            _ => self.material.sample(self.wo, u_lobe, u),
+        }
+    }
+}
+
 /// One direction drawn by [`Material::sample`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BsdfSample {
@@ -565,18 +609,18 @@ impl Material {
         }
     }
 
-    /// [`Material::eval`], and [`Material::pdf`] where it comes almost free
-    /// with it (the glTF BSDF shares its lobe weights and half vector between
-    /// the two; `None` elsewhere, where the pdf costs no more on its own and
-    /// is only worth computing once a shadow ray has found the light).
+    /// The BSDF seen from `wo` (local): what depends on `wo` alone worked
+    /// out once for a path vertex's light sample and BSDF sample.
     #[inline]
-    pub fn eval_and_pdf(&self, wo: Vec3A, wi: Vec3A) -> (Vec3A, Option<f32>) {
-        match self {
-            Material::Pbr(p) => {
-                let (f, pdf) = p.eval_pdf(wo, wi);
-                (f, Some(pdf))
-            }
-            _ => (self.eval(wo, wi), None),
+    pub fn at(&self, wo: Vec3A) -> BsdfAt<'_> {
+        let pbr = match self {
+            Material::Pbr(p) => Some(p.local(wo)),
+            _ => None,
+        };
+        BsdfAt {
+            material: self,
+            wo,
+            pbr,
         }
     }
 

@@ -136,7 +136,7 @@ enum Lobe {
 
 /// What depends on `wo` only: the canonical frame and the lobe probabilities.
 #[derive(Clone, Copy, Debug)]
-struct Local {
+pub struct Local {
     /// `wo` mirrored to `+z` if it was below.
     wo: Vec3A,
     /// Whether directions are mirrored (`wo.z < 0` originally).
@@ -365,7 +365,7 @@ impl PbrBsdf {
 
     /// The canonical frame and lobe probabilities for `wo`; `None` for a
     /// degenerate `wo` or a material that scatters nothing.
-    fn local(&self, wo: Vec3A) -> Option<Local> {
+    pub fn local(&self, wo: Vec3A) -> Option<Local> {
         if !wo.is_finite() || wo.z == 0.0 {
             return None;
         }
@@ -585,7 +585,17 @@ impl PbrBsdf {
         if self.nothing_between(wo, wi) {
             return (Vec3A::ZERO, 0.0);
         }
-        let Some(l) = self.local(wo) else {
+        self.eval_pdf_at(self.local(wo).as_ref(), wo, wi)
+    }
+
+    /// [`PbrBsdf::eval_pdf`] with `local` = [`PbrBsdf::local`]`(wo)` already
+    /// worked out (a path vertex's light sample and BSDF sample share it).
+    #[inline]
+    pub fn eval_pdf_at(&self, local: Option<&Local>, wo: Vec3A, wi: Vec3A) -> (Vec3A, f32) {
+        if self.nothing_between(wo, wi) {
+            return (Vec3A::ZERO, 0.0);
+        }
+        let Some(&l) = local else {
             return (Vec3A::ZERO, 0.0);
         };
         if !wi.is_finite() {
@@ -615,7 +625,14 @@ impl PbrBsdf {
     /// direction. `None` for a degenerate `wo`, a black material, or a draw that
     /// leaves the lobe's side of the surface (or totally internally reflects).
     pub fn sample(&self, wo: Vec3A, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
-        let l = self.local(wo)?;
+        self.sample_at(self.local(wo), u_lobe, u)
+    }
+
+    /// [`PbrBsdf::sample`] with `local` = [`PbrBsdf::local`]`(wo)` already
+    /// worked out.
+    #[inline]
+    pub fn sample_at(&self, local: Option<Local>, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
+        let l = local?;
         let wo_l = l.wo;
         let (m, s, c, a) = (self.metallic, self.specular, self.base_color, self.alpha);
         let lobe = l.choose(u_lobe);
@@ -873,11 +890,19 @@ mod tests {
                 };
                 let (f, pdf) = p.eval_pdf(wo, wi);
                 let (f_alone, pdf_alone) = (p.eval(wo, wi), p.pdf(wo, wi));
+                let bits = |f: Vec3A, pdf: f32| (f.to_array().map(f32::to_bits), pdf.to_bits());
                 assert_eq!(
-                    (f.to_array().map(f32::to_bits), pdf.to_bits()),
-                    (f_alone.to_array().map(f32::to_bits), pdf_alone.to_bits()),
+                    bits(f, pdf),
+                    bits(f_alone, pdf_alone),
                     "{p:?} wo {wo:?} wi {wi:?}"
                 );
+                // And through the material seen from `wo`, sampling included.
+                let m = Material::Pbr(p);
+                let at = m.at(wo);
+                let (f_at, pdf_at) = at.eval_and_pdf(wi);
+                assert_eq!(bits(f_at, pdf_at.unwrap()), bits(f, pdf));
+                let (u_lobe, u) = (r.next_f32(), u2(&mut r));
+                assert_eq!(at.sample(u_lobe, u), m.sample(wo, u_lobe, u));
                 nonzero += usize::from(pdf > 0.0 && f != Vec3A::ZERO);
             }
         }

@@ -358,6 +358,7 @@ pub fn radiance_traced(
         let sp = surface.point;
         let frame = Frame::from_normal(n);
         let wo = frame.to_local(wo_world);
+        let bsdf_at = bsdf.at(wo);
         // With shading normals, a direction must be on the same side of the
         // geometric and the shading surface, or light leaks through it.
         let same_side = |w: Vec3A| !shading || (w.dot(ng) > 0.0) == (w.dot(n) > 0.0);
@@ -399,13 +400,13 @@ pub fn radiance_traced(
             if li != Vec3A::ZERO {
                 let wi_world = (target - sp.p).normalize();
                 let wi = frame.to_local(wi_world);
-                let (f, pdf_here) = bsdf.eval_and_pdf(wo, wi);
+                let (f, pdf_here) = bsdf_at.eval_and_pdf(wi);
                 if f != Vec3A::ZERO && same_side(wi_world) {
                     let (shadow, t_max) = sp.ray_to(target);
                     *rays += 1;
                     if !scene.occluded(&shadow, t_max) {
                         let weight = light_pdf.map_or(1.0, |pdf| {
-                            power_heuristic(pdf, pdf_here.unwrap_or_else(|| bsdf.pdf(wo, wi)))
+                            power_heuristic(pdf, pdf_here.unwrap_or_else(|| bsdf_at.pdf(wi)))
                         });
                         tracer.event(depth, beta, PathEvent::Light { f, li, weight });
                         l += beta * f * li * weight;
@@ -415,7 +416,7 @@ pub fn radiance_traced(
         }
 
         // Continue the path by sampling the BSDF.
-        let Some(bs) = bsdf.sample(wo, u_lobe, u_bsdf) else {
+        let Some(bs) = bsdf_at.sample(u_lobe, u_bsdf) else {
             break;
         };
         let wi_world = frame.to_world(bs.wi);
