@@ -11,6 +11,7 @@ use rayon::prelude::*;
 
 use super::Scene;
 use super::light_tree::{self, LightBounds, LightTree, TreeLight};
+use crate::lights::environment::SkyRadiance;
 use crate::lights::{Incident, Light};
 use crate::materials::surface::SurfaceMaterial;
 use crate::sampling::distribution::AliasTable;
@@ -315,7 +316,7 @@ impl Scene {
     /// `u`, chosen with `probability`.
     #[inline]
     fn environment_sample(&self, p: Vec3A, u: Vec2, probability: f32) -> Option<LightSample> {
-        let (to_light, radiance, pdf) = self.environment.sample(u)?;
+        let (to_light, radiance, pdf) = self.environment.sample_direction(u)?;
         Some(LightSample::Environment {
             to_light,
             radiance,
@@ -608,8 +609,10 @@ pub enum LightSample {
     Environment {
         /// Unit direction towards the sky.
         to_light: Vec3A,
-        /// The environment's radiance.
-        radiance: Vec3A,
+        /// The environment's radiance, read by
+        /// [`Environment::radiance_of`](crate::lights::environment::Environment::radiance_of)
+        /// once it is needed.
+        radiance: SkyRadiance,
         /// Solid-angle density of the direction (selection included).
         pdf: f32,
         /// How far a shadow ray must go to leave the scene.

@@ -23,6 +23,7 @@ use glam::Vec3A;
 
 use crate::geometry::ray::{Hit, Ray};
 use crate::geometry::triangle::{Triangle, TriangleHit};
+use crate::memory::prefetch;
 use node::{BoxQuery, ChildRef, EMPTY, Isa, LEAF, NodeBoxes, WIDTH, leaf_parts};
 use packet::{Packet, PacketRay};
 #[cfg(target_arch = "x86_64")]
@@ -583,20 +584,6 @@ impl Stack<(ChildRef, f32)> {
             self.items[j] = MaybeUninit::new(item);
         }
     }
-}
-
-/// Asks for the cache line at `p` (a hint: it never faults, and `p` may point
-/// anywhere).
-#[inline(always)]
-fn prefetch<T>(p: *const T) {
-    #[cfg(target_arch = "x86_64")]
-    {
-        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
-        // SAFETY: a prefetch reads nothing the program sees and never faults.
-        unsafe { _mm_prefetch::<_MM_HINT_T0>(p.cast::<i8>()) };
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = p;
 }
 
 /// The closest hit by testing every triangle that can be hit

@@ -374,7 +374,9 @@ impl Vertex<'_> {
                 continue;
             }
             if let Some(light) = scene.sample_light(at, facing, u_choice, u_light) {
-                let (to, radiance, pdf) = light_terms(at, light);
+                let (to, arriving, pdf) = light_terms(at, light);
+                // (No environment here: the value is known.)
+                let radiance = arriving.value(scene);
                 if radiance != Vec3A::ZERO {
                     lights |= 1 << i;
                     Paths::set(&mut target, i, to);

@@ -4,6 +4,7 @@
 use glam::{Vec2, Vec3A};
 
 use crate::geometry::ray::{Hit, Ray};
+use crate::lights::environment::SkyRadiance;
 use crate::materials::{Frame, Material};
 use crate::sampling::sampler::Rng;
 use crate::sampling::sobol;
@@ -396,8 +397,8 @@ pub fn radiance_traced(
         if light_sampled
             && let Some(light) = scene.sample_light(sp.p, facing, u_choice, u_light_pos)
         {
-            let (target, li, light_pdf) = light_terms(sp.p, light);
-            if li != Vec3A::ZERO {
+            let (target, arriving, light_pdf) = light_terms(sp.p, light);
+            if !arriving.is_zero() {
                 let wi_world = (target - sp.p).normalize();
                 let wi = frame.to_local(wi_world);
                 let (f, pdf_here) = bsdf_at.eval_and_pdf(wi);
@@ -405,6 +406,7 @@ pub fn radiance_traced(
                     let (shadow, t_max) = sp.ray_to(target);
                     *rays += 1;
                     if !scene.occluded(&shadow, t_max) {
+                        let li = arriving.value(scene);
                         let weight = light_pdf.map_or(1.0, |pdf| {
                             power_heuristic(pdf, pdf_here.unwrap_or_else(|| bsdf_at.pdf(wi)))
                         });
@@ -462,31 +464,65 @@ pub fn radiance_traced(
     l
 }
 
+/// The incident radiance over its pdf that a light sample brings
+/// ([`light_terms`]), or, for the environment, what it will be once its
+/// texels are read, which [`Arriving::value`] does after the shadow ray (the
+/// read is a cache miss that the trace hides, or that a blocked ray saves).
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Arriving {
+    /// The value itself.
+    Value(Vec3A),
+    /// The environment's radiance in a sampled direction, over `pdf`.
+    Sky { radiance: SkyRadiance, pdf: f32 },
+}
+
+impl Arriving {
+    /// Whether it is known to be zero (nothing to trace a shadow ray for).
+    #[inline(always)]
+    pub(crate) fn is_zero(&self) -> bool {
+        matches!(self, Arriving::Value(v) if *v == Vec3A::ZERO)
+    }
+
+    /// The incident radiance over the sample's pdf.
+    #[inline(always)]
+    pub(crate) fn value(self, scene: &Scene) -> Vec3A {
+        match self {
+            Arriving::Value(v) => v,
+            Arriving::Sky { radiance, pdf } => scene.environment().radiance_of(radiance) / pdf,
+        }
+    }
+}
+
 /// What next-event estimation needs of a light sample for the point `p`: the
 /// point the shadow ray goes to, the incident radiance over the sample's pdf
-/// (zero where an area light faces away), and that pdf for MIS (`None` for
-/// punctual lights, which BSDF sampling cannot find).
+/// (zero where an area light faces away; the environment's read later:
+/// [`Arriving`]), and that pdf for MIS (`None` for punctual lights, which
+/// BSDF sampling cannot find).
 #[inline(always)]
-pub(crate) fn light_terms(p: Vec3A, light: LightSample) -> (Vec3A, Vec3A, Option<f32>) {
+pub(crate) fn light_terms(p: Vec3A, light: LightSample) -> (Vec3A, Arriving, Option<f32>) {
     match light {
         LightSample::Point {
             position,
             intensity,
         } => {
             let r2 = (position - p).length_squared();
-            (position, intensity / r2, None)
+            (position, Arriving::Value(intensity / r2), None)
         }
         LightSample::Directional {
             to_light,
             irradiance,
             distance,
-        } => (p + to_light * distance, irradiance, None),
+        } => (p + to_light * distance, Arriving::Value(irradiance), None),
         LightSample::Environment {
             to_light,
             radiance,
             pdf,
             distance,
-        } => (p + to_light * distance, radiance / pdf, Some(pdf)),
+        } => (
+            p + to_light * distance,
+            Arriving::Sky { radiance, pdf },
+            Some(pdf),
+        ),
         LightSample::Area {
             position,
             normal,
@@ -502,9 +538,9 @@ pub(crate) fn light_terms(p: Vec3A, light: LightSample) -> (Vec3A, Vec3A, Option
             }
             if cos_l > 0.0 {
                 let pdf = pdf_area * r2 / cos_l;
-                (position, radiance / pdf, Some(pdf))
+                (position, Arriving::Value(radiance / pdf), Some(pdf))
             } else {
-                (position, Vec3A::ZERO, None)
+                (position, Arriving::Value(Vec3A::ZERO), None)
             }
         }
     }
