@@ -233,7 +233,15 @@ impl EnvMap {
         let y = uv.y * h as f32 - 0.5;
         let (x0, y0) = (x.floor(), y.floor());
         let (fx, fy) = (x - x0, y - y0);
-        let col = |k: f32| (k as i64).rem_euclid(w as i64) as usize;
+        // (Inside the map no remainder, a 64-bit division, is needed.)
+        let col = |k: f32| {
+            let k = k as i64;
+            if (0..w as i64).contains(&k) {
+                k as usize
+            } else {
+                k.rem_euclid(w as i64) as usize
+            }
+        };
         let row = |k: f32| (k.max(0.0) as usize).min(h - 1);
         let (i0, i1) = (col(x0), col(x0 + 1.0));
         let (j0, j1) = (row(y0), row(y0 + 1.0));

@@ -299,6 +299,11 @@ fn taps(coord: f32, size: u32, wrap: Wrap) -> (u32, u32, f32) {
 #[inline]
 fn wrap_index(i: i64, size: u32, wrap: Wrap) -> u32 {
     let n = i64::from(size);
+    if (0..n).contains(&i) {
+        // Inside the image every mode keeps the index; the remainders below
+        // are 64-bit divisions, four for each bilinear lookup otherwise.
+        return i as u32;
+    }
     let w = match wrap {
         Wrap::Repeat => i.rem_euclid(n),
         // GL_MIRRORED_REPEAT: (size − 1) − mirror((i mod 2·size) − size), with
