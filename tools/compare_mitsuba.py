@@ -44,11 +44,12 @@ What is timed:
 Both use the same number of threads (--threads, default all cores; Mitsuba via
 `drjit.set_thread_count`).
 
-Needs numpy and mitsuba (PyPI) with LLVM: on Debian `apt-get install libllvm19`
-(DRJIT_LIBLLVM_PATH is set to /usr/lib/x86_64-linux-gnu/libLLVM-19.so when that
-exists and the variable is not set). If this Python cannot import mitsuba, the tool
-re-runs itself with --venv's Python, creating that venv (`python3 -m venv DIR` and
-`DIR/bin/pip install mitsuba numpy`) if it does not exist yet.
+Needs numpy and mitsuba (PyPI) with LLVM: on Debian `apt-get install libllvm19` (or 15;
+DRJIT_LIBLLVM_PATH, unless set, is the first of libLLVM-19.so, libLLVM-15.so.1 and
+libLLVM-14.so.1 in /usr/lib/x86_64-linux-gnu that exists). If this Python cannot import
+mitsuba, the tool re-runs itself with --venv's Python, creating that venv (`python3 -m
+venv DIR` and `DIR/bin/pip install mitsuba==3.7.1 numpy`) if it does not exist yet
+(Mitsuba 3.9.1 aborts in LLVM on AMD Zen 5 CPUs: see MITSUBA below).
 """
 
 import argparse
@@ -64,7 +65,15 @@ import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SHARED_REF = os.path.join(ROOT, "..", "shared", "refs", "cornell-path-mitsuba-256.exr")
-LIBLLVM = "/usr/lib/x86_64-linux-gnu/libLLVM-19.so"
+# Debian's LLVM libraries, newest first: the first that exists is Dr.Jit's (unless
+# DRJIT_LIBLLVM_PATH is set).
+LIBLLVM = ["/usr/lib/x86_64-linux-gnu/libLLVM-19.so", "/usr/lib/x86_64-linux-gnu/libLLVM-15.so.1",
+           "/usr/lib/x86_64-linux-gnu/libLLVM-14.so.1"]
+# The Mitsuba a new venv gets. 3.9.1 (Dr.Jit 1.5.0) aborts on the AMD EPYC (Zen 5, AVX-512)
+# of 2026-11-27 in LLVM 15 and 19 alike ("LLVM ERROR: Cannot select: ... fminimum", its
+# first kernel), whatever target CPU Dr.Jit is given; 3.7.1 (Dr.Jit 1.2.0) runs there and
+# on the Xeons where 3.9.1 ran.
+MITSUBA = "mitsuba==3.7.1"
 SIZE = 256
 
 
@@ -79,8 +88,9 @@ def default_raylab():
 
 
 def ensure_mitsuba(args):
-    if LIBLLVM and os.path.exists(LIBLLVM):
-        os.environ.setdefault("DRJIT_LIBLLVM_PATH", LIBLLVM)
+    found = next((p for p in LIBLLVM if os.path.exists(p)), None)
+    if found:
+        os.environ.setdefault("DRJIT_LIBLLVM_PATH", found)
     try:
         import numpy  # noqa: F401
         import mitsuba  # noqa: F401
@@ -90,7 +100,7 @@ def ensure_mitsuba(args):
     if os.environ.get("COMPARE_MITSUBA_REEXEC"):
         sys.exit(
             f"error: {sys.executable} cannot import numpy and mitsuba; install them with\n"
-            f"  {sys.executable} -m pip install mitsuba numpy"
+            f"  {sys.executable} -m pip install {MITSUBA} numpy"
         )
     venv = os.path.abspath(args.venv)
     py = os.path.join(venv, "bin", "python")
@@ -99,12 +109,12 @@ def ensure_mitsuba(args):
         subprocess.run([sys.executable, "-m", "venv", venv], check=True)
     ok = subprocess.run([py, "-c", "import numpy, mitsuba"], capture_output=True).returncode == 0
     if not ok:
-        print(f"# installing mitsuba and numpy into {venv} (pip)", file=sys.stderr)
-        r = subprocess.run([py, "-m", "pip", "install", "-q", "mitsuba", "numpy"])
+        print(f"# installing {MITSUBA} and numpy into {venv} (pip)", file=sys.stderr)
+        r = subprocess.run([py, "-m", "pip", "install", "-q", MITSUBA, "numpy"])
         if r.returncode != 0:
             sys.exit(
                 f"error: could not install mitsuba into {venv}; do it by hand:\n"
-                f"  python3 -m venv {venv} && {venv}/bin/pip install mitsuba numpy\n"
+                f"  python3 -m venv {venv} && {venv}/bin/pip install {MITSUBA} numpy\n"
                 "Mitsuba's llvm variants also need LLVM (Debian: apt-get install libllvm19)."
             )
     os.environ["COMPARE_MITSUBA_REEXEC"] = "1"
