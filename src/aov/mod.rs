@@ -468,13 +468,23 @@ impl AovSums {
         self.set
     }
 
-    /// The means over `samples` samples per pixel (see the module
-    /// documentation for what each AOV averages over).
+    /// The means over `samples` samples per pixel, the first ones of the
+    /// render (see the module documentation for what each AOV averages over).
     pub fn average(&self, samples: u32) -> AovImage {
+        self.average_of(0, samples)
+    }
+
+    /// The means over samples `first..first + samples` of every pixel (a
+    /// part of a render, `--samples A..B`): the guides over those of them
+    /// below [`GUIDE_SAMPLES`], zero where the part has none (its merged
+    /// render has them).
+    pub fn average_of(&self, first: u32, samples: u32) -> AovImage {
         let layout = self.layout;
         let stride = layout.stride;
         let n = f64::from(samples.max(1));
-        let guide_n = f64::from(samples.clamp(1, GUIDE_SAMPLES));
+        let end = first.saturating_add(samples);
+        let guide_samples = end.min(GUIDE_SAMPLES) - first.min(GUIDE_SAMPLES);
+        let guide_n = f64::from(guide_samples.max(1));
         // The records hold the AOVs' channels in the set's order.
         let mut next = 0;
         let layers = self
@@ -631,5 +641,29 @@ mod tests {
         let names: Vec<&str> = channels.iter().map(|c| c.name.as_str()).collect();
         assert_eq!(names, ["normal.X", "normal.Y", "normal.Z", "depth.Z"]);
         assert_eq!(channels[1].values, [0.5, 0.0]);
+    }
+
+    #[test]
+    fn guides_are_the_mean_of_the_first_samples_of_the_render() {
+        // One pixel whose albedo sums 4 over the guides' samples.
+        let set: AovSet = "albedo".parse().unwrap();
+        let mut sums = AovSums::new(set, 1, 1);
+        sums.sums[..4].copy_from_slice(&[4.0, 4.0, 4.0, 16.0]);
+        let albedo = |first, samples| {
+            sums.average_of(first, samples)
+                .get(Aov::Albedo, 0, 0)
+                .unwrap()[0]
+        };
+        // A whole render: 4 samples, or 16 of which the first 8 add guides.
+        assert_eq!(albedo(0, 4), 1.0);
+        assert_eq!(albedo(0, 16), 0.5);
+        assert_eq!(sums.average(16).get(Aov::Albedo, 0, 0).unwrap()[0], 0.5);
+        // Parts: samples 4..12 hold four of the guides' samples, 6..7 one,
+        // 8..16 none (its sums, zero in a real part, are kept as they are: its
+        // merged render has the guides).
+        assert_eq!(albedo(4, 8), 1.0);
+        assert_eq!(albedo(6, 1), 4.0);
+        assert_eq!(albedo(8, 8), 4.0);
+        assert_eq!(GUIDE_SAMPLES, 8);
     }
 }

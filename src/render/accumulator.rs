@@ -347,7 +347,7 @@ impl Accumulator {
                         };
                     });
             }
-            sums.average(self.spp)
+            sums.average_of(self.first, self.spp)
         });
         Rendered {
             film,
