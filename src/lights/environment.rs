@@ -214,11 +214,17 @@ impl EnvMap {
             return;
         }
         let x = ((uv.x * w as f32 - 0.5).max(0.0) as usize).min(w - 1);
+        // (Truncation is `floor` wherever `row` does not clamp to 0.)
         let y = uv.y * h as f32 - 0.5;
-        let row = |k: f32| (k.max(0.0) as usize).min(h - 1);
-        for j in [row(y), row(y + 1.0)] {
+        for j in [self.row(y), self.row(y + 1.0)] {
             crate::memory::prefetch(self.texels.as_ptr().wrapping_add(j * w + x));
         }
+    }
+
+    /// Row `k` of a lookup's taps, clamped to the map (`height > 0`).
+    #[inline]
+    fn row(&self, k: f32) -> usize {
+        (k.max(0.0) as usize).min(self.height - 1)
     }
 
     /// Bilinear lookup at `(u, v)` (texel centres at `(i + 0.5)/W`), wrapping
@@ -242,9 +248,8 @@ impl EnvMap {
                 k.rem_euclid(w as i64) as usize
             }
         };
-        let row = |k: f32| (k.max(0.0) as usize).min(h - 1);
         let (i0, i1) = (col(x0), col(x0 + 1.0));
-        let (j0, j1) = (row(y0), row(y0 + 1.0));
+        let (j0, j1) = (self.row(y0), self.row(y0 + 1.0));
         let t = |i: usize, j: usize| Vec3A::from(self.texels[j * w + i]);
         let top = t(i0, j0) * (1.0 - fx) + t(i1, j0) * fx;
         let bottom = t(i0, j1) * (1.0 - fx) + t(i1, j1) * fx;

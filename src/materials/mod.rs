@@ -204,11 +204,23 @@ pub enum Material {
 /// [`Material::sample`] at that `wo` bit for bit; the glTF BSDF's lobe
 /// probabilities ([`pbr::Local`]) are worked out once for all of them.
 #[derive(Clone, Copy, Debug)]
-pub struct BsdfAt<'a> {
-    material: &'a Material,
-    wo: Vec3A,
-    /// For [`Material::Pbr`], `PbrBsdf::local(wo)`.
-    pbr: Option<Option<pbr::Local>>,
+pub enum BsdfAt<'a> {
+    /// The glTF BSDF with `PbrBsdf::local(wo)`.
+    Pbr {
+        /// The BSDF.
+        bsdf: &'a PbrBsdf,
+        /// The outgoing direction (local).
+        wo: Vec3A,
+        /// Its lobe probabilities (`None`: it scatters nothing).
+        local: Option<pbr::Local>,
+    },
+    /// Any other material, which has nothing to work out ahead.
+    Other {
+        /// The material.
+        material: &'a Material,
+        /// The outgoing direction (local).
+        wo: Vec3A,
+    },
 }
 
 impl BsdfAt<'_> {
@@ -218,27 +230,30 @@ impl BsdfAt<'_> {
     /// only worth computing once a shadow ray has found the light).
     #[inline]
     pub fn eval_and_pdf(&self, wi: Vec3A) -> (Vec3A, Option<f32>) {
-        match (self.material, &self.pbr) {
-            (Material::Pbr(p), Some(local)) => {
-                let (f, pdf) = p.eval_pdf_at(local.as_ref(), self.wo, wi);
+        match *self {
+            BsdfAt::Pbr { bsdf, wo, local } => {
+                let (f, pdf) = bsdf.eval_pdf_at(local.as_ref(), wo, wi);
                 (f, Some(pdf))
             }
-            _ => (self.material.eval(self.wo, wi), None),
+            BsdfAt::Other { material, wo } => (material.eval(wo, wi), None),
         }
     }
 
     /// [`Material::pdf`] towards `wi`.
     #[inline]
     pub fn pdf(&self, wi: Vec3A) -> f32 {
-        self.material.pdf(self.wo, wi)
+        match *self {
+            BsdfAt::Pbr { bsdf, wo, .. } => bsdf.pdf(wo, wi),
+            BsdfAt::Other { material, wo } => material.pdf(wo, wi),
+        }
     }
 
     /// [`Material::sample`].
     #[inline(always)]
     pub fn sample(&self, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
-        match (self.material, &self.pbr) {
-            (Material::Pbr(p), Some(local)) => p.sample_at(*local, u_lobe, u),
-            _ => self.material.sample(self.wo, u_lobe, u),
+        match *self {
+            BsdfAt::Pbr { bsdf, local, .. } => bsdf.sample_at(local, u_lobe, u),
+            BsdfAt::Other { material, wo } => material.sample(wo, u_lobe, u),
         }
     }
 }
@@ -613,14 +628,13 @@ impl Material {
     /// out once for a path vertex's light sample and BSDF sample.
     #[inline]
     pub fn at(&self, wo: Vec3A) -> BsdfAt<'_> {
-        let pbr = match self {
-            Material::Pbr(p) => Some(p.local(wo)),
-            _ => None,
-        };
-        BsdfAt {
-            material: self,
-            wo,
-            pbr,
+        match self {
+            Material::Pbr(bsdf) => BsdfAt::Pbr {
+                bsdf,
+                wo,
+                local: bsdf.local(wo),
+            },
+            material => BsdfAt::Other { material, wo },
         }
     }
 

@@ -582,9 +582,6 @@ impl PbrBsdf {
     /// lobes' probabilities and the half vector worked out once (next-event
     /// estimation needs both): the same values bit for bit.
     pub fn eval_pdf(&self, wo: Vec3A, wi: Vec3A) -> (Vec3A, f32) {
-        if self.nothing_between(wo, wi) {
-            return (Vec3A::ZERO, 0.0);
-        }
         self.eval_pdf_at(self.local(wo).as_ref(), wo, wi)
     }
 
