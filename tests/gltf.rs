@@ -17,6 +17,7 @@ use raylab::camera::{Lens, Y_UP_TOWARDS_MINUS_Z};
 use raylab::integrators::path::PathOptions;
 use raylab::lights::Incident;
 use raylab::load::{LoadOptions, Loaded};
+use raylab::materials::surface::MaterialKind;
 use raylab::render::sample_pixel;
 use raylab::scene::Facing;
 use raylab::{Camera, Hit, Integrator, LightSample, Ray, Scene};
@@ -1749,4 +1750,67 @@ fn glb_files_load_and_lying_lengths_are_refused() {
     let path = dir.path().join("truncated.glb");
     std::fs::write(&path, &glb[..6]).unwrap();
     assert_names(&load_err(&path), "truncated.glb", &["GLB"]);
+}
+
+/// `KHR_materials_clearcoat`: the coat's normal is the interpolated normal
+/// without the base's normal map (square 0), or the coat's own normal map
+/// when it has one (square 1: the same map, so the same normal as the
+/// base's); the factors are read; a material without the extension has no
+/// coat; a factor that is not finite is refused naming the material.
+#[test]
+fn a_clear_coat_takes_its_own_normal_and_its_factors() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut g = Gltf::new();
+    let tangent = Some(Vec4::new(1.0, 0.0, 0.0, 1.0));
+    let node = |x: f32| json!({ "translation": [x, 0.0, 0.0] });
+    normal_mapped_square(&mut g, |c| c, tangent, true, 1.0, node(0.0));
+    normal_mapped_square(&mut g, |c| c, tangent, true, 1.0, node(3.0));
+    let coat = |normal: bool| {
+        let mut c = json!({ "clearcoatFactor": 0.8, "clearcoatRoughnessFactor": 0.25 });
+        if normal {
+            c["clearcoatNormalTexture"] = json!({ "index": 0 });
+        }
+        c
+    };
+    g.materials[0]["extensions"] = json!({ "KHR_materials_clearcoat": coat(false) });
+    let mut with_map = g.materials[0].clone();
+    with_map["extensions"] = json!({ "KHR_materials_clearcoat": coat(true) });
+    g.materials.push(with_map);
+    g.meshes[1]["primitives"][0]["material"] = json!(1);
+    g.extensions_used.push("KHR_materials_clearcoat".into());
+    let loaded = load(&g.write(dir.path(), "clearcoat.gltf"));
+    let scene = &loaded.scene;
+    let surface = |i: u32| {
+        let prim = 2 * i;
+        let t = scene.triangles()[prim as usize];
+        let centre = (t.v[0] + t.v[1] + t.v[2]) / 3.0;
+        let hit = scene
+            .intersect(&Ray::new(centre + Vec3A::Z, -Vec3A::Z), 2.0)
+            .expect("the ray hits the square");
+        scene.surface(&hit)
+    };
+    let (plain, mapped) = (surface(0), surface(1));
+    assert_near(plain.nc, Vec3A::Z, 1e-6, "coat without a normal map");
+    assert!(plain.ns.dot(Vec3A::Z) < 0.95, "the base's map tilts ns");
+    assert_near(mapped.nc, mapped.ns, 1e-6, "the coat's map");
+    for (i, m) in scene.materials().iter().enumerate() {
+        let MaterialKind::Gltf(g) = &m.kind else {
+            panic!("material {i} is not glTF's");
+        };
+        assert_eq!((g.clearcoat, g.clearcoat_roughness), (0.8, 0.25));
+        assert_eq!(g.clearcoat_normal_texture.is_some(), i == 1);
+        assert!(m.has_coat());
+    }
+    assert!(
+        !loaded.warnings.iter().any(|w| w.contains("clearcoat")),
+        "{:?}",
+        loaded.warnings
+    );
+    // Not finite (as f32): refused with the material named.
+    g.materials[0]["extensions"]["KHR_materials_clearcoat"]["clearcoatFactor"] = json!(1e39);
+    let err = load_err(&g.write(dir.path(), "clearcoat-inf.gltf"));
+    assert!(
+        err.contains("material 0") && err.contains("clearcoatFactor"),
+        "{err}"
+    );
 }

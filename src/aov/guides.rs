@@ -37,7 +37,7 @@ use glam::Vec3A;
 
 use super::luminance;
 use crate::geometry::ray::Ray;
-use crate::integrators::path::shading_normal;
+use crate::integrators::path::{coat_normal, shading_normal};
 use crate::materials::{Frame, Material};
 use crate::scene::{Scene, SurfaceHit};
 
@@ -109,6 +109,8 @@ fn visit(
     let wo_world = -dir;
     let n = shading_normal(scene, s, bsdf, wo_world);
     let frame = Frame::from_normal(n);
+    let mut bsdf = *bsdf;
+    bsdf.orient_coat(&frame, coat_normal(s, n));
     let lobes = bsdf.guide_lobes(frame.to_local(wo_world));
     let specular = |l: Option<(Vec3A, Vec3A)>| l.map_or(Vec3A::ZERO, |(_, v)| v);
     let (reflect, transmit) = (specular(lobes.reflect), specular(lobes.transmit));

@@ -437,6 +437,15 @@ fn finite_or_zero(v: Vec3A) -> Vec3A {
 }
 
 impl Material {
+    /// Gives a clear coat (of [`Material::Pbr`]) its normal `n_c` in the
+    /// shading frame `frame`; nothing for other materials or without a coat.
+    #[inline]
+    pub fn orient_coat(&mut self, frame: &Frame, n_c: Vec3A) {
+        if let Material::Pbr(p) = self {
+            p.orient_coat(frame, n_c);
+        }
+    }
+
     /// Gold: RGB `eta`/`k` from Mitsuba's spectral data for Au integrated to linear
     /// sRGB (as tabulated in Tungsten's `ComplexIorData.hpp`).
     pub fn gold(alpha: f32) -> Material {

@@ -1,6 +1,6 @@
 //! The glTF 2.0 metallic–roughness BSDF (glTF specification, Appendix B), with
-//! `KHR_materials_specular`, `KHR_materials_ior`, `KHR_materials_transmission` and
-//! `KHR_materials_volume`.
+//! `KHR_materials_specular`, `KHR_materials_ior`, `KHR_materials_transmission`,
+//! `KHR_materials_volume` and `KHR_materials_clearcoat`.
 //!
 //! The frame, side and estimator conventions are those of the parent module
 //! ([`crate::materials`]): local frame with the shading normal as `+z`, `wo` and
@@ -26,6 +26,24 @@
 //!   grazing angles (the `1 − s max(F_d)` of the base uses the half vector of the
 //!   pair, not an albedo): a white rough dielectric reflects more than it
 //!   receives at 80°. That is the specified model.
+//!
+//! # Clear coat
+//!
+//! `KHR_materials_clearcoat` layers a GGX reflection of width `α_c` about the
+//! coat's own normal `n_c` (the surface's normal without the base's normal
+//! map, or the coat's normal map) over everything above, with the
+//! specification's `fresnel_coat`: with `F_c = Schlick(0.04, |wo·n_c|)` and
+//! coat weight `w`,
+//!
+//! `f = (1 − w F_c) f_base + w F_c D_c G2_c / (4 |wo·n_c| |wi·n_c|)`,
+//!
+//! whose cosine is the coat's (`|wi·n_c|`), as a microfacet BRDF about `n_c`
+//! is. `F_c` depends on `wo` alone, so it is not reciprocal, as specified; a
+//! white coat over a base that loses nothing reflects at most what it
+//! receives. The coat reflects where `wi` is above both `n_c` and the shading
+//! normal, and is smooth (a mirror about `n_c`) below
+//! [`ALPHA_SMOOTH`](super::ALPHA_SMOOTH). Seen from inside a refracting volume
+//! there is no coat (it lies on the outside).
 //!
 //! # Transmission
 //!
@@ -76,7 +94,7 @@
 //! Nothing here allocates.
 
 use super::{
-    BsdfSample, GUIDE_ALPHA, GuideLobes, Material, concentric_disk, finite_or_zero, ggx_d,
+    BsdfSample, Frame, GUIDE_ALPHA, GuideLobes, Material, concentric_disk, finite_or_zero, ggx_d,
     ggx_lambda, ggx_sample_visible_normal, reflect_z,
 };
 use glam::{Vec2, Vec3A};
@@ -117,7 +135,19 @@ pub struct PbrBsdf {
     /// True for transmission without `KHR_materials_volume`: light passes
     /// straight through; false makes the surface a refracting interface.
     pub thin_walled: bool,
+    /// `KHR_materials_clearcoat`: `clearcoatFactor` × `clearcoatTexture.r`
+    /// in `[0, 1]` (0: no coat).
+    pub coat: f32,
+    /// The coat's GGX `α` (`clearcoatRoughness²`, at least [`MIN_ALPHA`]).
+    pub coat_alpha: f32,
+    /// The coat's unit normal in the shading frame (`+z` is the base's
+    /// shading normal), above its horizon; set per hit by
+    /// [`PbrBsdf::orient_coat`].
+    pub coat_normal: Vec3A,
 }
+
+/// The clear coat's `F0`: an index of 1.5, `((1.5 − 1)/(1.5 + 1))²`.
+pub const COAT_F0: f32 = 0.04;
 
 impl Default for PbrBsdf {
     /// glTF's default material: white, fully metallic, roughness 1.
@@ -132,6 +162,18 @@ enum Lobe {
     Specular,
     Diffuse,
     Transmission,
+    Coat,
+}
+
+/// What the clear coat needs at one `wo` (see the module's "Clear coat").
+#[derive(Clone, Copy, Debug)]
+struct CoatLocal {
+    /// The coat's frame (its normal as `+z`) in the canonical frame.
+    frame: Frame,
+    /// `wo` in the coat's frame.
+    wo: Vec3A,
+    /// `w F_c`: the coat's share, `1 − w F_c` the base's.
+    weight: f32,
 }
 
 /// What depends on `wo` only: the canonical frame and the lobe probabilities.
@@ -153,6 +195,9 @@ pub struct Local {
     p_spec: f32,
     p_diff: f32,
     p_trans: f32,
+    p_coat: f32,
+    /// The clear coat, where there is one and `wo` is above it.
+    coat: Option<CoatLocal>,
 }
 
 impl Local {
@@ -168,6 +213,11 @@ impl Local {
     }
 
     fn choose(&self, u: f32) -> Lobe {
+        // The coat's share is taken from the top of `[0, 1)`, so that the
+        // other lobes' choices are those of the material without a coat.
+        if self.p_coat > 0.0 && u >= self.p_spec + self.p_diff + self.p_trans {
+            return Lobe::Coat;
+        }
         if u < self.p_spec || (self.p_diff <= 0.0 && self.p_trans <= 0.0) {
             Lobe::Specular
         } else if self.p_trans <= 0.0 || (self.p_diff > 0.0 && u < self.p_spec + self.p_diff) {
@@ -184,6 +234,14 @@ fn schlick(f0: Vec3A, cos: f32) -> Vec3A {
     let x = 1.0 - cos.clamp(0.0, 1.0);
     let x2 = x * x;
     f0 + (Vec3A::ONE - f0) * (x2 * x2 * x)
+}
+
+/// Schlick's Fresnel approximation for a grey `f0`.
+#[inline]
+fn schlick_grey(f0: f32, cos: f32) -> f32 {
+    let x = 1.0 - cos.clamp(0.0, 1.0);
+    let x2 = x * x;
+    f0 + (1.0 - f0) * (x2 * x2 * x)
 }
 
 /// Rec. 709 luminance (the weights sum to 1), never negative.
@@ -231,7 +289,31 @@ impl PbrBsdf {
             specular_color: Vec3A::ONE,
             transmission: 0.0,
             thin_walled: true,
+            coat: 0.0,
+            coat_alpha: 1.0,
+            coat_normal: Vec3A::Z,
         }
+    }
+
+    /// Sets the coat's normal from `n_c`, in the coordinates of the shading
+    /// frame `frame` (`n_c` on the same side as its normal); a normal at or
+    /// below the shading horizon (or not finite) becomes the shading normal.
+    #[inline]
+    pub fn orient_coat(&mut self, frame: &Frame, n_c: Vec3A) {
+        if self.coat > 0.0 {
+            let n = frame.to_local(n_c).normalize_or_zero();
+            self.coat_normal = if n.z > 0.0 && n.is_finite() {
+                n
+            } else {
+                Vec3A::Z
+            };
+        }
+    }
+
+    /// Whether the coat is a delta lobe.
+    #[inline]
+    fn coat_smooth(&self) -> bool {
+        Material::is_smooth(self.coat_alpha)
     }
 
     /// glTF's perceptual roughness to GGX width: `max(roughness², 1e-4)`.
@@ -244,7 +326,9 @@ impl PbrBsdf {
     /// has zero weight, e.g. a smooth metal or smooth full transmission): next
     /// event estimation cannot hit it.
     pub fn is_specular(&self) -> bool {
-        Material::is_smooth(self.alpha) && !self.has_diffuse()
+        Material::is_smooth(self.alpha)
+            && !self.has_diffuse()
+            && (self.coat <= 0.0 || self.coat_smooth())
     }
 
     /// A cheap estimate of the directional albedo seen at cosine `cos_o` to the
@@ -260,7 +344,12 @@ impl PbrBsdf {
         let (m, s, c) = (self.metallic, self.specular, self.base_color);
         let fd = schlick(self.f0(), cos);
         let dielectric = s * fd + (1.0 - s * fd.max_element()) * c;
-        let a = m * schlick(c, cos) + (1.0 - m) * dielectric;
+        let mut a = m * schlick(c, cos) + (1.0 - m) * dielectric;
+        if self.coat > 0.0 {
+            // About the shading normal (the coat's tilt is ignored here).
+            let w = self.coat * schlick_grey(COAT_F0, cos);
+            a = a * (1.0 - w) + Vec3A::splat(w);
+        }
         if a.is_finite() {
             a.clamp(Vec3A::ZERO, Vec3A::ONE)
         } else {
@@ -275,10 +364,41 @@ impl PbrBsdf {
     /// straight through a thin wall; none under total internal reflection)
     /// and the diffuse part as the rough albedo; rougher, the whole
     /// [`PbrBsdf::albedo`] is rough.
+    ///
+    /// A clear coat scales all of these by `1 − w F_c` and adds its own
+    /// reflection: along its mirror direction where it is smooth (taking the
+    /// reflection's place, with the base's reflected value added), to the
+    /// rough part otherwise.
     pub fn guide_lobes(&self, wo: Vec3A) -> GuideLobes {
         let Some(l) = self.local(wo) else {
             return GuideLobes::NONE;
         };
+        let base = self.base_guide_lobes(wo, &l);
+        let Some(coat) = l.coat else {
+            return base;
+        };
+        let under = 1.0 - coat.weight;
+        let scaled = |lobe: Option<(Vec3A, Vec3A)>| lobe.map(|(wi, v)| (wi, v * under));
+        let w = Vec3A::splat(coat.weight);
+        if self.coat_alpha > GUIDE_ALPHA {
+            return GuideLobes {
+                rough: super::unit_range(base.rough * under + w),
+                reflect: scaled(base.reflect),
+                transmit: scaled(base.transmit),
+            };
+        }
+        let wi = l.map(coat.frame.to_world(reflect_z(coat.wo)));
+        let reflected = base.reflect.map_or(Vec3A::ZERO, |(_, v)| v * under);
+        GuideLobes {
+            rough: base.rough * under,
+            reflect: GuideLobes::lobe(wi, w + reflected),
+            transmit: scaled(base.transmit),
+        }
+    }
+
+    /// [`PbrBsdf::guide_lobes`] of the material under the coat.
+    fn base_guide_lobes(&self, wo: Vec3A, l: &Local) -> GuideLobes {
+        let l = *l;
         if self.alpha > GUIDE_ALPHA {
             return GuideLobes::rough(self.albedo(wo.z));
         }
@@ -415,8 +535,16 @@ impl PbrBsdf {
             0.0
         };
         // Negative inputs (out of range) count as absent lobes.
-        let (w_spec, w_diff, w_trans) = (w_spec.max(0.0), w_diff.max(0.0), w_trans.max(0.0));
-        let total = w_spec + w_diff + w_trans;
+        let (mut w_spec, mut w_diff, mut w_trans) =
+            (w_spec.max(0.0), w_diff.max(0.0), w_trans.max(0.0));
+        let coat = self.coat_local(wo, flip, inside);
+        let mut w_coat = 0.0;
+        if let Some(c) = &coat {
+            let base = 1.0 - c.weight;
+            (w_spec, w_diff, w_trans) = (w_spec * base, w_diff * base, w_trans * base);
+            w_coat = c.weight;
+        }
+        let total = w_spec + w_diff + w_trans + w_coat;
         if !(total > 0.0 && total.is_finite()) {
             return None;
         }
@@ -431,7 +559,50 @@ impl PbrBsdf {
             p_spec: w_spec * inv,
             p_diff: w_diff * inv,
             p_trans: w_trans * inv,
+            p_coat: w_coat * inv,
+            coat,
         })
+    }
+
+    /// The coat at `wo` (canonical, mirrored if `flip`): none without a coat,
+    /// seen from inside a volume, or with `wo` below the coat's horizon.
+    #[inline]
+    fn coat_local(&self, wo: Vec3A, flip: bool, inside: bool) -> Option<CoatLocal> {
+        // (`coat` may be NaN: no coat then either.)
+        if self.coat.is_nan() || self.coat <= 0.0 || inside {
+            return None;
+        }
+        // Mirrored with the rest, the back's coat normal is −n_c seen from
+        // the mirrored side: (−x, −y, z).
+        let n = self.coat_normal;
+        let n = if flip { Vec3A::new(-n.x, -n.y, n.z) } else { n };
+        let frame = Frame::from_normal(n);
+        let wo_c = frame.to_local(wo);
+        (wo_c.z > 0.0 && wo_c.is_finite()).then(|| CoatLocal {
+            frame,
+            wo: wo_c,
+            weight: self.coat.min(1.0) * schlick_grey(COAT_F0, wo_c.z.min(1.0)),
+        })
+    }
+
+    /// The rough coat's `f |cos θi|` (about its normal, times `w F_c`) and
+    /// its density for `wi` (canonical frame); zero for a smooth coat, or
+    /// `wi` below the shading or the coat's horizon.
+    #[inline]
+    fn coat_eval_pdf(&self, c: &CoatLocal, wi: Vec3A) -> (f32, f32) {
+        if wi.z <= 0.0 || self.coat_smooth() {
+            return (0.0, 0.0);
+        }
+        let wi_c = c.frame.to_local(wi);
+        if wi_c.z <= 0.0 {
+            return (0.0, 0.0);
+        }
+        let a = self.coat_alpha;
+        let h = (c.wo + wi_c).normalize();
+        let d = ggx_d(a, h);
+        let f = c.weight * ((d * g2(a, c.wo, wi_c)) / (4.0 * c.wo.z));
+        let p = (g1(a, c.wo) * d) / (4.0 * c.wo.z);
+        (f, p)
     }
 
     /// The generalized half vector of a refracted pair (`wo.z > 0 > wi.z`, `eta`
@@ -457,6 +628,15 @@ impl PbrBsdf {
 
     /// `f |cos θi|` of the non-delta lobes in the canonical frame (`l.wo.z > 0`).
     fn eval_local(&self, l: &Local, wi: Vec3A) -> Vec3A {
+        let base = self.eval_base(l, wi);
+        match &l.coat {
+            Some(c) => base * (1.0 - c.weight) + Vec3A::splat(self.coat_eval_pdf(c, wi).0),
+            None => base,
+        }
+    }
+
+    /// [`PbrBsdf::eval_local`] of the material under the coat.
+    fn eval_base(&self, l: &Local, wi: Vec3A) -> Vec3A {
         let (wo, a) = (l.wo, self.alpha);
         let (m, s, c) = (self.metallic, self.specular, self.base_color);
         if wi.z > 0.0 {
@@ -502,8 +682,22 @@ impl PbrBsdf {
     /// bit for bit.
     #[inline]
     fn eval_pdf_local(&self, l: &Local, wi: Vec3A) -> (Vec3A, f32) {
+        let (f, p) = self.eval_pdf_base(l, wi);
+        match &l.coat {
+            Some(c) => {
+                let (fc, pc) = self.coat_eval_pdf(c, wi);
+                (f * (1.0 - c.weight) + Vec3A::splat(fc), p + l.p_coat * pc)
+            }
+            None => (f, p),
+        }
+    }
+
+    /// [`PbrBsdf::eval_pdf_local`] of the material under the coat (its
+    /// density already weighted by the lobes' probabilities).
+    #[inline]
+    fn eval_pdf_base(&self, l: &Local, wi: Vec3A) -> (Vec3A, f32) {
         if wi.z <= 0.0 {
-            return (self.eval_local(l, wi), self.pdf_local(l, wi));
+            return (self.eval_base(l, wi), self.pdf_base(l, wi));
         }
         let (wo, a) = (l.wo, self.alpha);
         let (m, s, c) = (self.metallic, self.specular, self.base_color);
@@ -526,6 +720,15 @@ impl PbrBsdf {
 
     /// The mixture density of the non-delta lobes in the canonical frame.
     fn pdf_local(&self, l: &Local, wi: Vec3A) -> f32 {
+        let p = self.pdf_base(l, wi);
+        match &l.coat {
+            Some(c) if l.p_coat > 0.0 => p + l.p_coat * self.coat_eval_pdf(c, wi).1,
+            _ => p,
+        }
+    }
+
+    /// [`PbrBsdf::pdf_local`] of the lobes under the coat.
+    fn pdf_base(&self, l: &Local, wi: Vec3A) -> f32 {
         let (wo, a) = (l.wo, self.alpha);
         if wi.z > 0.0 {
             let mut p = l.p_diff * FRAC_1_PI * wi.z;
@@ -633,12 +836,35 @@ impl PbrBsdf {
         let wo_l = l.wo;
         let (m, s, c, a) = (self.metallic, self.specular, self.base_color, self.alpha);
         let lobe = l.choose(u_lobe);
+        // The base's share under the coat.
+        let under = l.coat.map_or(1.0, |coat| 1.0 - coat.weight);
         let wi = match lobe {
+            Lobe::Coat => {
+                let coat = l.coat?;
+                let wi_c = if self.coat_smooth() {
+                    reflect_z(coat.wo)
+                } else {
+                    let h = ggx_sample_visible_normal(self.coat_alpha, coat.wo, u);
+                    let cos_oh = coat.wo.dot(h);
+                    if cos_oh.is_nan() || cos_oh <= 0.0 {
+                        return None;
+                    }
+                    (2.0 * cos_oh * h - coat.wo).normalize()
+                };
+                let wi = coat.frame.to_world(wi_c);
+                if wi_c.z <= 0.0 || wi.z <= 0.0 {
+                    return None;
+                }
+                if self.coat_smooth() {
+                    return Self::delta(l.map(wi), Vec3A::splat(coat.weight), l.p_coat);
+                }
+                wi
+            }
             Lobe::Specular if l.smooth => {
                 let cos_o = wo_l.z.min(1.0);
                 let value =
                     m * schlick(c, cos_o) + (1.0 - m) * s * self.fresnel_d(l.f0, cos_o, l.inside);
-                return Self::delta(l.map(reflect_z(wo_l)), value, l.p_spec);
+                return Self::delta(l.map(reflect_z(wo_l)), value * under, l.p_spec);
             }
             Lobe::Transmission if l.smooth => {
                 let cos_o = wo_l.z.min(1.0);
@@ -648,7 +874,7 @@ impl PbrBsdf {
                     -wo_l
                 };
                 let kd = 1.0 - s * self.fresnel_d(l.f0, cos_o, l.inside).max_element();
-                let value = c * (self.transmission_scale() * kd);
+                let value = c * (self.transmission_scale() * kd * under);
                 return Self::delta(l.map(wi), value, l.p_trans);
             }
             Lobe::Specular => {
@@ -727,7 +953,7 @@ mod tests {
     use super::*;
 
     /// All χ² tests of this module, for the Šidák correction.
-    const CHI2_TESTS: u32 = 3 * 3 * 2 + 4;
+    const CHI2_TESTS: u32 = 3 * 3 * 2 + 4 + 4;
 
     const COLOR: Vec3A = Vec3A::new(0.8, 0.5, 0.2);
 
@@ -820,6 +1046,137 @@ mod tests {
         );
     }
 
+    /// `base` under a clear coat of weight `coat` and roughness
+    /// `coat_roughness`, its normal tilted by `tilt` degrees from the shading
+    /// normal.
+    fn coated(base: PbrBsdf, coat: f32, coat_roughness: f32, tilt: f32) -> PbrBsdf {
+        PbrBsdf {
+            coat,
+            coat_alpha: PbrBsdf::alpha_from_roughness(coat_roughness),
+            coat_normal: dir(tilt, 1.1),
+            ..base
+        }
+    }
+
+    /// Coated materials: rough and smooth coats over rough, smooth, metal,
+    /// dielectric and transmitting bases, with straight and tilted coat
+    /// normals.
+    fn coated_materials() -> Vec<PbrBsdf> {
+        vec![
+            coated(PbrBsdf::new(COLOR, 0.0, 0.5), 1.0, 0.2, 0.0),
+            coated(PbrBsdf::new(COLOR, 1.0, 0.6), 0.7, 0.4, 20.0),
+            coated(PbrBsdf::new(COLOR, 0.0, 0.7), 1.0, 0.0, 0.0),
+            coated(PbrBsdf::new(COLOR, 0.3, 0.0), 0.5, 0.3, 10.0),
+            coated(thin(COLOR, 0.0, 0.4, 0.6), 1.0, 0.1, 0.0),
+            coated(volume(COLOR, 0.0, 0.3, 0.8), 1.0, 0.3, 15.0),
+        ]
+    }
+
+    #[test]
+    fn chi2_coat_sampling_matches_pdf() {
+        chi2_cases(
+            &[
+                (
+                    coated(PbrBsdf::new(COLOR, 0.0, 0.6), 1.0, 0.3, 0.0),
+                    dir(40.0, 0.3),
+                    "coat over dielectric",
+                ),
+                (
+                    coated(PbrBsdf::new(COLOR, 1.0, 0.5), 0.8, 0.2, 25.0),
+                    dir(70.0, 0.3),
+                    "tilted coat over metal",
+                ),
+                (
+                    coated(PbrBsdf::new(COLOR, 0.0, 0.4), 1.0, 0.5, 0.0),
+                    -dir(30.0, 1.3),
+                    "coat, back side",
+                ),
+                (
+                    coated(thin(COLOR, 0.0, 0.5, 0.7), 0.6, 0.25, 10.0),
+                    dir(60.0, 2.0),
+                    "coat over a thin wall",
+                ),
+            ],
+            600,
+        );
+    }
+
+    /// Over a base that reflects nothing (black, no specular), a smooth coat
+    /// is a mirror about its normal whose weight is exactly the coat weight
+    /// times Schlick's Fresnel at `|wo·n_c|` with `F0` = 0.04 (written out
+    /// here from the specification), from either side.
+    #[test]
+    fn smooth_coat_over_black_is_the_coats_fresnel() {
+        let black = PbrBsdf {
+            specular: 0.0,
+            ..PbrBsdf::new(Vec3A::ZERO, 0.0, 0.0)
+        };
+        for (weight, tilt) in [(1.0f32, 0.0f32), (0.6, 0.0), (1.0, 25.0)] {
+            let p = coated(black, weight, 0.0, tilt);
+            let m = Material::Pbr(p);
+            assert!(p.is_specular());
+            for theta in [0.0f32, 30.0, 60.0, 80.0] {
+                let wo = dir(theta, 1.1 + 0.3 * theta.to_radians());
+                let n = p.coat_normal;
+                let cos = wo.dot(n);
+                let expected = weight * (0.04 + 0.96 * (1.0 - cos).powi(5));
+                for ul in [0.0, 0.5, 0.999_999] {
+                    let s = m.sample(wo, ul, Vec2::new(0.3, 0.6));
+                    let Some(s) = s else {
+                        // Only where the mirror about a tilted normal dips
+                        // below the shading horizon.
+                        assert!(tilt > 0.0 && (2.0 * cos * n - wo).z <= 0.0);
+                        continue;
+                    };
+                    assert!(s.specular && (s.pdf - 1.0).abs() < 1e-6, "{s:?}");
+                    let value = s.weight.x * s.pdf;
+                    assert!(
+                        (value - expected).abs() < 1e-6 && s.weight.x == s.weight.z,
+                        "θo = {theta}, tilt {tilt}: {value} against {expected}"
+                    );
+                    assert!((s.wi - (2.0 * cos * n - wo)).length() < 1e-5);
+                    // From the back, mirrored: the same Fresnel.
+                    if tilt == 0.0 {
+                        let back = m.sample(flip(wo), ul, Vec2::new(0.3, 0.6)).unwrap();
+                        assert!((back.weight.x * back.pdf - expected).abs() < 1e-6);
+                        assert!((back.wi - flip(s.wi)).length() < 1e-6);
+                    }
+                }
+            }
+        }
+    }
+
+    /// White furnaces: a clear coat over a white metal (which loses nothing
+    /// when smooth) never reflects more than it receives, at any angle, coat
+    /// roughness and tilt; smooth over smooth it loses nothing either.
+    #[test]
+    fn furnace_coat_over_white_metal() {
+        let n = 60_000;
+        for base_roughness in [0.0f32, 0.4] {
+            for (coat_roughness, tilt) in [(0.0f32, 0.0f32), (0.1, 0.0), (0.5, 0.0), (0.3, 20.0)] {
+                let p = coated(
+                    PbrBsdf::new(Vec3A::ONE, 1.0, base_roughness),
+                    1.0,
+                    coat_roughness,
+                    tilt,
+                );
+                for theta in [0.0f32, 45.0, 80.0] {
+                    let (a, se) = albedo(Material::Pbr(p), dir(theta, 0.7), n, 800);
+                    let what = format!(
+                        "base r={base_roughness} coat r={coat_roughness} tilt {tilt} θo={theta}"
+                    );
+                    assert!(a < 1.0 + 4.0 * se + 1e-4, "{what}: albedo {a} ± {se}");
+                    if base_roughness == 0.0 && coat_roughness == 0.0 && tilt == 0.0 {
+                        assert!((a - 1.0).abs() < 1e-5, "{what}: {a}");
+                    } else {
+                        // Single scattering loses some, not most.
+                        assert!(a > 0.6, "{what}: albedo {a}");
+                    }
+                }
+            }
+        }
+    }
+
     #[test]
     fn chi2_detects_wrong_pbr_pdfs() {
         // Sampling against the pdf of a slightly different material is rejected:
@@ -876,7 +1233,7 @@ mod tests {
         // computation must give exactly what the two separate calls give.
         let mut r = rng(17);
         let mut nonzero = 0;
-        for p in test_materials() {
+        for p in test_materials().into_iter().chain(coated_materials()) {
             for k in 0..5_000 {
                 let wo = sphere(&mut r);
                 let wi = match k % 50 {
@@ -910,7 +1267,7 @@ mod tests {
     fn sample_weight_is_eval_over_pdf_and_pdf_matches() {
         let mut r = rng(3);
         let mut worst = 0.0f32;
-        for p in test_materials() {
+        for p in test_materials().into_iter().chain(coated_materials()) {
             let m = Material::Pbr(p);
             let (mut hits, mut deltas) = (0, 0);
             for _ in 0..20_000 {
@@ -927,7 +1284,9 @@ mod tests {
                     // A delta lobe: its selection probability, and a direction
                     // eval/pdf cannot see (a mixed material's diffuse part aside).
                     deltas += 1;
-                    assert!(p.alpha < ALPHA_SMOOTH && s.pdf > 0.0 && s.pdf <= 1.0);
+                    let smooth =
+                        p.alpha < ALPHA_SMOOTH || (p.coat > 0.0 && p.coat_alpha < ALPHA_SMOOTH);
+                    assert!(smooth && s.pdf > 0.0 && s.pdf <= 1.0);
                     continue;
                 }
                 hits += 1;
@@ -957,7 +1316,7 @@ mod tests {
     #[test]
     fn two_sided_and_reciprocal() {
         let mut r = rng(4);
-        for p in test_materials() {
+        for p in test_materials().into_iter().chain(coated_materials()) {
             let m = Material::Pbr(p);
             let volume = p.transmission > 0.0 && !p.thin_walled;
             // Index of the medium a direction is in (1 for two-sided materials).
@@ -971,11 +1330,16 @@ mod tests {
                 }
                 checked += 1;
                 // f(wo, wi) / n(wi)² = f(wi, wo) / n(wo)²: symmetric but for the
-                // 1/η² the transmitted radiance leaves out.
-                let a = f / (wi.z.abs() * n(wi) * n(wi));
-                let b = m.eval(wi, wo) / (wo.z.abs() * n(wo) * n(wo));
-                assert!(rel_err(a, b) < 2e-3, "{p:?}: {wo} {wi}: {a} vs {b}");
-                if !volume {
+                // 1/η² the transmitted radiance leaves out. (A clear coat's
+                // layering weighs by the Fresnel term at `wo` alone, as
+                // specified: not reciprocal.)
+                if p.coat == 0.0 {
+                    let a = f / (wi.z.abs() * n(wi) * n(wi));
+                    let b = m.eval(wi, wo) / (wo.z.abs() * n(wo) * n(wo));
+                    assert!(rel_err(a, b) < 2e-3, "{p:?}: {wo} {wi}: {a} vs {b}");
+                }
+                // Mirrored, a tilted coat normal is the back's, not the same.
+                if !volume && (p.coat == 0.0 || p.coat_normal == Vec3A::Z) {
                     let g = m.eval(flip(wo), flip(wi));
                     assert!(rel_err(g, f) < 1e-6, "{p:?}: not two-sided");
                     assert_eq!(m.pdf(flip(wo), flip(wi)), m.pdf(wo, wi));
@@ -988,6 +1352,11 @@ mod tests {
     #[test]
     fn degenerate_inputs_are_safe() {
         let mut all = test_materials();
+        all.extend(coated_materials());
+        all.push(PbrBsdf {
+            coat_normal: Vec3A::NAN,
+            ..coated(PbrBsdf::new(COLOR, 0.0, 0.5), 1.0, 0.3, 0.0)
+        });
         all.extend([
             PbrBsdf {
                 alpha: f32::NAN,

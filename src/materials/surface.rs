@@ -86,6 +86,19 @@ pub struct GltfMaterial {
     pub alpha_texture: Option<TextureRef>,
     /// Whether `alpha_texture`'s red channel is the alpha.
     pub alpha_from_red: bool,
+    /// `KHR_materials_clearcoat`: `clearcoatFactor` (0: no coat).
+    pub clearcoat: f32,
+    /// Its `clearcoatTexture` (red channel).
+    pub clearcoat_texture: Option<TextureRef>,
+    /// `clearcoatRoughnessFactor`.
+    pub clearcoat_roughness: f32,
+    /// Its `clearcoatRoughnessTexture` (green channel).
+    pub clearcoat_roughness_texture: Option<TextureRef>,
+    /// `clearcoatNormalTexture`; without it the coat takes the surface's
+    /// normal before the base's normal map.
+    pub clearcoat_normal_texture: Option<TextureRef>,
+    /// That normal map's `scale`.
+    pub clearcoat_normal_scale: f32,
 }
 
 impl Default for GltfMaterial {
@@ -112,6 +125,12 @@ impl Default for GltfMaterial {
             metallic_texture: None,
             alpha_texture: None,
             alpha_from_red: false,
+            clearcoat: 0.0,
+            clearcoat_texture: None,
+            clearcoat_roughness: 0.0,
+            clearcoat_roughness_texture: None,
+            clearcoat_normal_texture: None,
+            clearcoat_normal_scale: 1.0,
         }
     }
 }
@@ -252,6 +271,16 @@ impl SurfaceMaterial {
         }
         let clamp01 = |x: f32| if x.is_nan() { 0.0 } else { x.clamp(0.0, 1.0) };
         let roughness = clamp01(roughness);
+        let (mut coat, mut coat_roughness) = (g.clearcoat, g.clearcoat_roughness);
+        if coat > 0.0 {
+            if let Some(t) = &g.clearcoat_texture {
+                coat *= lookup(t, attrs, textures, ColorSpace::Linear).x;
+            }
+            if let Some(t) = &g.clearcoat_roughness_texture {
+                coat_roughness *= lookup(t, attrs, textures, ColorSpace::Linear).y;
+            }
+        }
+        let coat_roughness = clamp01(coat_roughness);
         Material::Pbr(PbrBsdf {
             base_color: base.clamp(Vec3A::ZERO, Vec3A::ONE),
             metallic: clamp01(metallic),
@@ -261,6 +290,9 @@ impl SurfaceMaterial {
             specular_color: specular_color.max(Vec3A::ZERO),
             transmission: clamp01(transmission),
             thin_walled: g.thin_walled,
+            coat: clamp01(coat),
+            coat_alpha: PbrBsdf::alpha_from_roughness(coat_roughness),
+            coat_normal: Vec3A::Z,
         })
     }
 
@@ -280,13 +312,7 @@ impl SurfaceMaterial {
     #[inline]
     pub fn mapped_normal(&self, attrs: &HitAttributes, textures: &TextureStore) -> Option<Vec3A> {
         let (t, scale) = self.normal_texture()?;
-        let texel = lookup(t, attrs, textures, ColorSpace::Linear);
-        let n = Vec3A::new(
-            (2.0 * texel.x - 1.0) * scale,
-            (2.0 * texel.y - 1.0) * scale,
-            2.0 * texel.z - 1.0,
-        );
-        Some(n)
+        Some(tangent_normal(t, scale, attrs, textures))
     }
 
     /// Beer–Lambert attenuation inside the material's volume (zero if none).
@@ -296,6 +322,46 @@ impl SurfaceMaterial {
             _ => Vec3A::ZERO,
         }
     }
+
+    /// Whether the material has a clear coat (`KHR_materials_clearcoat`).
+    #[inline]
+    pub fn has_coat(&self) -> bool {
+        matches!(&self.kind, MaterialKind::Gltf(g) if g.clearcoat > 0.0)
+    }
+
+    /// The clear coat's normal map's tangent-space normal at a hit (not
+    /// normalized), if it has one.
+    #[inline]
+    pub fn mapped_coat_normal(
+        &self,
+        attrs: &HitAttributes,
+        textures: &TextureStore,
+    ) -> Option<Vec3A> {
+        match &self.kind {
+            MaterialKind::Gltf(g) if g.clearcoat > 0.0 => {
+                let t = g.clearcoat_normal_texture.as_ref()?;
+                Some(tangent_normal(t, g.clearcoat_normal_scale, attrs, textures))
+            }
+            _ => None,
+        }
+    }
+}
+
+/// The tangent-space normal of normal map `t` with `scale` at a hit (not
+/// normalized).
+#[inline]
+fn tangent_normal(
+    t: &TextureRef,
+    scale: f32,
+    attrs: &HitAttributes,
+    textures: &TextureStore,
+) -> Vec3A {
+    let texel = lookup(t, attrs, textures, ColorSpace::Linear);
+    Vec3A::new(
+        (2.0 * texel.x - 1.0) * scale,
+        (2.0 * texel.y - 1.0) * scale,
+        2.0 * texel.z - 1.0,
+    )
 }
 
 /// A texture's value at a hit: the texture coordinate set it names, its
@@ -327,6 +393,9 @@ pub fn texture_refs(m: &SurfaceMaterial) -> impl Iterator<Item = &TextureRef> {
             &g.roughness_texture,
             &g.metallic_texture,
             &g.alpha_texture,
+            &g.clearcoat_texture,
+            &g.clearcoat_roughness_texture,
+            &g.clearcoat_normal_texture,
         ]
     });
     textures.chain([&m.emission_texture]).flatten()
@@ -350,6 +419,9 @@ pub fn texture_refs_mut(m: &mut SurfaceMaterial) -> impl Iterator<Item = &mut Te
             &mut g.roughness_texture,
             &mut g.metallic_texture,
             &mut g.alpha_texture,
+            &mut g.clearcoat_texture,
+            &mut g.clearcoat_roughness_texture,
+            &mut g.clearcoat_normal_texture,
         ]
     });
     textures.chain([&mut m.emission_texture]).flatten()

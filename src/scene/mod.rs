@@ -217,6 +217,10 @@ pub struct SurfaceHit {
     pub ng: Vec3A,
     /// Unit shading normal (interpolated, normal-mapped), on `ng`'s side.
     pub ns: Vec3A,
+    /// Unit normal of a clear coat (`KHR_materials_clearcoat`), on `ng`'s
+    /// side: interpolated, then the coat's own normal map if it has one (the
+    /// base's normal map does not apply); `ns` for a material without a coat.
+    pub nc: Vec3A,
     /// Texture coordinates and colour.
     pub attrs: HitAttributes,
     /// Index of the material.
@@ -824,6 +828,7 @@ impl Scene {
                 point,
                 ng,
                 ns: ng,
+                nc: ng,
                 attrs: HitAttributes::default(),
                 material,
             };
@@ -838,33 +843,27 @@ impl Scene {
                 ns = if n.dot(ng) < 0.0 { -n } else { n };
             }
         }
+        let interpolated = ns;
         let m = &self.materials[material as usize];
-        if let Some(mapped) = m.mapped_normal(&attrs, &self.textures) {
-            let local = (hit.prim - inst.first_triangle) as usize;
-            let tangent = match &mesh.tangents {
-                Tangents::PerVertex(t) => Some(interpolate(b, idx.map(|i| t[i as usize]))),
-                Tangents::PerCorner(t) => Some(interpolate(b, t[local])),
-                Tangents::None => None,
-            };
-            if let Some(t) = tangent {
-                let sign = if inst.mirrors { -t.w } else { t.w };
-                let t = inst.to_world.matrix3 * Vec3A::from(t.truncate());
-                // Gram–Schmidt against the shading normal.
-                let t = (t - ns * ns.dot(t)).normalize_or_zero();
-                if t != Vec3A::ZERO {
-                    let bitangent = sign.signum() * ns.cross(t);
-                    let n =
-                        (mapped.x * t + mapped.y * bitangent + mapped.z * ns).normalize_or_zero();
-                    if n != Vec3A::ZERO && n.is_finite() {
-                        ns = n;
-                    }
-                }
+        if let Some(mapped) = m.mapped_normal(&attrs, &self.textures)
+            && let Some(n) = tangent_to_world(inst, mesh, idx, hit, b, interpolated, mapped)
+        {
+            ns = n;
+        }
+        let mut nc = ns;
+        if m.has_coat() {
+            nc = interpolated;
+            if let Some(mapped) = m.mapped_coat_normal(&attrs, &self.textures)
+                && let Some(n) = tangent_to_world(inst, mesh, idx, hit, b, interpolated, mapped)
+            {
+                nc = n;
             }
         }
         SurfaceHit {
             point,
             ng,
             ns,
+            nc,
             attrs,
             material,
         }
@@ -929,6 +928,37 @@ fn coverage_number(ray: &Ray, prim: u32, p: Vec3A) -> f32 {
         h ^= h >> 33;
     }
     (h >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
+}
+
+/// A normal map's tangent-space normal `mapped` at hit `hit` (barycentrics
+/// `b`) of `mesh`'s triangle `idx`, in world space about the interpolated
+/// normal `n`; `None` without tangents or where the result is degenerate.
+#[inline]
+fn tangent_to_world(
+    inst: &Instance,
+    mesh: &MeshData,
+    idx: [u32; 3],
+    hit: &Hit,
+    b: [f32; 3],
+    n: Vec3A,
+    mapped: Vec3A,
+) -> Option<Vec3A> {
+    let local = (hit.prim - inst.first_triangle) as usize;
+    let tangent = match &mesh.tangents {
+        Tangents::PerVertex(t) => interpolate(b, idx.map(|i| t[i as usize])),
+        Tangents::PerCorner(t) => interpolate(b, t[local]),
+        Tangents::None => return None,
+    };
+    let sign = if inst.mirrors { -tangent.w } else { tangent.w };
+    let t = inst.to_world.matrix3 * Vec3A::from(tangent.truncate());
+    // Gram–Schmidt against the interpolated normal.
+    let t = (t - n * n.dot(t)).normalize_or_zero();
+    if t == Vec3A::ZERO {
+        return None;
+    }
+    let bitangent = sign.signum() * n.cross(t);
+    let mapped = (mapped.x * t + mapped.y * bitangent + mapped.z * n).normalize_or_zero();
+    (mapped != Vec3A::ZERO && mapped.is_finite()).then_some(mapped)
 }
 
 #[cfg(test)]

@@ -349,7 +349,7 @@ pub fn radiance_traced(
             break;
         }
 
-        let bsdf = material.bsdf(&surface.attrs, textures);
+        let mut bsdf = material.bsdf(&surface.attrs, textures);
         if depth == 0 {
             observe(&surface, &bsdf);
         }
@@ -358,6 +358,7 @@ pub fn radiance_traced(
         let n = shading_normal(scene, &surface, &bsdf, wo_world);
         let sp = surface.point;
         let frame = Frame::from_normal(n);
+        bsdf.orient_coat(&frame, coat_normal(&surface, n));
         let wo = frame.to_local(wo_world);
         let bsdf_at = bsdf.at(wo);
         // With shading normals, a direction must be on the same side of the
@@ -569,6 +570,17 @@ pub(crate) fn shading_normal(
         -n
     } else {
         n
+    }
+}
+
+/// The clear coat's normal on the side of the shading normal `n` (which
+/// [`shading_normal`] may have turned to the back).
+#[inline]
+pub(crate) fn coat_normal(surface: &SurfaceHit, n: Vec3A) -> Vec3A {
+    if n.dot(surface.ns) < 0.0 {
+        -surface.nc
+    } else {
+        surface.nc
     }
 }
 

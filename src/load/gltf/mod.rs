@@ -30,8 +30,9 @@ use crate::scene::{NO_INSTANCE, PointLight, SceneParts};
 use crate::textures::{TextureError, TextureRef, TextureStore, TextureTransform, Wrap};
 
 /// Extensions raylab reads; a file that requires any other is refused.
-pub const SUPPORTED_EXTENSIONS: [&str; 8] = [
+pub const SUPPORTED_EXTENSIONS: [&str; 9] = [
     "KHR_lights_punctual",
+    "KHR_materials_clearcoat",
     "KHR_materials_emissive_strength",
     "KHR_materials_ior",
     "KHR_materials_specular",
@@ -40,6 +41,22 @@ pub const SUPPORTED_EXTENSIONS: [&str; 8] = [
     "KHR_texture_transform",
     "KHR_mesh_quantization",
 ];
+
+/// The clear coat extension's name.
+const CLEARCOAT: &str = "KHR_materials_clearcoat";
+
+/// `KHR_materials_clearcoat`'s object (`gltf-json` does not know it).
+#[derive(serde::Deserialize)]
+#[serde(rename_all = "camelCase")]
+struct Clearcoat {
+    #[serde(default)]
+    clearcoat_factor: f32,
+    clearcoat_texture: Option<json::texture::Info>,
+    #[serde(default)]
+    clearcoat_roughness_factor: f32,
+    clearcoat_roughness_texture: Option<json::texture::Info>,
+    clearcoat_normal_texture: Option<json::material::NormalTexture>,
+}
 
 /// Deepest node hierarchy accepted.
 pub const MAX_NODE_DEPTH: usize = 1024;
@@ -785,7 +802,9 @@ impl Loader<'_> {
         let ext = m.extensions.as_ref();
         if let Some(e) = ext {
             for name in e.others.keys() {
-                self.warn_once(name, format!("ignoring the material extension {name}"));
+                if name != CLEARCOAT {
+                    self.warn_once(name, format!("ignoring the material extension {name}"));
+                }
             }
         }
         let finite = |v: f32, name: &str| -> Result<f32, GltfError> {
@@ -805,13 +824,7 @@ impl Loader<'_> {
             ..GltfMaterial::default()
         };
         if let Some(n) = &m.normal_texture {
-            let transform = n
-                .extensions
-                .as_ref()
-                .and_then(|e| e.others.get("KHR_texture_transform"))
-                .and_then(|v| serde_json::from_value(v.clone()).ok());
-            g.normal_texture =
-                self.texture_parts(n.index.value(), n.tex_coord, transform.as_ref(), &what)?;
+            g.normal_texture = self.normal_texture(n, &what)?;
             g.normal_scale = finite(n.scale, "normalTexture.scale")?;
         }
         if let Some(e) = ext {
@@ -843,6 +856,9 @@ impl Loader<'_> {
                 }
             }
         }
+        if let Some(value) = ext.and_then(|e| e.others.get(CLEARCOAT)) {
+            self.clearcoat(value, &mut g, &what)?;
+        }
         let strength = ext
             .and_then(|e| e.emissive_strength.as_ref())
             .map_or(1.0, |s| s.emissive_strength.0);
@@ -867,6 +883,58 @@ impl Loader<'_> {
             emits_both_sides: m.double_sided,
             alpha,
         })
+    }
+
+    /// Reads `KHR_materials_clearcoat` (`value`, the extension's object) into
+    /// `g`.
+    fn clearcoat(
+        &mut self,
+        value: &serde_json::Value,
+        g: &mut GltfMaterial,
+        what: &str,
+    ) -> Result<(), GltfError> {
+        let c: Clearcoat = serde_json::from_value(value.clone())
+            .map_err(|e| GltfError::invalid(format!("{what}: {CLEARCOAT}: {e}")))?;
+        let unit = |v: f32, name: &str| -> Result<f32, GltfError> {
+            if v.is_finite() {
+                Ok(v.clamp(0.0, 1.0))
+            } else {
+                Err(GltfError::invalid(format!(
+                    "{what}: {CLEARCOAT}: {name} is not finite"
+                )))
+            }
+        };
+        g.clearcoat = unit(c.clearcoat_factor, "clearcoatFactor")?;
+        g.clearcoat_roughness = unit(c.clearcoat_roughness_factor, "clearcoatRoughnessFactor")?;
+        g.clearcoat_texture = self.texture(c.clearcoat_texture.as_ref(), what)?;
+        g.clearcoat_roughness_texture =
+            self.texture(c.clearcoat_roughness_texture.as_ref(), what)?;
+        if let Some(n) = &c.clearcoat_normal_texture {
+            g.clearcoat_normal_texture = self.normal_texture(n, what)?;
+            if !n.scale.is_finite() {
+                return Err(GltfError::invalid(format!(
+                    "{what}: {CLEARCOAT}: clearcoatNormalTexture.scale is not finite"
+                )));
+            }
+            g.clearcoat_normal_scale = n.scale;
+        }
+        Ok(())
+    }
+
+    /// A normal map's texture reference (as [`Self::texture`]; its
+    /// `KHR_texture_transform` is among the extensions `gltf-json` keeps as
+    /// JSON for normal textures).
+    fn normal_texture(
+        &mut self,
+        n: &json::material::NormalTexture,
+        what: &str,
+    ) -> Result<Option<TextureRef>, GltfError> {
+        let transform = n
+            .extensions
+            .as_ref()
+            .and_then(|e| e.others.get("KHR_texture_transform"))
+            .and_then(|v| serde_json::from_value(v.clone()).ok());
+        self.texture_parts(n.index.value(), n.tex_coord, transform.as_ref(), what)
     }
 
     /// A texture reference: its image (queued for decoding), sampler, texture
