@@ -344,6 +344,60 @@ fn specular_glossiness_converts_to_the_extensions_brdf_inputs() {
     }
 }
 
+#[test]
+fn specular_glossiness_equals_its_metallic_roughness_twin() {
+    // The extension's two examples of one material in both models: a metal
+    // (diffuse black, specular = the metal's colour) and a plastic (diffuse
+    // c / (1 − 0.04), specular 0.04). Their BSDFs must agree everywhere.
+    let dir = tempfile::tempdir().unwrap();
+    let mut g = Gltf::new();
+    let gold = [1.0, 0.766, 0.336];
+    let plastic = [0.6, 0.2, 0.1];
+    let materials = [
+        json!({ "pbrMetallicRoughness": {
+            "baseColorFactor": [gold[0], gold[1], gold[2], 1.0], "metallicFactor": 1.0, "roughnessFactor": 0.3 } }),
+        json!({ "extensions": { "KHR_materials_pbrSpecularGlossiness": {
+            "diffuseFactor": [0.0, 0.0, 0.0, 1.0], "specularFactor": gold, "glossinessFactor": 0.7 } } }),
+        json!({ "pbrMetallicRoughness": {
+            "baseColorFactor": [plastic[0], plastic[1], plastic[2], 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.5 } }),
+        json!({ "extensions": { "KHR_materials_pbrSpecularGlossiness": {
+            "diffuseFactor": [plastic[0] / 0.96, plastic[1] / 0.96, plastic[2] / 0.96, 1.0],
+            "specularFactor": [0.04, 0.04, 0.04], "glossinessFactor": 0.5 } } }),
+    ];
+    for (k, m) in materials.into_iter().enumerate() {
+        let m = g.material(m);
+        let mut p = quad(&mut g, square([3.0 * k as f32, 0.0, 0.0], 1.0), &[]);
+        p["material"] = json!(m);
+        let mesh = g.mesh(vec![p]);
+        g.root(json!({ "mesh": mesh }));
+    }
+    let loaded = load(&g.write(dir.path(), "twins.gltf"));
+    let scene = &loaded.scene;
+    let bsdf = |k: u32| {
+        scene
+            .material(2 * k)
+            .bsdf(&HitAttributes::default(), scene.textures())
+    };
+    for (mr, sg, what) in [(0, 1, "gold"), (2, 3, "plastic")] {
+        let (a, b) = (bsdf(mr), bsdf(sg));
+        for (wo, wi) in [
+            (Vec3A::new(0.3, 0.1, 0.9), Vec3A::new(-0.2, 0.3, 0.8)),
+            (Vec3A::new(0.0, 0.0, 1.0), Vec3A::new(0.6, 0.0, 0.5)),
+            (Vec3A::new(0.8, -0.3, 0.3), Vec3A::new(-0.5, 0.4, 0.6)),
+            (Vec3A::new(0.9, 0.0, 0.1), Vec3A::new(-0.9, 0.0, 0.12)),
+        ] {
+            let (wo, wi) = (wo.normalize(), wi.normalize());
+            let (fa, fb) = (a.eval(wo, wi), b.eval(wo, wi));
+            assert_near(
+                fb,
+                fa,
+                1e-5 * fa.max_element().max(1e-3),
+                &format!("{what} at {wo} {wi}"),
+            );
+        }
+    }
+}
+
 // ---------------------------------------------------------------------------
 // 3. KHR_materials_variants
 
