@@ -125,13 +125,19 @@ fn an_unlit_square_shows_its_base_colour_in_every_integrator() {
         let path = Integrator::path().radiance(scene, &ray, &mut rays);
         assert_eq!(path, flat, "path at ({x}, {y})");
     }
-    // A whole render through the file's camera: every pixel the colour, at
-    // any sample count (each sample is exactly it).
+    // A whole render through the file's camera (the lab's integrators on
+    // pixel quads and blocks): every pixel the colour (π × it for `direct`),
+    // at any sample count (each sample is exactly it).
     let view = loaded.view;
     let camera = Camera::with_lens(view.position, view.rotation, view.lens, 12, 8);
-    for spp in [1, 4] {
+    for (integrator, spp, want) in [
+        (Integrator::path(), 1, want),
+        (Integrator::path(), 4, want),
+        (Integrator::Flat, 1, want),
+        (Integrator::Direct, 2, want * PI),
+    ] {
         let settings = RenderSettings {
-            integrator: Integrator::path(),
+            integrator,
             spp,
             seed: 3,
         };
@@ -139,7 +145,12 @@ fn an_unlit_square_shows_its_base_colour_in_every_integrator() {
         for (i, p) in image.film.pixels.iter().enumerate() {
             // (Interpolating the vertices' equal colours and coordinates
             // gives them back to within a rounding.)
-            assert_near(*p, want, 1e-6, &format!("pixel {i} at {spp} spp"));
+            assert_near(
+                *p,
+                want,
+                4e-6,
+                &format!("{integrator} pixel {i} at {spp} spp"),
+            );
         }
     }
 }

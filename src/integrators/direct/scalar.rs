@@ -55,7 +55,7 @@ impl Integrator {
         // Unlit lanes borrow a lit lane's ray so that the packet can still share
         // the triangle test's axis order; their answers are not used.
         let Some(first) = lit.iter().position(|&l| l) else {
-            return unlit_lanes(scene, &hits, &rho, rho.map(|r| r * scene.ambient));
+            return unlit_surfaces(scene, &hits, &rho, rho.map(|r| r * scene.ambient));
         };
         for lane in 0..N {
             if !lit[lane] {
@@ -71,7 +71,7 @@ impl Integrator {
             };
             rho[lane] * (d + scene.ambient)
         });
-        unlit_lanes(scene, &hits, &rho, out)
+        unlit_surfaces(scene, &hits, &rho, out)
     }
 }
 
@@ -84,12 +84,13 @@ pub(in crate::integrators) fn unlit_value(rho: Vec3A) -> Vec3A {
     rho * PI
 }
 
-/// `out` with the lanes whose hit is on an unlit surface replaced by
+/// `out` with the lanes whose hit is on a `KHR_materials_unlit` surface (not
+/// to be confused with the lanes the light does not reach) replaced by
 /// [`unlit_value`] of their base colour `rho` (a no-op, one test, in scenes
 /// without unlit materials). Their shadow rays were traced for nothing, which
 /// keeps the lit lanes' packet as it is.
 #[inline(always)]
-fn unlit_lanes<const N: usize>(
+fn unlit_surfaces<const N: usize>(
     scene: &Scene,
     hits: &[Option<Hit>; N],
     rho: &[Vec3A; N],
