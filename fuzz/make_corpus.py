@@ -267,10 +267,36 @@ def glb(doc, buf):
     return struct.pack("<III", 0x46546C67, 2, 12 + len(body)) + body
 
 
+def extension_gltf(doc):
+    """The feature glTF with the extensions of issue 32's first part: unlit and
+    specular-glossiness materials, variants mapping to them, GPU instancing."""
+    d = json.loads(json.dumps(doc))
+    d["extensionsUsed"] += ["KHR_materials_unlit", "KHR_materials_pbrSpecularGlossiness",
+                            "KHR_materials_variants", "EXT_mesh_gpu_instancing"]
+    d["materials"] += [
+        {"pbrMetallicRoughness": {"baseColorFactor": [0.2, 0.6, 1, 1], "baseColorTexture": {"index": 0}},
+         "extensions": {"KHR_materials_unlit": {}}},
+        {"extensions": {"KHR_materials_pbrSpecularGlossiness": {
+            "diffuseFactor": [0.5, 0.5, 0.5, 1], "diffuseTexture": {"index": 0},
+            "specularFactor": [0.9, 0.7, 0.3], "glossinessFactor": 0.6,
+            "specularGlossinessTexture": {"index": 0}}}},
+    ]
+    d["extensions"]["KHR_materials_variants"] = {"variants": [{"name": "unlit"}, {"name": "gloss"}]}
+    d["meshes"][0]["primitives"][0]["extensions"] = {"KHR_materials_variants": {"mappings": [
+        {"material": 4, "variants": [0]}, {"material": 5, "variants": [1]}]}}
+    d["meshes"][2]["primitives"][0]["material"] = 5
+    # Node 2 (mesh 0) instanced at the positions, scaled by the normals' accessor.
+    d["nodes"][2]["extensions"] = {"EXT_mesh_gpu_instancing": {"attributes": {"TRANSLATION": 0, "SCALE": 1}}}
+    return d
+
+
 def gltf_seeds(shared):
     doc, buf = feature_gltf()
     put("gltf_json", "features.gltf", gltf_text(doc, buf))
     put("glb", "features.glb", glb(doc, buf))
+    ext = extension_gltf(doc)
+    put("gltf_json", "extensions.gltf", gltf_text(ext, buf))
+    put("glb", "extensions.glb", glb(ext, buf))
     fixture = open(os.path.join(HERE, "src", "lib.rs")).read().split('FIXTURE_GLTF: &str = r#"')[1].split('"#;')[0]
     put("gltf_json", "fixture.gltf", fixture)
     put("gltf_json", "minimal.gltf", '{"asset":{"version":"2.0"}}')

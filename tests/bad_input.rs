@@ -174,6 +174,19 @@ const CASES: &[(&str, &str)] = &[
     ),
     ("gltf-scale-overflows-f32.gltf", "transform is not finite"),
     (
+        "gltf-instancing-counts-differ.gltf",
+        "EXT_mesh_gpu_instancing: SCALE has 2 elements but TRANSLATION has 3",
+    ),
+    (
+        "gltf-instancing-rotation-vec3.gltf",
+        "ROTATION accessor 0 is not VEC4",
+    ),
+    (
+        "gltf-variant-mapping-past-variants.gltf",
+        "mapping names variant 5, but the file defines 1",
+    ),
+    ("gltf-variant-without-name.gltf", "missing field `name`"),
+    (
         "gltf-camera-zero-yfov.gltf",
         "yfov 0 is not between 0 and π",
     ),

@@ -11,7 +11,7 @@ mod builder;
 use std::f32::consts::{FRAC_PI_2, PI};
 use std::path::Path;
 
-use builder::{F32, Gltf, I8, I16, U8, U16, U32, png};
+use builder::{F32, Gltf, I8, I16, U8, U16, U32, assert_near, load, load_with, png, quad};
 use glam::{Mat3, Quat, Vec2, Vec3, Vec3A, Vec4};
 use raylab::camera::{Lens, Y_UP_TOWARDS_MINUS_Z};
 use raylab::integrators::path::PathOptions;
@@ -26,28 +26,12 @@ use serde_json::{Value, json};
 // ---------------------------------------------------------------------------
 // Helpers
 
-fn load_with(path: &Path, options: &LoadOptions) -> Result<Loaded, String> {
-    raylab::load::load(path.to_str().unwrap(), options).map_err(|e| e.to_string())
-}
-
-fn load(path: &Path) -> Loaded {
-    load_with(path, &LoadOptions::default()).unwrap_or_else(|e| panic!("{e}"))
-}
-
 /// The error message of a file that must not load.
 fn load_err(path: &Path) -> String {
     match load_with(path, &LoadOptions::default()) {
         Ok(_) => panic!("{} loaded but should not have", path.display()),
         Err(e) => e,
     }
-}
-
-#[track_caller]
-fn assert_near(got: Vec3A, want: Vec3A, tol: f32, what: &str) {
-    assert!(
-        (got - want).abs().max_element() <= tol,
-        "{what}: got {got}, want {want} (tolerance {tol})"
-    );
 }
 
 /// `t + q·(s ∘ p)`: a glTF TRS node applied to a point, written out.
@@ -75,18 +59,6 @@ fn hit_at(prim: u32, b1: f32, b2: f32) -> Hit {
         b1,
         b2,
     }
-}
-
-/// A quad primitive over `corners` (counter-clockwise seen from the front),
-/// indexed as two triangles (0, 1, 2) and (0, 2, 3), with extra attributes.
-fn quad(g: &mut Gltf, corners: [[f32; 3]; 4], extra: &[(&str, usize)]) -> Value {
-    let pos = g.floats(&corners);
-    let idx = g.indices(U16, &[0, 1, 2, 0, 2, 3]);
-    let mut attributes = json!({ "POSITION": pos });
-    for (name, acc) in extra {
-        attributes[*name] = json!(acc);
-    }
-    json!({ "attributes": attributes, "indices": idx })
 }
 
 /// The square of side 2 centred on the origin in the z = 0 plane, front +z.

@@ -143,6 +143,24 @@ put("gltf-scale-overflows-f32.gltf", gltf(nodes=[{"mesh": 0, "scale": [1e39, 1, 
 put("gltf-camera-zero-yfov.gltf", gltf(
     cameras=[{"type": "perspective", "perspective": {"yfov": 0, "znear": 0.1}}],
     nodes=[{"mesh": 0, "children": [1]}, {"camera": 0}]))
+# EXT_mesh_gpu_instancing: attribute counts that differ, a rotation of 3 components.
+INSTANCED = {"mesh": 0, "extensions": {"EXT_mesh_gpu_instancing": {"attributes": {}}}}
+put("gltf-instancing-counts-differ.gltf", gltf(
+    nodes=[{**INSTANCED, "extensions": {"EXT_mesh_gpu_instancing": {"attributes": {"TRANSLATION": 0, "SCALE": 2}}}}],
+    accessors=[
+        {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3"},
+        {"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"},
+        {"bufferView": 0, "componentType": 5126, "count": 2, "type": "VEC3"},
+    ]))
+put("gltf-instancing-rotation-vec3.gltf", gltf(
+    nodes=[{**INSTANCED, "extensions": {"EXT_mesh_gpu_instancing": {"attributes": {"ROTATION": 0}}}}]))
+# KHR_materials_variants: a mapping to a variant the file does not define, a variant without a name.
+put("gltf-variant-mapping-past-variants.gltf", gltf(
+    materials=[{}],
+    extensions={"KHR_materials_variants": {"variants": [{"name": "only"}]}},
+    meshes__0__primitives__0__extensions={"KHR_materials_variants": {"mappings": [{"material": 0, "variants": [5]}]}}))
+put("gltf-variant-without-name.gltf", gltf(
+    extensions={"KHR_materials_variants": {"variants": [{}]}}))
 
 # Images referenced by a glTF (a data URI, so the error names the glTF).
 PNG_SIG = b"\x89PNG\r\n\x1a\n"

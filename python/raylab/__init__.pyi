@@ -77,6 +77,7 @@ def render(
     height: Optional[int] = None,
     integrator: Optional[Literal["flat", "direct", "path"]] = None,
     camera: Union[None, int, Camera] = None,
+    variant: Optional[str] = None,
     default_light: Literal["auto", "on", "off"] = "auto",
     light_selection: Literal["tree", "power", "uniform"] = "tree",
     tonemap: Optional[Literal["clamp", "aces", "khronos-pbr-neutral"]] = None,

@@ -147,6 +147,7 @@ def valid_values(tmp_path):
         "integrator": ("path", {}),
         "camera": (0, {"scene": ROOT / "scenes/helmet-venice/helmet-venice.gltf"}),
         "default_light": ("on", {"scene": HELMET}),
+        "variant": ("Peacock Velvet", {"scene": SHARED / "models/SheenChair/SheenChair.gltf"}),
         "light_selection": ("power", {"scene": ROOT / "scenes/showcase/showcase.gltf"}),
         "tonemap": ("aces", {}),
         "max_depth": (3, {}),

@@ -90,6 +90,9 @@ impl Integrator {
         let rho = scene.base_color(&hit);
         match self {
             Integrator::Flat => rho,
+            _ if scene.has_unlit() && scene.material(hit.prim).is_unlit() => {
+                direct::scalar::unlit_value(rho)
+            }
             _ => rho * (direct::scalar::direct_light(scene, &hit, ray.dir, rays) + scene.ambient),
         }
     }

@@ -45,6 +45,11 @@ pub struct SceneOptions {
     /// node tree, from 0).
     #[arg(long, value_name = "N", allow_hyphen_values = true, value_parser = parse_camera)]
     pub camera: Option<usize>,
+    /// glTF: which material variant (`KHR_materials_variants`) to show, by
+    /// name; the load summary lists a file's variants. In a scene file, the
+    /// models that have a variant of that name show it.
+    #[arg(long, value_name = "NAME")]
+    pub variant: Option<String>,
     /// glTF: when to add raylab's default lighting (a key light and a grey sky):
     /// `auto` (when the file has no punctual light and no emitters strong enough
     /// to light it), `on` or `off`.
@@ -397,6 +402,7 @@ impl SceneOptions {
             camera: self.camera,
             default_light: self.default_light,
             light_selection: self.light_selection,
+            variant: self.variant.clone(),
             environment: crate::load::EnvironmentOptions {
                 source: match (&self.env, self.env_color) {
                     (Some(path), _) => Some(crate::load::EnvSource::File(path.clone())),

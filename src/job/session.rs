@@ -149,6 +149,16 @@ pub fn load_session(
             mib(s.geometry_bytes),
             s.time.as_secs_f64() * 1e3,
         ));
+        if !s.variants.is_empty() {
+            let shown = match &s.variant {
+                Some(v) => format!("showing {v}"),
+                None => "showing the default materials; --variant NAME picks one".into(),
+            };
+            hooks.say(&format!(
+                "material variants: {} ({shown})",
+                s.variants.join(", ")
+            ));
+        }
     }
     if !quiet && let Some([w, h]) = loaded.summary.environment_size {
         let s = &loaded.summary;

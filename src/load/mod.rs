@@ -27,9 +27,9 @@ use crate::lights::environment::{EnvError, Environment};
 use crate::memory::{GEOMETRY_BYTES_PER_TRIANGLE, Ledger, MemoryBudget, MemoryError, Needs};
 use crate::scene::{PointLight, Scene, SceneError};
 use cornell::MaterialChoice;
-use gltf::{GltfError, load_gltf_with};
+use gltf::{GltfError, VariantChoice, load_gltf_variant};
 use obj::{ObjError, load_obj, load_obj_scene_with};
-use shot::{ShotCamera, ShotError, ShotSettings, load_shot_with};
+use shot::{ShotCamera, ShotError, ShotSettings, load_shot_variant};
 use transform::Transform;
 
 /// What a scene was made from; decides defaults (integrator, image size, tone
@@ -83,6 +83,10 @@ pub struct LoadOptions {
     pub max_memory: MemoryBudget,
     /// How `path` chooses among the lights (default: the light tree).
     pub light_selection: crate::scene::LightSelection,
+    /// The glTF material variant (`KHR_materials_variants`) to show: a glTF
+    /// file without it is refused; in a scene file, the models that have it
+    /// show it (at least one must).
+    pub variant: Option<String>,
 }
 
 /// Where an environment's radiance comes from.
@@ -192,7 +196,7 @@ pub struct InitialView {
 }
 
 /// How big the loaded scene is.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct LoadSummary {
     /// Triangles after instancing.
     pub triangles: usize,
@@ -219,6 +223,11 @@ pub struct LoadSummary {
     pub time: Duration,
     /// The memory estimate the load was checked against (no film yet).
     pub needs: Needs,
+    /// The glTF material variants (`KHR_materials_variants`) `--variant` can
+    /// pick, in the file's order.
+    pub variants: Vec<String>,
+    /// The variant shown, if one was picked.
+    pub variant: Option<String>,
 }
 
 /// A loaded scene with its starting view.
@@ -339,6 +348,14 @@ pub fn load(name: &str, options: &LoadOptions) -> Result<Loaded, LoadError> {
             "--add places meshes in the cornell scene; {name} is a file"
         )));
     }
+    if !kind.is_physical()
+        && let Some(v) = &options.variant
+    {
+        return Err(LoadError::Usage(format!(
+            "--variant {}: material variants are glTF's; {name} is neither a glTF file nor a scene file",
+            crate::guard::one_line(v)
+        )));
+    }
     if kind != SceneKind::Lab && !options.materials.is_empty() {
         return Err(LoadError::Usage(format!(
             "--material names parts of the built-in box, not of {name}"
@@ -347,6 +364,7 @@ pub fn load(name: &str, options: &LoadOptions) -> Result<Loaded, LoadError> {
     let mut warnings = Vec::new();
     let mut default_light = false;
     let mut settings = ShotSettings::default();
+    let (mut variants, mut variant) = (Vec::new(), None);
     // The environment first: a scene lit by one gets no default lighting.
     let ledger = Ledger::new(options.max_memory);
     let env_start = Instant::now();
@@ -446,8 +464,13 @@ pub fn load(name: &str, options: &LoadOptions) -> Result<Loaded, LoadError> {
             (scene, view)
         }
         SceneKind::Gltf => {
-            let loaded = load_gltf_with(Path::new(name), &ledger)?;
+            let choice = match &options.variant {
+                Some(v) => VariantChoice::Named(v.clone()),
+                None => VariantChoice::Default,
+            };
+            let loaded = load_gltf_variant(Path::new(name), &ledger, &choice)?;
             warnings.extend(loaded.warnings);
+            (variants, variant) = (loaded.variants, loaded.variant);
             let mut parts = loaded.parts;
             parts.ambient = Vec3A::splat(options.ambient.unwrap_or(MESH_AMBIENT));
             let cameras = parts.cameras.len();
@@ -476,8 +499,9 @@ pub fn load(name: &str, options: &LoadOptions) -> Result<Loaded, LoadError> {
             (scene, view)
         }
         SceneKind::Shot => {
-            let shot = load_shot_with(Path::new(name), &ledger)?;
+            let shot = load_shot_variant(Path::new(name), &ledger, options.variant.as_deref())?;
             warnings.extend(shot.warnings);
+            (variants, variant) = (shot.variants, shot.variant);
             settings = shot.settings;
             let mut parts = shot.parts;
             parts.ambient = Vec3A::splat(options.ambient.unwrap_or(MESH_AMBIENT));
@@ -557,6 +581,8 @@ pub fn load(name: &str, options: &LoadOptions) -> Result<Loaded, LoadError> {
         environment_time,
         time: start.elapsed(),
         needs: ledger.needs(),
+        variants,
+        variant,
     };
     if options.light_selection != scene.light_selection() {
         scene.set_light_selection(options.light_selection);

@@ -173,6 +173,9 @@ pub struct ModelSection {
     /// a preset (`glass:1.5`, `gold:0.2`, ...) or a `[[material]]`'s name.
     #[serde(default)]
     pub materials: BTreeMap<String, String>,
+    /// A glTF model's material variant (`KHR_materials_variants`) to show;
+    /// the command line's `--variant` replaces it.
+    pub variant: Option<String>,
 }
 
 /// `[[material]]`: a glTF-style metallic–roughness material.
@@ -304,6 +307,12 @@ pub struct Shot {
     pub has_lights: bool,
     /// Things worth telling the user.
     pub warnings: Vec<String>,
+    /// The material variants of the glTF models (each name once, in the
+    /// models' order).
+    pub variants: Vec<String>,
+    /// The `--variant` shown, when one was asked for (the models' own
+    /// `variant` keys are not listed here).
+    pub variant: Option<String>,
 }
 
 /// The 1-based line and column of byte `offset` of `text`.
@@ -352,12 +361,24 @@ pub fn load_shot_with(
     path: &Path,
     ledger: &crate::memory::Ledger,
 ) -> Result<Shot, super::LoadError> {
+    load_shot_variant(path, ledger, None)
+}
+
+/// [`load_shot_with`] with the command line's `--variant`: every glTF model
+/// that has a material variant of that name shows it (whatever its own
+/// `variant` key says); a scene none of whose models has it is refused, with
+/// the names they have.
+pub fn load_shot_variant(
+    path: &Path,
+    ledger: &crate::memory::Ledger,
+    variant: Option<&str>,
+) -> Result<Shot, super::LoadError> {
     let text = std::fs::read_to_string(path).map_err(|cause| ShotError::Io {
         path: path.to_owned(),
         cause,
     })?;
     let file = parse(&text, path)?;
-    compose_with(file, path, ledger)
+    compose_variant(file, path, ledger, variant)
 }
 
 /// A scene-file error; names quoted from the file (which may hold a newline)
@@ -536,6 +557,9 @@ struct ModelParts {
     named_ranges: Vec<(String, Range<usize>)>,
     lab_camera: Option<SceneCamera>,
     warnings: Vec<String>,
+    /// A glTF model's material variants, and the one shown.
+    variants: Vec<String>,
+    variant: Option<String>,
 }
 
 /// Loads one model in its own frame.
@@ -545,7 +569,23 @@ fn load_model(
     m: &ModelSection,
     index: usize,
     ledger: &crate::memory::Ledger,
+    variant: &super::gltf::VariantChoice,
 ) -> Result<ModelParts, super::LoadError> {
+    let is_gltf = m.file.as_ref().is_some_and(|f| {
+        f.extension()
+            .and_then(|e| e.to_str())
+            .is_some_and(|e| e.eq_ignore_ascii_case("gltf") || e.eq_ignore_ascii_case("glb"))
+    });
+    if m.variant.is_some() && !is_gltf {
+        return Err(invalid(
+            path,
+            format!(
+                "[[model]] {}: variant picks a glTF model's material variant; this model is not glTF",
+                index + 1
+            ),
+        )
+        .into());
+    }
     match (&m.file, &m.builtin) {
         (Some(_), Some(_)) | (None, None) => Err(invalid(
             path,
@@ -596,6 +636,8 @@ fn load_model(
                 named_ranges,
                 lab_camera: Some(lab_camera),
                 warnings: Vec::new(),
+                variants: Vec::new(),
+                variant: None,
             };
             let turn = Affine3A::from_rotation_z(std::f32::consts::PI);
             model.parts.transform(turn);
@@ -613,12 +655,14 @@ fn load_model(
                 .map(str::to_ascii_lowercase);
             match ext.as_deref() {
                 Some("gltf" | "glb") => {
-                    let g = super::gltf::load_gltf_with(&file, ledger)?;
+                    let g = super::gltf::load_gltf_variant(&file, ledger, variant)?;
                     Ok(ModelParts {
                         parts: g.parts,
                         named_ranges: Vec::new(),
                         lab_camera: None,
                         warnings: g.warnings,
+                        variants: g.variants,
+                        variant: g.variant,
                     })
                 }
                 Some("obj") => {
@@ -628,6 +672,8 @@ fn load_model(
                         named_ranges: obj.named_parts,
                         lab_camera: None,
                         warnings: obj.warnings,
+                        variants: Vec::new(),
+                        variant: None,
                     })
                 }
                 _ => Err(invalid(
@@ -711,6 +757,18 @@ pub fn compose_with(
     path: &Path,
     ledger: &crate::memory::Ledger,
 ) -> Result<Shot, super::LoadError> {
+    compose_variant(file, path, ledger, None)
+}
+
+/// [`compose_with`] with the command line's `--variant` (see
+/// [`load_shot_variant`]).
+pub fn compose_variant(
+    file: ShotFile,
+    path: &Path,
+    ledger: &crate::memory::Ledger,
+    variant: Option<&str>,
+) -> Result<Shot, super::LoadError> {
+    use super::gltf::VariantChoice;
     let base = path.parent().unwrap_or(Path::new("")).to_path_buf();
     let settings = settings(path, &file.render)?;
     let mut defined = BTreeMap::new();
@@ -736,6 +794,8 @@ pub fn compose_with(
         ..SceneParts::default()
     };
     let mut warnings = Vec::new();
+    let mut variants: Vec<String> = Vec::new();
+    let mut shown_variant = false;
     let mut box_camera = None;
     // Per model: its name and the range of its cameras in `all.cameras`.
     let mut model_cameras: Vec<(String, std::ops::Range<usize>)> = Vec::new();
@@ -749,8 +809,21 @@ pub fn compose_with(
                 _ => format!("model {}", index + 1),
             });
         let what = format!("[[model]] '{name}'");
-        let mut model = load_model(path, &base, m, index, ledger)?;
+        // The command line's variant wins over the model's own (option
+        // merging as for [render]); it applies to the models that have it.
+        let choice = match (variant, &m.variant) {
+            (Some(v), _) => VariantChoice::IfDefined(v.to_string()),
+            (None, Some(v)) => VariantChoice::Named(v.clone()),
+            (None, None) => VariantChoice::Default,
+        };
+        let mut model = load_model(path, &base, m, index, ledger, &choice)?;
         warnings.append(&mut model.warnings);
+        for v in model.variants.drain(..) {
+            if !variants.contains(&v) {
+                variants.push(v);
+            }
+        }
+        shown_variant |= model.variant.is_some();
         // Overrides: "*" for the whole model, a part name, else every material
         // of that name.
         for (target, spec) in &m.materials {
@@ -1014,6 +1087,19 @@ pub fn compose_with(
             check(path, "[environment] rotate", &[r], false)?;
         }
     }
+    if let Some(v) = variant
+        && !shown_variant
+    {
+        let names = match variants.is_empty() {
+            true => "the models have no material variants".to_string(),
+            false => format!("variants: {}", variants.join(", ")),
+        };
+        return Err(invalid(
+            path,
+            format!("--variant '{v}': no model has a material variant of that name ({names})"),
+        )
+        .into());
+    }
     Ok(Shot {
         parts: all,
         camera,
@@ -1022,6 +1108,8 @@ pub fn compose_with(
         settings,
         has_lights,
         warnings,
+        variants,
+        variant: variant.map(str::to_string),
     })
 }
 

@@ -1,7 +1,10 @@
 //! Surface materials: what the scene's material table holds. A material is
-//! either a fixed BSDF (the lab box's parts, OBJ colours) or the glTF 2.0
+//! either a fixed BSDF (the lab box's parts, OBJ colours), the glTF 2.0
 //! metallic–roughness material with its textures, which becomes a
-//! [`Material::Pbr`] at each hit once its textures are looked up.
+//! [`Material::Pbr`] at each hit once its textures are looked up (a
+//! `KHR_materials_pbrSpecularGlossiness` material too, converted there), or a
+//! `KHR_materials_unlit` material, which shows its base colour and scatters
+//! nothing.
 
 use glam::{Vec2, Vec3A, Vec4, Vec4Swizzles};
 
@@ -99,6 +102,79 @@ pub struct GltfMaterial {
     pub clearcoat_normal_texture: Option<TextureRef>,
     /// That normal map's `scale`.
     pub clearcoat_normal_scale: f32,
+    /// `KHR_materials_pbrSpecularGlossiness`: when present, it replaces the
+    /// metallic–roughness parameters (the diffuse colour is `base_color` and
+    /// `base_color_texture`), converted per hit by
+    /// [`SpecularGlossiness::bsdf`].
+    pub specular_glossiness: Option<SpecularGlossiness>,
+}
+
+/// The specular–glossiness parameters of `KHR_materials_pbrSpecularGlossiness`
+/// (its `diffuseFactor` and `diffuseTexture` are the material's base colour).
+///
+/// The extension defines the BRDF's inputs as `c_diff = diffuse ·
+/// (1 − max(specular.rgb))`, `F0 = specular` and `α = (1 − glossiness)²`, on
+/// the core specification's BRDF. raylab evaluates exactly those inputs with
+/// its metallic–roughness BSDF as `KHR_materials_specular` (which superseded
+/// the extension) expresses them: metallic 0, base colour `c_diff`, roughness
+/// `1 − glossiness`, and a specular colour that makes the dielectric's `F0`
+/// equal `specular` ([`SpecularGlossiness::bsdf`]). The one difference from
+/// the extension's reference BRDF is the diffuse lobe's Fresnel weight,
+/// `1 − max(F)` (as `KHR_materials_specular` has it) where the archived text
+/// has `1 − F` per channel: the same for grey speculars.
+///
+/// The conversion is done per hit on the filtered texels, so textures stay as
+/// decoded (no converted copy in memory) and nothing is allocated per ray.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SpecularGlossiness {
+    /// `specularFactor` (linear RGB, the reflectance at normal incidence).
+    pub specular: Vec3A,
+    /// `glossinessFactor` (1: smooth).
+    pub glossiness: f32,
+    /// `specularGlossinessTexture`: specular in RGB (sRGB), glossiness in A
+    /// (linear), multiplying the factors.
+    pub texture: Option<TextureRef>,
+}
+
+/// `F0` of raylab's dielectric of index `ior`, with the arithmetic
+/// [`crate::materials::PbrBsdf`] uses, so that a specular colour of
+/// `specular / dielectric_f0(ior)` gives `F0 = specular` to within a rounding.
+fn dielectric_f0(ior: f32) -> f32 {
+    let r = (ior - 1.0) / (ior + 1.0);
+    r * r
+}
+
+impl SpecularGlossiness {
+    /// The metallic–roughness BSDF with this material's specular–glossiness
+    /// inputs at a hit: `diffuse` is the diffuse colour there (factor ×
+    /// texture × `COLOR_0`), `texel` the specular–glossiness texel (`None`
+    /// without a texture). `transmission` passes `KHR_materials_transmission`
+    /// through.
+    pub fn bsdf(&self, diffuse: Vec3A, texel: Option<Vec4>, transmission: f32) -> PbrBsdf {
+        let (specular, glossiness) = match texel {
+            Some(t) => (self.specular * Vec3A::from(t.xyz()), self.glossiness * t.w),
+            None => (self.specular, self.glossiness),
+        };
+        let clamp01 = |x: f32| if x.is_nan() { 0.0 } else { x.clamp(0.0, 1.0) };
+        // (Finite: the factor is checked at load and texels are finite.)
+        let specular = specular.clamp(Vec3A::ZERO, Vec3A::ONE);
+        let roughness = 1.0 - clamp01(glossiness);
+        let ior = 1.5;
+        PbrBsdf {
+            base_color: (diffuse * (1.0 - specular.max_element())).clamp(Vec3A::ZERO, Vec3A::ONE),
+            metallic: 0.0,
+            alpha: PbrBsdf::alpha_from_roughness(roughness),
+            ior,
+            specular: 1.0,
+            // `F0 = min(dielectric_f0 · specular_color, 1)` in the BSDF.
+            specular_color: specular / dielectric_f0(ior),
+            transmission: clamp01(transmission),
+            thin_walled: true,
+            coat: 0.0,
+            coat_alpha: 1.0,
+            coat_normal: Vec3A::Z,
+        }
+    }
 }
 
 impl Default for GltfMaterial {
@@ -131,6 +207,7 @@ impl Default for GltfMaterial {
             clearcoat_roughness_texture: None,
             clearcoat_normal_texture: None,
             clearcoat_normal_scale: 1.0,
+            specular_glossiness: None,
         }
     }
 }
@@ -142,6 +219,16 @@ pub enum MaterialKind {
     Fixed(Material),
     /// The glTF material, evaluated per hit.
     Gltf(Box<GltfMaterial>),
+    /// `KHR_materials_unlit`: the surface shows its base colour (factor ×
+    /// texture × `COLOR_0`, with its alpha) as radiance, from either side,
+    /// and scatters no light: `path` adds it where a path reaches the surface
+    /// and ends the path there; `flat` shows it, and `direct` gives it the
+    /// value its display shows as that colour (see
+    /// [`crate::integrators::Integrator`]). It is not a light source: light
+    /// sampling never picks it. Only the base colour and alpha of the glTF
+    /// material are read (its other parameters are the fallback for viewers
+    /// without the extension).
+    Unlit(Box<GltfMaterial>),
 }
 
 /// One entry of a scene's material table.
@@ -193,7 +280,7 @@ impl SurfaceMaterial {
     pub fn normal_texture(&self) -> Option<(&TextureRef, f32)> {
         match &self.kind {
             MaterialKind::Gltf(g) => g.normal_texture.as_ref().map(|t| (t, g.normal_scale)),
-            MaterialKind::Fixed(_) => None,
+            MaterialKind::Fixed(_) | MaterialKind::Unlit(_) => None,
         }
     }
 
@@ -203,7 +290,7 @@ impl SurfaceMaterial {
     pub fn base_color(&self, attrs: &HitAttributes, textures: &TextureStore) -> Vec4 {
         match &self.kind {
             MaterialKind::Fixed(_) => self.reflectance.extend(1.0),
-            MaterialKind::Gltf(g) => {
+            MaterialKind::Gltf(g) | MaterialKind::Unlit(g) => {
                 let mut c = g.base_color * attrs.color;
                 if let Some(t) = &g.base_color_texture {
                     c *= lookup(t, attrs, textures, ColorSpace::Srgb);
@@ -226,14 +313,34 @@ impl SurfaceMaterial {
         }
     }
 
+    /// Whether the material is `KHR_materials_unlit` (shows its base colour,
+    /// scatters nothing).
+    #[inline(always)]
+    pub fn is_unlit(&self) -> bool {
+        matches!(self.kind, MaterialKind::Unlit(_))
+    }
+
     /// The BSDF at a hit. (The fixed materials inlined, the glTF one out of
-    /// line: as one call, the lab box's `path` spent 1.8 % more.)
+    /// line: as one call, the lab box's `path` spent 1.8 % more.) An unlit
+    /// material, which the integrators do not scatter off, answers a
+    /// Lambertian reflector of its base colour: what the denoiser's albedo
+    /// guide should see there.
     #[inline(always)]
     pub fn bsdf(&self, attrs: &HitAttributes, textures: &TextureStore) -> Material {
         match &self.kind {
             MaterialKind::Fixed(m) => *m,
             MaterialKind::Gltf(g) => self.gltf_bsdf(g, attrs, textures),
+            MaterialKind::Unlit(_) => Material::Diffuse {
+                reflectance: self.unlit_color(attrs, textures),
+            },
         }
+    }
+
+    /// What an unlit material shows at a hit: its base colour (RGB), clamped
+    /// to `[0, 1]` as the glTF material's is.
+    #[inline]
+    pub fn unlit_color(&self, attrs: &HitAttributes, textures: &TextureStore) -> Vec3A {
+        Vec3A::from(self.base_color(attrs, textures).xyz()).clamp(Vec3A::ZERO, Vec3A::ONE)
     }
 
     /// [`SurfaceMaterial::bsdf`] of a glTF material: textures looked up.
@@ -245,6 +352,18 @@ impl SurfaceMaterial {
         textures: &TextureStore,
     ) -> Material {
         let base = Vec3A::from(self.base_color(attrs, textures).xyz());
+        let mut transmission = g.transmission;
+        if let Some(t) = &g.transmission_texture {
+            transmission *= lookup(t, attrs, textures, ColorSpace::Linear).x;
+        }
+        if let Some(sg) = &g.specular_glossiness {
+            // Specular in sRGB, glossiness in the (always linear) alpha.
+            let texel = sg
+                .texture
+                .as_ref()
+                .map(|t| lookup(t, attrs, textures, ColorSpace::Srgb));
+            return Material::Pbr(sg.bsdf(base, texel, transmission));
+        }
         let (mut metallic, mut roughness) = (g.metallic, g.roughness);
         if let Some(t) = &g.metallic_roughness_texture {
             let mr = lookup(t, attrs, textures, ColorSpace::Linear);
@@ -265,10 +384,6 @@ impl SurfaceMaterial {
         if let Some(t) = &g.specular_color_texture {
             specular_color *= Vec3A::from(lookup(t, attrs, textures, ColorSpace::Srgb).xyz());
         }
-        let mut transmission = g.transmission;
-        if let Some(t) = &g.transmission_texture {
-            transmission *= lookup(t, attrs, textures, ColorSpace::Linear).x;
-        }
         let clamp01 = |x: f32| if x.is_nan() { 0.0 } else { x.clamp(0.0, 1.0) };
         let roughness = clamp01(roughness);
         let (mut coat, mut coat_roughness) = (g.clearcoat, g.clearcoat_roughness);
@@ -284,7 +399,7 @@ impl SurfaceMaterial {
         Material::Pbr(PbrBsdf {
             base_color: base.clamp(Vec3A::ZERO, Vec3A::ONE),
             metallic: clamp01(metallic),
-            alpha: (roughness * roughness).max(1e-4),
+            alpha: PbrBsdf::alpha_from_roughness(roughness),
             ior: g.ior,
             specular: clamp01(specular),
             specular_color: specular_color.max(Vec3A::ZERO),
@@ -379,10 +494,11 @@ pub fn lookup(
 /// Every texture a material refers to.
 pub fn texture_refs(m: &SurfaceMaterial) -> impl Iterator<Item = &TextureRef> {
     let gltf = match &m.kind {
-        MaterialKind::Gltf(g) => Some(g.as_ref()),
+        MaterialKind::Gltf(g) | MaterialKind::Unlit(g) => Some(g.as_ref()),
         MaterialKind::Fixed(_) => None,
     };
     let textures = gltf.into_iter().flat_map(|g| {
+        let specular_glossiness = g.specular_glossiness.as_ref().map(|s| &s.texture);
         [
             &g.base_color_texture,
             &g.metallic_roughness_texture,
@@ -397,6 +513,8 @@ pub fn texture_refs(m: &SurfaceMaterial) -> impl Iterator<Item = &TextureRef> {
             &g.clearcoat_roughness_texture,
             &g.clearcoat_normal_texture,
         ]
+        .into_iter()
+        .chain(specular_glossiness)
     });
     textures.chain([&m.emission_texture]).flatten()
 }
@@ -405,10 +523,11 @@ pub fn texture_refs(m: &SurfaceMaterial) -> impl Iterator<Item = &TextureRef> {
 /// material's images move to another store).
 pub fn texture_refs_mut(m: &mut SurfaceMaterial) -> impl Iterator<Item = &mut TextureRef> {
     let gltf = match &mut m.kind {
-        MaterialKind::Gltf(g) => Some(g.as_mut()),
+        MaterialKind::Gltf(g) | MaterialKind::Unlit(g) => Some(g.as_mut()),
         MaterialKind::Fixed(_) => None,
     };
     let textures = gltf.into_iter().flat_map(|g| {
+        let specular_glossiness = g.specular_glossiness.as_mut().map(|s| &mut s.texture);
         [
             &mut g.base_color_texture,
             &mut g.metallic_roughness_texture,
@@ -423,6 +542,8 @@ pub fn texture_refs_mut(m: &mut SurfaceMaterial) -> impl Iterator<Item = &mut Te
             &mut g.clearcoat_roughness_texture,
             &mut g.clearcoat_normal_texture,
         ]
+        .into_iter()
+        .chain(specular_glossiness)
     });
     textures.chain([&mut m.emission_texture]).flatten()
 }

@@ -189,6 +189,9 @@ pub struct Scene {
     lights: Vec<Light>,
     area_lights: AreaLights,
     has_alpha: bool,
+    /// Whether any material is `KHR_materials_unlit` (the lab's integrators
+    /// test their hits' materials only then).
+    has_unlit: bool,
     environment: Environment,
     selection: LightSelection,
     /// The lights other than the key light, for choosing one.
@@ -369,6 +372,7 @@ impl Scene {
             }
         }
         let has_alpha = parts.materials.iter().any(|m| m.alpha != AlphaMode::Opaque);
+        let has_unlit = parts.materials.iter().any(SurfaceMaterial::is_unlit);
         let bounds = parts
             .triangles
             .par_iter()
@@ -398,6 +402,7 @@ impl Scene {
             lights: Vec::new(),
             area_lights: AreaLights::default(),
             has_alpha,
+            has_unlit,
             environment: Environment::none(),
             selection: LightSelection::Tree,
             light_table: LightTable::default(),
@@ -592,6 +597,12 @@ impl Scene {
     /// The material table.
     pub fn materials(&self) -> &[SurfaceMaterial] {
         &self.materials
+    }
+
+    /// Whether any material is `KHR_materials_unlit`.
+    #[inline]
+    pub fn has_unlit(&self) -> bool {
+        self.has_unlit
     }
 
     /// The images the materials use.

@@ -4,6 +4,8 @@
 
 use std::path::{Path, PathBuf};
 
+use glam::Vec3A;
+use raylab::load::{LoadOptions, Loaded};
 use serde_json::{Value, json};
 
 /// glTF component types.
@@ -228,6 +230,36 @@ impl Gltf {
         out.extend_from_slice(&bin);
         out
     }
+}
+
+/// A quad primitive over `corners` (counter-clockwise seen from the front),
+/// indexed as two triangles (0, 1, 2) and (0, 2, 3), with extra attributes.
+pub fn quad(g: &mut Gltf, corners: [[f32; 3]; 4], extra: &[(&str, usize)]) -> Value {
+    let pos = g.floats(&corners);
+    let idx = g.indices(U16, &[0, 1, 2, 0, 2, 3]);
+    let mut attributes = json!({ "POSITION": pos });
+    for (name, acc) in extra {
+        attributes[*name] = json!(acc);
+    }
+    json!({ "attributes": attributes, "indices": idx })
+}
+
+/// Loads a file as `raylab render` would, the error as its message.
+pub fn load_with(path: &Path, options: &LoadOptions) -> Result<Loaded, String> {
+    raylab::load::load(path.to_str().unwrap(), options).map_err(|e| e.to_string())
+}
+
+/// Loads a file that must load.
+pub fn load(path: &Path) -> Loaded {
+    load_with(path, &LoadOptions::default()).unwrap_or_else(|e| panic!("{e}"))
+}
+
+#[track_caller]
+pub fn assert_near(got: Vec3A, want: Vec3A, tol: f32, what: &str) {
+    assert!(
+        (got - want).abs().max_element() <= tol,
+        "{what}: got {got}, want {want} (tolerance {tol})"
+    );
 }
 
 /// Writes `value` as `dir/name`.

@@ -55,7 +55,7 @@ impl Integrator {
         // Unlit lanes borrow a lit lane's ray so that the packet can still share
         // the triangle test's axis order; their answers are not used.
         let Some(first) = lit.iter().position(|&l| l) else {
-            return rho.map(|r| r * scene.ambient);
+            return unlit_surfaces(scene, &hits, &rho, rho.map(|r| r * scene.ambient));
         };
         for lane in 0..N {
             if !lit[lane] {
@@ -63,15 +63,49 @@ impl Integrator {
             }
         }
         let blocked = occluded(&shadow, t_max, lit);
-        std::array::from_fn(|lane| {
+        let out = std::array::from_fn(|lane| {
             let d = if lit[lane] && !blocked[lane] {
                 irradiance[lane]
             } else {
                 Vec3A::ZERO
             };
             rho[lane] * (d + scene.ambient)
-        })
+        });
+        unlit_surfaces(scene, &hits, &rho, out)
     }
+}
+
+/// `direct`'s value of a `KHR_materials_unlit` surface: `π` times its base
+/// colour, the value that `direct`'s display (which divides by `π` in glTF
+/// scenes, see `crate::job::display`) shows as that colour, and equal to what
+/// `path` shows there in any kind of scene.
+#[inline]
+pub(in crate::integrators) fn unlit_value(rho: Vec3A) -> Vec3A {
+    rho * PI
+}
+
+/// `out` with the lanes whose hit is on a `KHR_materials_unlit` surface (not
+/// to be confused with the lanes the light does not reach) replaced by
+/// [`unlit_value`] of their base colour `rho` (a no-op, one test, in scenes
+/// without unlit materials). Their shadow rays were traced for nothing, which
+/// keeps the lit lanes' packet as it is.
+#[inline(always)]
+fn unlit_surfaces<const N: usize>(
+    scene: &Scene,
+    hits: &[Option<Hit>; N],
+    rho: &[Vec3A; N],
+    mut out: [Vec3A; N],
+) -> [Vec3A; N] {
+    if scene.has_unlit() {
+        for ((o, hit), r) in out.iter_mut().zip(hits).zip(rho) {
+            if let Some(h) = hit
+                && scene.material(h.prim).is_unlit()
+            {
+                *o = unlit_value(*r);
+            }
+        }
+    }
+    out
 }
 
 /// The lab's `D`: irradiance from the point light at a hit, zero when the light is

@@ -344,6 +344,19 @@ pub fn radiance_traced(
             tracer.event(depth, beta, PathEvent::Emission { le, weight });
             l += beta * le * weight;
         }
+        // An unlit surface (`KHR_materials_unlit`) shows its base colour and
+        // scatters nothing. Light sampling never picks it (it is not in the
+        // light table), so however the path reached it, it counts in full,
+        // with no MIS weight, and the path ends.
+        if material.is_unlit() {
+            if depth == 0 {
+                observe(&surface, &material.bsdf(&surface.attrs, textures));
+            }
+            let le = material.unlit_color(&surface.attrs, textures);
+            tracer.event(depth, beta, PathEvent::Emission { le, weight: 1.0 });
+            l += beta * le;
+            break;
+        }
         // Mitsuba's convention: a path of `max_depth` segments ends here.
         if depth + 1 >= options.max_depth {
             break;

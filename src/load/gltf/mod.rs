@@ -23,23 +23,29 @@ use accessor::{Buffers, read_floats, read_indices};
 use crate::camera::{Lens, SceneCamera};
 use crate::geometry::triangle::Triangle;
 use crate::lights::Light;
-use crate::materials::surface::{AlphaMode, GltfMaterial, MaterialKind, SurfaceMaterial};
+use crate::materials::surface::{
+    AlphaMode, GltfMaterial, MaterialKind, SpecularGlossiness, SurfaceMaterial,
+};
 use crate::memory::{GEOMETRY_BYTES_PER_TRIANGLE, Ledger, Needs};
 use crate::scene::mesh::{Instance, MeshData, Tangents};
 use crate::scene::{NO_INSTANCE, PointLight, SceneParts};
 use crate::textures::{TextureError, TextureRef, TextureStore, TextureTransform, Wrap};
 
 /// Extensions raylab reads; a file that requires any other is refused.
-pub const SUPPORTED_EXTENSIONS: [&str; 9] = [
+pub const SUPPORTED_EXTENSIONS: [&str; 13] = [
     "KHR_lights_punctual",
     "KHR_materials_clearcoat",
     "KHR_materials_emissive_strength",
     "KHR_materials_ior",
+    "KHR_materials_pbrSpecularGlossiness",
     "KHR_materials_specular",
     "KHR_materials_transmission",
+    "KHR_materials_unlit",
+    "KHR_materials_variants",
     "KHR_materials_volume",
     "KHR_texture_transform",
     "KHR_mesh_quantization",
+    "EXT_mesh_gpu_instancing",
 ];
 
 /// The clear coat extension's name.
@@ -92,6 +98,21 @@ impl GltfError {
     }
 }
 
+/// Which `KHR_materials_variants` variant a file is loaded with.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub enum VariantChoice {
+    /// The primitives' own materials.
+    #[default]
+    Default,
+    /// The variant of this name; a file without it is refused, with the
+    /// names it has.
+    Named(String),
+    /// The variant of this name if the file has one, else the primitives' own
+    /// materials (a scene file's `--variant`, which applies to the models
+    /// that have it).
+    IfDefined(String),
+}
+
 /// What [`load_gltf`] returns: the scene's parts and what to tell the user.
 #[derive(Debug)]
 pub struct GltfScene {
@@ -99,6 +120,11 @@ pub struct GltfScene {
     pub parts: SceneParts,
     /// Whether the file had any punctual light.
     pub has_punctual_lights: bool,
+    /// The names of the file's material variants (`KHR_materials_variants`),
+    /// in the file's order.
+    pub variants: Vec<String>,
+    /// The variant shown, if any.
+    pub variant: Option<String>,
     /// Things worth telling that do not stop the load (skipped primitives,
     /// ignored extensions), each once.
     pub warnings: Vec<String>,
@@ -112,8 +138,19 @@ pub fn load_gltf(path: &Path) -> Result<GltfScene, GltfError> {
 /// [`load_gltf`], charging the decoded textures to `ledger` before decoding
 /// them.
 pub fn load_gltf_with(path: &Path, ledger: &Ledger) -> Result<GltfScene, GltfError> {
+    load_gltf_variant(path, ledger, &VariantChoice::Default)
+}
+
+/// [`load_gltf_with`] showing a material variant (`KHR_materials_variants`):
+/// each primitive whose mappings name the variant gets that mapping's
+/// material.
+pub fn load_gltf_variant(
+    path: &Path,
+    ledger: &Ledger,
+    variant: &VariantChoice,
+) -> Result<GltfScene, GltfError> {
     let name = path.display().to_string();
-    load_gltf_inner(path, ledger).map_err(|e| match e {
+    load_gltf_inner(path, ledger, variant).map_err(|e| match e {
         GltfError::Invalid(m) => GltfError::Invalid(format!("{name}: {m}")),
         io => io,
     })
@@ -191,7 +228,11 @@ fn split_glb(bytes: &[u8]) -> Result<(&[u8], Option<&[u8]>), GltfError> {
     Ok((json, bin))
 }
 
-fn load_gltf_inner(path: &Path, ledger: &Ledger) -> Result<GltfScene, GltfError> {
+fn load_gltf_inner(
+    path: &Path,
+    ledger: &Ledger,
+    variant: &VariantChoice,
+) -> Result<GltfScene, GltfError> {
     let mut held = 0;
     let bytes = read_file(path, ledger, &mut held)?;
     let (json_bytes, glb_bin) = if bytes.starts_with(b"glTF") {
@@ -220,6 +261,33 @@ fn load_gltf_inner(path: &Path, ledger: &Ledger) -> Result<GltfScene, GltfError>
     {
         warnings.push(format!("{}: ignoring the extension {ext}", path.display()));
     }
+    let variants: Vec<String> = root
+        .extensions
+        .as_ref()
+        .and_then(|e| e.khr_materials_variants.as_ref())
+        .map(|v| {
+            v.variants
+                .iter()
+                .map(|v| crate::guard::one_line(&v.name).into_owned())
+                .collect()
+        })
+        .unwrap_or_default();
+    let shown = match variant {
+        VariantChoice::Default => None,
+        VariantChoice::Named(name) | VariantChoice::IfDefined(name) => {
+            match variants.iter().position(|v| v == name) {
+                Some(k) => Some(k),
+                None if matches!(variant, VariantChoice::IfDefined(_)) => None,
+                None => {
+                    return Err(GltfError::invalid(format!(
+                        "has no material variant '{}' ({})",
+                        crate::guard::one_line(name),
+                        variant_list(&variants)
+                    )));
+                }
+            }
+        }
+    };
     let base = path.parent().unwrap_or(Path::new("."));
     let buffer_data = load_buffers(&root, base, glb_bin, ledger, &mut held)?;
     let buffers = Buffers {
@@ -243,9 +311,24 @@ fn load_gltf_inner(path: &Path, ledger: &Ledger) -> Result<GltfScene, GltfError>
         warned: HashSet::new(),
         warnings,
         point_lights: Vec::new(),
+        variant: shown,
+        variant_count: variants.len(),
     };
     loader.walk_scene()?;
-    loader.finish()
+    let mut scene = loader.finish()?;
+    scene.variant = shown.map(|k| variants[k].clone());
+    scene.variants = variants;
+    Ok(scene)
+}
+
+/// The variants a file has, for a message: "variants: a, b, c" or "the file
+/// has no material variants".
+pub fn variant_list(variants: &[String]) -> String {
+    if variants.is_empty() {
+        "the file has no material variants".into()
+    } else {
+        format!("variants: {}", variants.join(", "))
+    }
 }
 
 /// Reads every buffer: the GLB's binary chunk, a data URI or a file beside the
@@ -389,6 +472,10 @@ struct Loader<'a> {
     warnings: Vec<String>,
     /// Point lights in node order; the first becomes the key light.
     point_lights: Vec<(Vec3A, Vec3A)>,
+    /// The index of the `KHR_materials_variants` variant shown, if any.
+    variant: Option<usize>,
+    /// How many variants the file defines (mappings must name one of them).
+    variant_count: usize,
 }
 
 impl Loader<'_> {
@@ -461,7 +548,14 @@ impl Loader<'_> {
                 self.light(light.light.value(), &world)?;
             }
             if let Some(mesh) = node.mesh {
-                self.mesh_instance(mesh.value(), &world)?;
+                match node
+                    .extensions
+                    .as_ref()
+                    .and_then(|e| e.others.get("EXT_mesh_gpu_instancing"))
+                {
+                    Some(ext) => self.gpu_instances(index, ext, mesh.value(), &world)?,
+                    None => self.mesh_instance(mesh.value(), &world)?,
+                }
             }
             for child in node.children.iter().flatten().rev() {
                 stack.push((child.value(), world, depth + 1));
@@ -585,6 +679,130 @@ impl Loader<'_> {
                     cos_inner: inner.cos(),
                     cos_outer: outer.cos(),
                 })
+            }
+        }
+        Ok(())
+    }
+
+    /// `EXT_mesh_gpu_instancing` on node `node`: one instance of the node's
+    /// mesh per element of its TRANSLATION, ROTATION and SCALE accessors, each
+    /// at `world` × the element's T·R·S, sharing the mesh as node instances
+    /// do. The node's mesh is drawn only through them.
+    fn gpu_instances(
+        &mut self,
+        node: usize,
+        ext: &serde_json::Value,
+        mesh: usize,
+        world: &Mat4,
+    ) -> Result<(), GltfError> {
+        let what = format!("node {node} EXT_mesh_gpu_instancing");
+        let attributes = ext
+            .get("attributes")
+            .and_then(|a| a.as_object())
+            .ok_or_else(|| GltfError::invalid(format!("{what}: no attributes object")))?;
+        let index_of = |name: &str| -> Result<Option<usize>, GltfError> {
+            let Some(v) = attributes.get(name) else {
+                return Ok(None);
+            };
+            // An integer, also when written as one with a fraction of zero.
+            match v.as_u64().or_else(|| {
+                v.as_f64()
+                    .filter(|f| f.fract() == 0.0 && *f >= 0.0 && *f < u32::MAX as f64)
+                    .map(|f| f as u64)
+            }) {
+                Some(i) => Ok(Some(i as usize)),
+                None => Err(GltfError::invalid(format!(
+                    "{what}: {name} is not an accessor index"
+                ))),
+            }
+        };
+        let (t, r, s) = (
+            index_of("TRANSLATION")?,
+            index_of("ROTATION")?,
+            index_of("SCALE")?,
+        );
+        let counts: Vec<(&str, u64)> = [("TRANSLATION", t), ("ROTATION", r), ("SCALE", s)]
+            .into_iter()
+            .filter_map(|(name, a)| a.map(|a| (name, a)))
+            .map(|(name, a)| {
+                self.root
+                    .accessors
+                    .get(a)
+                    .map(|acc| (name, acc.count.0))
+                    .ok_or_else(|| {
+                        GltfError::invalid(format!("{what}: {name} accessor {a} does not exist"))
+                    })
+            })
+            .collect::<Result<_, _>>()?;
+        let Some(&(_, count)) = counts.first() else {
+            return Err(GltfError::invalid(format!(
+                "{what}: none of TRANSLATION, ROTATION and SCALE is given"
+            )));
+        };
+        if let Some((name, n)) = counts.iter().find(|(_, n)| *n != count) {
+            return Err(GltfError::invalid(format!(
+                "{what}: {name} has {n} elements but {} has {count}",
+                counts[0].0
+            )));
+        }
+        if let Some(a) = r {
+            // read_floats::<4> would take a VEC3 as a colour without alpha.
+            let n = valid(&self.root.accessors[a].type_).map(|&t| accessor::type_components(t));
+            if n != Some(4) {
+                return Err(GltfError::invalid(format!(
+                    "{what}: ROTATION accessor {a} is not VEC4"
+                )));
+            }
+        }
+        // Each array is checked against the bytes behind it before it is
+        // allocated (read_floats), so `count` is backed by the file.
+        let read3 = |a: Option<usize>, name: &str| -> Result<Option<Vec<[f32; 3]>>, GltfError> {
+            a.map(|a| read_floats::<3>(self.buffers, a, &format!("{what} {name}")))
+                .transpose()
+        };
+        let translations = read3(t, "TRANSLATION")?;
+        let scales = read3(s, "SCALE")?;
+        let rotations = r
+            .map(|a| read_floats::<4>(self.buffers, a, &format!("{what} ROTATION")))
+            .transpose()?;
+        let count = count as usize;
+        for k in 0..count {
+            let t = translations
+                .as_ref()
+                .map_or(Vec3::ZERO, |v| Vec3::from(v[k]));
+            let s = scales.as_ref().map_or(Vec3::ONE, |v| Vec3::from(v[k]));
+            let q = rotations
+                .as_ref()
+                .map_or(Quat::IDENTITY, |v| Quat::from_array(v[k]));
+            if !(t.is_finite() && s.is_finite() && q.is_finite()) {
+                return Err(GltfError::invalid(format!(
+                    "{what}: instance {k}'s transform is not finite"
+                )));
+            }
+            // As a node's rotation: normalized, the identity if zero.
+            let q = if q.length_squared() > 0.0 {
+                q.normalize()
+            } else {
+                Quat::IDENTITY
+            };
+            let before = self.parts.triangles.len();
+            let local = Mat4::from_scale_rotation_translation(s, q, t);
+            self.mesh_instance(mesh, &(*world * local))?;
+            let per = self.parts.triangles.len() - before;
+            if k == 0 {
+                // The first instance read the mesh: the whole count is checked
+                // against the ceiling before any more are made (each is also
+                // charged to the memory budget as it is made).
+                let total = (before as u64).saturating_add(per as u64 * count as u64);
+                if total > MAX_TRIANGLES {
+                    return Err(GltfError::invalid(format!(
+                        "{what}: {count} instances of {per} triangles make more than {MAX_TRIANGLES} triangles"
+                    )));
+                }
+                if per == 0 {
+                    // Nothing to place (a mesh of points or lines).
+                    break;
+                }
             }
         }
         Ok(())
@@ -746,7 +964,7 @@ impl Loader<'_> {
                 .map(|i| [indices[i + 1], indices[i + 2], indices[0]])
                 .collect(),
         };
-        data.material = self.material(prim.material.map(|m| m.value()))?;
+        data.material = self.material(self.primitive_material(prim, &what)?)?;
         let material = &self.parts.materials[data.material as usize];
         if let Some((normal_map, _)) = material.normal_texture() {
             let set = normal_map.tex_coord as usize;
@@ -765,6 +983,42 @@ impl Loader<'_> {
         self.parts.meshes.push(data);
         self.mesh_ids.insert((m, p), id);
         Ok(Some(id))
+    }
+
+    /// The glTF material a primitive shows: its own, or the one its
+    /// `KHR_materials_variants` mappings give the variant shown.
+    fn primitive_material(
+        &self,
+        prim: &json::mesh::Primitive,
+        what: &str,
+    ) -> Result<Option<usize>, GltfError> {
+        let own = prim.material.map(|m| m.value());
+        let Some(mappings) = prim
+            .extensions
+            .as_ref()
+            .and_then(|e| e.khr_materials_variants.as_ref())
+        else {
+            return Ok(own);
+        };
+        let mut shown = own;
+        for mapping in &mappings.mappings {
+            if let Some(&v) = mapping
+                .variants
+                .iter()
+                .find(|&&v| v as usize >= self.variant_count)
+            {
+                return Err(GltfError::invalid(format!(
+                    "{what}: a KHR_materials_variants mapping names variant {v}, but the file defines {}",
+                    self.variant_count
+                )));
+            }
+            if let Some(k) = self.variant
+                && mapping.variants.contains(&(k as u32))
+            {
+                shown = Some(mapping.material as usize);
+            }
+        }
+        Ok(shown)
     }
 
     /// The table index of glTF material `index` (None: the default material).
@@ -814,14 +1068,64 @@ impl Loader<'_> {
                 Err(GltfError::invalid(format!("{what}: {name} is not finite")))
             }
         };
-        let mut g = GltfMaterial {
-            base_color: Vec4::from(pbr.base_color_factor.0).clamp(Vec4::ZERO, Vec4::ONE),
-            base_color_texture: self.texture(pbr.base_color_texture.as_ref(), &what)?,
-            metallic: finite(pbr.metallic_factor.0, "metallicFactor")?.clamp(0.0, 1.0),
-            roughness: finite(pbr.roughness_factor.0, "roughnessFactor")?.clamp(0.0, 1.0),
-            metallic_roughness_texture: self
-                .texture(pbr.metallic_roughness_texture.as_ref(), &what)?,
-            ..GltfMaterial::default()
+        let alpha = match valid(&m.alpha_mode) {
+            Some(Mode::Opaque) | None => AlphaMode::Opaque,
+            Some(Mode::Mask) => AlphaMode::Mask(m.alpha_cutoff.map_or(0.5, |c| c.0)),
+            Some(Mode::Blend) => AlphaMode::Blend,
+        };
+        if ext.is_some_and(|e| e.unlit.is_some()) {
+            // KHR_materials_unlit: the base colour and alpha only; the rest is
+            // the fallback for viewers without the extension, and its textures
+            // are not decoded. (With another shading model's extension the
+            // result is undefined; unlit wins.)
+            let g = GltfMaterial {
+                base_color: Vec4::from(pbr.base_color_factor.0).clamp(Vec4::ZERO, Vec4::ONE),
+                base_color_texture: self.texture(pbr.base_color_texture.as_ref(), &what)?,
+                ..GltfMaterial::default()
+            };
+            return Ok(SurfaceMaterial {
+                name: m.name.clone().unwrap_or_default(),
+                reflectance: Vec3A::from(g.base_color.truncate()),
+                kind: MaterialKind::Unlit(Box::new(g)),
+                emission: Vec3A::ZERO,
+                emission_texture: None,
+                emits_both_sides: m.double_sided,
+                alpha,
+            });
+        }
+        let spec_gloss = ext.and_then(|e| e.pbr_specular_glossiness.as_ref());
+        let mut g = match spec_gloss {
+            // The specular–glossiness parameters replace the metallic–roughness
+            // ones, whose textures are then not decoded.
+            Some(sg) => {
+                let specular = Vec3A::from(sg.specular_factor.0);
+                if !specular.is_finite() {
+                    return Err(GltfError::invalid(format!(
+                        "{what}: specularFactor is not finite"
+                    )));
+                }
+                GltfMaterial {
+                    base_color: Vec4::from(sg.diffuse_factor.0).clamp(Vec4::ZERO, Vec4::ONE),
+                    base_color_texture: self.texture(sg.diffuse_texture.as_ref(), &what)?,
+                    metallic: 0.0,
+                    specular_glossiness: Some(SpecularGlossiness {
+                        specular: specular.clamp(Vec3A::ZERO, Vec3A::ONE),
+                        glossiness: finite(sg.glossiness_factor.0, "glossinessFactor")?
+                            .clamp(0.0, 1.0),
+                        texture: self.texture(sg.specular_glossiness_texture.as_ref(), &what)?,
+                    }),
+                    ..GltfMaterial::default()
+                }
+            }
+            None => GltfMaterial {
+                base_color: Vec4::from(pbr.base_color_factor.0).clamp(Vec4::ZERO, Vec4::ONE),
+                base_color_texture: self.texture(pbr.base_color_texture.as_ref(), &what)?,
+                metallic: finite(pbr.metallic_factor.0, "metallicFactor")?.clamp(0.0, 1.0),
+                roughness: finite(pbr.roughness_factor.0, "roughnessFactor")?.clamp(0.0, 1.0),
+                metallic_roughness_texture: self
+                    .texture(pbr.metallic_roughness_texture.as_ref(), &what)?,
+                ..GltfMaterial::default()
+            },
         };
         if let Some(n) = &m.normal_texture {
             g.normal_texture = self.normal_texture(n, &what)?;
@@ -869,11 +1173,6 @@ impl Loader<'_> {
             )));
         }
         let emission_texture = self.texture(m.emissive_texture.as_ref(), &what)?;
-        let alpha = match valid(&m.alpha_mode) {
-            Some(Mode::Opaque) | None => AlphaMode::Opaque,
-            Some(Mode::Mask) => AlphaMode::Mask(m.alpha_cutoff.map_or(0.5, |c| c.0)),
-            Some(Mode::Blend) => AlphaMode::Blend,
-        };
         Ok(SurfaceMaterial {
             name: m.name.clone().unwrap_or_default(),
             reflectance: Vec3A::from(g.base_color.truncate()),
@@ -1096,6 +1395,8 @@ impl Loader<'_> {
         Ok(GltfScene {
             parts: self.parts,
             has_punctual_lights,
+            variants: Vec::new(),
+            variant: None,
             warnings: self.warnings,
         })
     }

@@ -1023,7 +1023,7 @@ mod tests {
     fn gltf(m: &SurfaceMaterial) -> &GltfMaterial {
         match &m.kind {
             MaterialKind::Gltf(g) => g,
-            MaterialKind::Fixed(_) => panic!("a fixed material"),
+            _ => panic!("not a metallic–roughness material"),
         }
     }
 
