@@ -1778,6 +1778,16 @@ fn a_clear_coat_takes_its_own_normal_and_its_factors() {
         "{:?}",
         loaded.warnings
     );
+    // Emission under the coat is dimmed by 1 − w F_c(|dir·n_c|) (square 0's
+    // coat normal is +z): head-on, and at 60°.
+    let fresnel = |cos: f32| 0.04 + 0.96 * (1.0 - cos).powi(5);
+    for (dir, cos) in [
+        (Vec3A::Z, 1.0f32),
+        (Vec3A::new(0.75f32.sqrt(), 0.0, 0.5), 0.5),
+    ] {
+        let dim = scene.coat_dimming(0, 0.3, 0.3, dir * 2.0);
+        assert!((dim - (1.0 - 0.8 * fresnel(cos))).abs() < 1e-6, "{dim}");
+    }
     // Not finite (as f32): refused with the material named.
     g.materials[0]["extensions"]["KHR_materials_clearcoat"]["clearcoatFactor"] = json!(1e39);
     let err = load_err(&g.write(dir.path(), "clearcoat-inf.gltf"));

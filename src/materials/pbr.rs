@@ -149,6 +149,12 @@ pub struct PbrBsdf {
 /// The clear coat's `F0`: an index of 1.5, `((1.5 − 1)/(1.5 + 1))²`.
 pub const COAT_F0: f32 = 0.04;
 
+/// The clear coat's Fresnel term `F_c` at `cos = |wo·n_c|`.
+#[inline]
+pub fn coat_fresnel(cos: f32) -> f32 {
+    schlick_grey(COAT_F0, cos)
+}
+
 impl Default for PbrBsdf {
     /// glTF's default material: white, fully metallic, roughness 1.
     fn default() -> PbrBsdf {

@@ -438,6 +438,34 @@ impl SurfaceMaterial {
         }
     }
 
+    /// The share of emitted light that leaves through a clear coat towards
+    /// the unit direction `dir`: `1 − w F_c(|dir·n_c|)`, as
+    /// `KHR_materials_clearcoat` dims emission (1 without a coat).
+    #[inline]
+    pub fn coat_dimming(
+        &self,
+        attrs: &HitAttributes,
+        textures: &TextureStore,
+        n_c: Vec3A,
+        dir: Vec3A,
+    ) -> f32 {
+        let MaterialKind::Gltf(g) = &self.kind else {
+            return 1.0;
+        };
+        // (Finite and in [0, 1]: checked at load.)
+        if g.clearcoat <= 0.0 {
+            return 1.0;
+        }
+        let mut w = g.clearcoat;
+        if let Some(t) = &g.clearcoat_texture {
+            w *= lookup(t, attrs, textures, ColorSpace::Linear).x;
+        }
+        let w = if w.is_nan() { 0.0 } else { w.clamp(0.0, 1.0) };
+        let cos = dir.dot(n_c).abs().min(1.0);
+        let dim = 1.0 - w * crate::materials::pbr::coat_fresnel(cos);
+        if dim.is_finite() { dim } else { 1.0 }
+    }
+
     /// Whether the material has a clear coat (`KHR_materials_clearcoat`).
     #[inline]
     pub fn has_coat(&self) -> bool {

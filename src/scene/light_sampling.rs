@@ -295,7 +295,9 @@ impl Scene {
                 let probability = pmf * probability;
                 match light {
                     TreeLight::Punctual(i) => self.punctual_sample(i, p, probability),
-                    TreeLight::Triangle(prim) => Some(self.triangle_sample(prim, u, probability)),
+                    TreeLight::Triangle(prim) => {
+                        Some(self.triangle_sample(prim, u, probability, p))
+                    }
                 }
             }
             TopLevel::Environment => self.environment_sample(p, u, probability),
@@ -349,9 +351,10 @@ impl Scene {
     }
 
     /// A point on emitting triangle `prim`, uniform by area with `u`, chosen
-    /// with `probability`.
+    /// with `probability`, for the shading point `p` (towards which a clear
+    /// coat dims it).
     #[inline]
-    fn triangle_sample(&self, prim: u32, u: Vec2, probability: f32) -> LightSample {
+    fn triangle_sample(&self, prim: u32, u: Vec2, probability: f32, p: Vec3A) -> LightSample {
         let v = &self.triangles[prim as usize].v;
         let (b1, b2) = uniform_barycentrics(u);
         let position = (1.0 - b1 - b2) * v[0] + b1 * v[1] + b2 * v[2];
@@ -359,7 +362,8 @@ impl Scene {
         LightSample::Area {
             position,
             normal: self.normals[prim as usize],
-            radiance: self.emission_at(prim, b1, b2),
+            radiance: self.emission_at(prim, b1, b2)
+                * self.coat_dimming(prim, b1, b2, p - position),
             two_sided: self.material(prim).emits_both_sides,
             pdf_area: probability / area,
         }
@@ -466,7 +470,7 @@ impl Scene {
                 self.punctual_sample(i, p, probability)
             }
             LightRef::Environment => self.environment_sample(p, u, probability),
-            LightRef::Triangle(prim) => Some(self.triangle_sample(prim, u, probability)),
+            LightRef::Triangle(prim) => Some(self.triangle_sample(prim, u, probability, p)),
         }
     }
 

@@ -688,6 +688,24 @@ impl Scene {
         m.emitted(&self.attributes(&hit), &self.textures)
     }
 
+    /// The share of triangle `prim`'s emission at barycentrics `(b1, b2)`
+    /// that a clear coat lets out along `towards` (any length): see
+    /// [`SurfaceMaterial::coat_dimming`]; 1 without a coat.
+    #[inline]
+    pub fn coat_dimming(&self, prim: u32, b1: f32, b2: f32, towards: Vec3A) -> f32 {
+        let m = self.material(prim);
+        if !m.has_coat() {
+            return 1.0;
+        }
+        let s = self.surface(&Hit {
+            t: 0.0,
+            prim,
+            b1,
+            b2,
+        });
+        m.coat_dimming(&s.attrs, &self.textures, s.nc, towards.normalize_or_zero())
+    }
+
     /// Makes triangle `prim` an area light emitting radiance `le` from its front
     /// side (zero turns it off), and updates the light tables.
     pub fn set_emission(&mut self, prim: usize, le: Vec3A) -> Result<(), SceneError> {

@@ -333,7 +333,10 @@ pub fn radiance_traced(
 
         // Emission from the front side of an area light (or either side).
         if material.is_emissive() && (cos_out > 0.0 || material.emits_both_sides) {
-            let le = material.emitted(&surface.attrs, textures);
+            let mut le = material.emitted(&surface.attrs, textures);
+            if material.has_coat() {
+                le *= material.coat_dimming(&surface.attrs, textures, surface.nc, ray.dir);
+            }
             let weight = if specular {
                 1.0
             } else {
