@@ -560,6 +560,10 @@ def image_seeds(shared):
         b = io.BytesIO()
         im.convert("CMYK").save(b, "JPEG")
         put("jpeg", stem + "-cmyk.jpg", b.getvalue())
+        for mode, lossless in (("RGB", False), ("RGBA", True), ("RGB", True)):
+            b = io.BytesIO()
+            im.convert(mode).save(b, "WEBP", lossless=lossless, quality=70)
+            put("webp", "%s-%s-%s.webp" % (stem, mode, "lossless" if lossless else "lossy"), b.getvalue())
         b = io.BytesIO()
         im.convert("RGBA").save(b, "PNG")
         put("png", stem + "-rgba.png", b.getvalue())

@@ -194,7 +194,10 @@ const CASES: &[(&str, &str)] = &[
         "gltf-image-65536-png-header.gltf",
         "65536×65536 texels is too large",
     ),
-    ("gltf-image-not-an-image.gltf", "not a PNG or JPEG image"),
+    (
+        "gltf-image-not-an-image.gltf",
+        "not a PNG, JPEG or WebP image",
+    ),
     // GLB
     ("glb-header-truncated.glb", "GLB header is truncated"),
     ("glb-version-1.glb", "GLB version 1, expected 2"),
@@ -313,7 +316,7 @@ const CASES: &[(&str, &str)] = &[
         "jpg-65535-square-header.jpg",
         "65535×65535 texels is too large",
     ),
-    ("jpg-not-jpeg.jpg", "not a PNG or JPEG image"),
+    ("jpg-not-jpeg.jpg", "not a PNG, JPEG or WebP image"),
     // Ray files (raylab bench --rays)
     ("rays-empty.rays", "holds no rays"),
     (

@@ -1796,3 +1796,53 @@ fn a_clear_coat_takes_its_own_normal_and_its_factors() {
         "{err}"
     );
 }
+
+/// `EXT_texture_webp`: a texture's WebP image (its extension's `source`) is
+/// used in place of its core PNG fallback.
+#[test]
+fn a_webp_texture_replaces_its_png_fallback() {
+    use image::ImageEncoder;
+    let dir = tempfile::tempdir().unwrap();
+    let mut g = Gltf::new();
+    let (fallback, webp_texel) = ([255u8, 0, 0], [0u8, 200, 40]);
+    let texture = g.png_texture(&png(1, 1, 3, &fallback), None);
+    let mut webp = Vec::new();
+    image::codecs::webp::WebPEncoder::new_lossless(&mut webp)
+        .write_image(&webp_texel, 1, 1, image::ExtendedColorType::Rgb8)
+        .unwrap();
+    g.images
+        .push(json!({ "uri": format!("data:image/webp;base64,{}", builder::base64(&webp)) }));
+    g.textures[texture]["extensions"] =
+        json!({ "EXT_texture_webp": { "source": g.images.len() - 1 } });
+    g.extensions_used.push("EXT_texture_webp".into());
+    g.material(json!({
+        "pbrMetallicRoughness": { "baseColorTexture": { "index": texture } }
+    }));
+    let uv = g.floats(&[[0.5f32, 0.5]; 4]);
+    let corners = [
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [1.0, 1.0, 0.0],
+        [0.0, 1.0, 0.0],
+    ];
+    let mut p = quad(&mut g, corners, &[("TEXCOORD_0", uv)]);
+    p["material"] = json!(0);
+    let mesh = g.mesh(vec![p]);
+    g.root(json!({ "mesh": mesh }));
+    let loaded = load(&g.write(dir.path(), "webp.gltf"));
+    let hit = loaded
+        .scene
+        .intersect(&Ray::new(Vec3A::new(0.3, 0.3, 1.0), -Vec3A::Z), 2.0)
+        .expect("the ray hits the square");
+    // sRGB 200 and 40, linear.
+    let srgb = |c: u8| {
+        let c = f32::from(c) / 255.0;
+        if c <= 0.04045 {
+            c / 12.92
+        } else {
+            ((c + 0.055) / 1.055).powf(2.4)
+        }
+    };
+    let want = Vec3A::new(0.0, srgb(webp_texel[1]), srgb(webp_texel[2]));
+    assert_near(loaded.scene.base_color(&hit), want, 1e-4, "the WebP texel");
+}

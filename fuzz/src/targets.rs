@@ -85,6 +85,11 @@ pub fn jpeg(data: &[u8]) {
     texture(data, "jpg");
 }
 
+/// A WebP texture (`EXT_texture_webp`'s images, and any texture file).
+pub fn webp(data: &[u8]) {
+    texture(data, "webp");
+}
+
 /// A `raylab bench --rays` file, read as the bench reads it and cast at a
 /// small mesh by every query kind, each answer compared with brute force.
 pub fn rays(data: &[u8]) {

@@ -1,5 +1,5 @@
-//! PNG and JPEG decoding into [`Image`]s, with the size checked before any
-//! texel is allocated.
+//! PNG, JPEG and WebP decoding into [`Image`]s, with the size checked before
+//! any texel is allocated.
 
 use std::io::Cursor;
 
@@ -11,6 +11,20 @@ use super::{Image, MAX_SIDE, MAX_TEXELS, TextureError};
 const PNG_SIGNATURE: &[u8] = b"\x89PNG\r\n\x1a\n";
 /// A JPEG file's start-of-image marker and the first byte of the next marker.
 const JPEG_SIGNATURE: &[u8] = &[0xFF, 0xD8, 0xFF];
+
+/// The format of an image file, by its signature: PNG, JPEG, or WebP (a RIFF
+/// container of form type `WEBP`); `None` for anything else.
+fn format_of(bytes: &[u8]) -> Option<ImageFormat> {
+    if bytes.starts_with(PNG_SIGNATURE) {
+        Some(ImageFormat::Png)
+    } else if bytes.starts_with(JPEG_SIGNATURE) {
+        Some(ImageFormat::Jpeg)
+    } else if bytes.len() >= 12 && &bytes[..4] == b"RIFF" && &bytes[8..12] == b"WEBP" {
+        Some(ImageFormat::WebP)
+    } else {
+        None
+    }
+}
 
 /// Most decoded bytes per byte of file: PNG's deflate expands at most 1032
 /// times and a 1-bit palette image with transparency decodes to 32 bits a
@@ -67,14 +81,14 @@ fn bad_palette(bytes: &[u8]) -> Option<u32> {
 }
 
 impl Image {
-    /// Decodes a PNG or JPEG image, telling them apart by their signatures (not
+    /// Decodes a PNG, JPEG or WebP image, telling them apart by their signatures (not
     /// by a file name); `name` (a file name, a glTF image index…) only labels
     /// errors.
     ///
     /// PNGs of 8 or 16 bits per channel keep their depth; smaller depths and
     /// palettes are expanded to 8 bits (grey, grey + alpha, RGB or RGBA as the
     /// file says, a palette with transparency to RGBA). JPEGs decode to 8-bit
-    /// grey or RGB. Colour-space information in the file (ICC profiles, gamma
+    /// grey or RGB, WebPs (lossy or lossless) to 8-bit RGB or RGBA. Colour-space information in the file (ICC profiles, gamma
     /// chunks) is ignored, as glTF requires: the material slot that uses the
     /// image decides ([`ColorSpace`](super::ColorSpace)); so is EXIF orientation.
     ///
@@ -113,11 +127,7 @@ impl Image {
     }
 
     fn decode_unguarded(bytes: &[u8], name: &str) -> Result<Image, TextureError> {
-        let format = if bytes.starts_with(PNG_SIGNATURE) {
-            ImageFormat::Png
-        } else if bytes.starts_with(JPEG_SIGNATURE) {
-            ImageFormat::Jpeg
-        } else {
+        let Some(format) = format_of(bytes) else {
             return Err(TextureError::UnknownFormat { name: name.into() });
         };
         let decode_error = |cause| TextureError::Decode {
@@ -158,7 +168,12 @@ impl Image {
         if u64::from(width) * u64::from(height) > MAX_TEXELS {
             return Err(too_large(width, height));
         }
-        if decoder.total_bytes() > (bytes.len() as u64).saturating_mul(MAX_EXPANSION) {
+        // (Not for WebP: its lossless coding spends no bits at all on the
+        // texels of a one-colour image, so any size may come from a few
+        // bytes; the limits above and the memory budget bound it.)
+        if format != ImageFormat::WebP
+            && decoder.total_bytes() > (bytes.len() as u64).saturating_mul(MAX_EXPANSION)
+        {
             return Err(TextureError::Truncated {
                 name: name.into(),
                 width,
@@ -174,13 +189,7 @@ impl Image {
     /// decoded); `None` if the header is unreadable or refused (decoding then
     /// says why).
     pub fn decoded_bytes(bytes: &[u8]) -> Option<u64> {
-        let format = if bytes.starts_with(PNG_SIGNATURE) {
-            ImageFormat::Png
-        } else if bytes.starts_with(JPEG_SIGNATURE) {
-            ImageFormat::Jpeg
-        } else {
-            return None;
-        };
+        let format = format_of(bytes)?;
         let mut reader = ImageReader::with_format(Cursor::new(bytes), format);
         reader.limits(limits());
         Some(reader.into_decoder().ok()?.total_bytes())

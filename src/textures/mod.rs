@@ -107,8 +107,10 @@ impl TextureRef {
 /// Why an image could not be decoded; the one-line message names the image.
 #[derive(Debug, Error)]
 pub enum TextureError {
-    /// The data is neither PNG nor JPEG.
-    #[error("{name}: not a PNG or JPEG image (the data starts with neither signature)")]
+    /// The data is neither PNG, JPEG nor WebP.
+    #[error(
+        "{name}: not a PNG, JPEG or WebP image (the data starts with none of their signatures)"
+    )]
     UnknownFormat {
         /// The image.
         name: String,

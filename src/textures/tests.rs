@@ -685,3 +685,41 @@ fn decode_all_keeps_order_and_reports_the_first_failure() {
 
     assert!(TextureStore::decode_all(Vec::new()).unwrap().is_empty());
 }
+
+/// WebP (`EXT_texture_webp`): a lossless RGBA image decodes texel for texel,
+/// told apart from PNG and JPEG by its RIFF signature; a cut file is an error
+/// naming it, not a panic.
+#[test]
+fn webp_lossless_round_trip() {
+    let (w, h) = (5u32, 3u32);
+    let rgba: Vec<u8> = (0..w * h)
+        .flat_map(|i| {
+            [
+                (i * 17) as u8,
+                (255 - i * 9) as u8,
+                (i * i) as u8,
+                (100 + i) as u8,
+            ]
+        })
+        .collect();
+    let mut webp = Vec::new();
+    image::codecs::webp::WebPEncoder::new_lossless(&mut webp)
+        .write_image(&rgba, w, h, image::ExtendedColorType::Rgba8)
+        .unwrap();
+    assert!(webp.starts_with(b"RIFF") && &webp[8..12] == b"WEBP");
+    let image = Image::decode(&webp, "texture.webp").unwrap();
+    assert_eq!((image.width(), image.height(), image.channels()), (w, h, 4));
+    for y in 0..h {
+        for x in 0..w {
+            let got = image.texel(x, y, ColorSpace::Linear) * 255.0;
+            let at = 4 * (y * w + x) as usize;
+            for k in 0..4 {
+                assert_eq!(got[k].round() as u8, rgba[at + k], "({x}, {y}) channel {k}");
+            }
+        }
+    }
+    assert_eq!(Image::decoded_bytes(&webp), Some(u64::from(w * h * 4)));
+    let cut = &webp[..webp.len() - 8];
+    let err = Image::decode(cut, "cut.webp").unwrap_err().to_string();
+    assert!(err.contains("cut.webp"), "{err}");
+}

@@ -32,7 +32,7 @@ use crate::scene::{NO_INSTANCE, PointLight, SceneParts};
 use crate::textures::{TextureError, TextureRef, TextureStore, TextureTransform, Wrap};
 
 /// Extensions raylab reads; a file that requires any other is refused.
-pub const SUPPORTED_EXTENSIONS: [&str; 13] = [
+pub const SUPPORTED_EXTENSIONS: [&str; 14] = [
     "KHR_lights_punctual",
     "KHR_materials_clearcoat",
     "KHR_materials_emissive_strength",
@@ -46,6 +46,7 @@ pub const SUPPORTED_EXTENSIONS: [&str; 13] = [
     "KHR_texture_transform",
     "KHR_mesh_quantization",
     "EXT_mesh_gpu_instancing",
+    "EXT_texture_webp",
 ];
 
 /// The clear coat extension's name.
@@ -1278,7 +1279,17 @@ impl Loader<'_> {
             wrap_s = wrap(&sampler.wrap_s);
             wrap_t = wrap(&sampler.wrap_t);
         }
-        let image = texture.source.value();
+        // `EXT_texture_webp`: its WebP image where the texture names one
+        // (raylab decodes WebP), else the core `source` (range-checked below).
+        let image = texture
+            .extensions
+            .as_ref()
+            .and_then(|e| e.others.get("EXT_texture_webp"))
+            .and_then(|w| w.get("source"))
+            .and_then(serde_json::Value::as_u64)
+            .map_or(texture.source.value(), |s| {
+                usize::try_from(s).unwrap_or(usize::MAX)
+            });
         if image >= self.root.images.len() {
             return Err(GltfError::invalid(format!(
                 "texture {t}: image {image} does not exist"

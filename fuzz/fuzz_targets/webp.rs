@@ -1,0 +1,5 @@
+//! A WebP texture.
+#![no_main]
+use libfuzzer_sys::fuzz_target;
+
+fuzz_target!(|data: &[u8]| raylab_fuzz::targets::webp(data));
