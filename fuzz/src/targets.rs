@@ -26,16 +26,32 @@ pub fn mtl(data: &[u8]) {
 }
 
 /// A glTF 2.0 JSON file `in.gltf` (it may refer to the fixtures `fixture.bin`
-/// and `fixture.png`, or carry `data:` URIs), loaded and rendered.
+/// and `fixture.png`, or carry `data:` URIs), loaded and rendered as written
+/// and posed by its first animation.
 pub fn gltf_json(data: &[u8]) {
     let path = put("in.gltf", data);
     load_and_render(&path, &LoadOptions::default());
+    load_and_render(&path, &posed());
 }
 
-/// A binary glTF container `in.glb`, loaded and rendered.
+/// A binary glTF container `in.glb`, loaded and rendered as written and
+/// posed by its first animation.
 pub fn glb(data: &[u8]) {
     let path = put("in.glb", data);
     load_and_render(&path, &LoadOptions::default());
+    load_and_render(&path, &posed());
+}
+
+/// The options of `--at 0.7`: a glTF file's first animation between
+/// keyframes (a file without animations is refused in one line).
+fn posed() -> LoadOptions {
+    LoadOptions {
+        animation: raylab::load::gltf::AnimationOptions {
+            animation: None,
+            time: Some(0.7),
+        },
+        ..LoadOptions::default()
+    }
 }
 
 /// A scene file `in.toml` (it may refer to the fixtures), its settings read

@@ -169,6 +169,8 @@ def valid_values(tmp_path):
         "max_memory": ("2G", {}),
         "cache": (tmp_path / "cache", {}),
         "denoise": (True, {}),
+        "at": (0.5, {"scene": ROOT / "scenes/animation/bend.gltf"}),
+        "animation": ("bend", {"scene": ROOT / "scenes/animation/bend.gltf"}),
         "output": (out, {}),
         "aov": (["depth"], {}),
         "spp": (2, {}),
@@ -182,6 +184,7 @@ def valid_values(tmp_path):
         "samples": ("0..1", {"spp": 2, "output": out}),
         "frames": ((0, 2), {"output": tmp_path / "f-%02d.png"}),
         "orbit": (10, {"frames": 1, "output": tmp_path / "o-%02d.png"}),
+        "fps": (12, {"frames": 1, "output": tmp_path / "a-%02d.png", "scene": ROOT / "scenes/animation/bend.gltf"}),
         "quiet": (True, {}),
     }
 

@@ -27,6 +27,7 @@
 //! [`Job::run_with`], which also carry the flag that stops a render between
 //! passes (`raylab render` sets it on Ctrl-C).
 
+pub mod animate;
 mod image;
 mod merge;
 pub mod options;
@@ -374,16 +375,36 @@ impl Job {
                 .push(images.render_image(&camera, output, None)?);
             return Ok(report);
         };
-        // An animation: each frame a render of its own, of the scene loaded once.
+        // An animation: each frame a render of its own, of the scene loaded
+        // once, or (a file with animations) loaded posed at the frame's time.
         let (low, high) = scene.bounds();
         let centre = 0.5 * (low + high);
+        let aov_channels = aovs.iter().map(|a| a.channels().len()).sum();
+        let fps = args.fps.unwrap_or(animate::DEFAULT_FPS);
         for frame in first..end {
             let path = farm::frame_path(output, frame).context("-o has no frame number field")?;
             let degrees = args
                 .orbit
                 .map_or(0.0, |d| (f64::from(d) * f64::from(frame)) % 360.0);
-            let camera = camera.orbited(centre, degrees as f32);
-            let image = images.render_image(&camera, &path, Some(frame))?;
+            let posed = if session.animations.is_empty() {
+                None
+            } else {
+                let time = animate::frame_time(frame, fps);
+                let posed = animate::posed_session(&args.scene, session, time, aov_channels, hooks);
+                Some(posed?)
+            };
+            let shown = posed.as_ref().unwrap_or(session);
+            let camera = shown
+                .view
+                .camera(shown.size.0, shown.size.1)
+                .orbited(centre, degrees as f32);
+            let image = image::Images {
+                session: shown,
+                denoiser: images.denoiser.as_deref_mut(),
+                kept: None,
+                ..images
+            }
+            .render_image(&camera, &path, Some(frame))?;
             let ended = image.ended;
             report.images.push(image);
             if ended == Ended::Stopped {

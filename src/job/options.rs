@@ -142,6 +142,9 @@ pub struct SceneOptions {
     /// camera rests (key N toggles it).
     #[arg(long, value_name = "BOOL", num_args = 0..=1, default_missing_value = "true", require_equals = true)]
     pub denoise: Option<bool>,
+    /// A glTF file's animation: `--at` and `--animation`.
+    #[command(flatten)]
+    pub animation: super::animate::AnimationArgs,
 }
 
 /// Everything a render job takes: the scene options and what `raylab render`
@@ -216,6 +219,10 @@ pub struct JobOptions {
     /// bounds (counter-clockwise seen from above).
     #[arg(long, value_name = "DEG", requires = "frames", allow_hyphen_values = true, value_parser = parse_finite)]
     pub orbit: Option<f32>,
+    /// Frames per second of an animated glTF file's --frames: frame F shows
+    /// the animation at F / FPS seconds [default: 24].
+    #[arg(long, value_name = "FPS", requires = "frames", value_parser = super::animate::parse_fps)]
+    pub fps: Option<f64>,
     /// No progress bar and no summary line.
     #[arg(short, long)]
     pub quiet: bool,
@@ -269,6 +276,11 @@ impl JobOptions {
                     "error: --samples {a}..{b} goes past --spp {spp} (the whole render's samples)"
                 ));
             }
+        }
+        if let (Some(at), Some((a, b))) = (self.scene.animation.at, self.frames) {
+            return Err(format!(
+                "error: --at {at} renders one moment; --frames {a}..{b} renders frame F at F / --fps seconds: give one of them"
+            ));
         }
         if let Some((a, _)) = self.frames {
             let pattern = self
@@ -413,6 +425,7 @@ impl SceneOptions {
                 rotation: self.env_rotate,
             },
             max_memory: self.memory_budget(),
+            animation: self.animation.load_options(),
         }
     }
 

@@ -30,6 +30,9 @@ pub struct Session {
     pub loaded_with: SceneOptions,
     /// The memory the scene needs (without a film).
     pub needs: crate::memory::Needs,
+    /// The names of a glTF file's animations (empty for other scenes): the
+    /// job poses each frame of such a file at its time.
+    pub animations: Vec<String>,
 }
 
 impl Session {
@@ -128,6 +131,7 @@ pub fn load_session(
         hooks.say(&format!("warning: {}", crate::guard::one_line(w)));
     }
     let kind = loaded.kind;
+    let animations = loaded.animations.clone();
     if !quiet && kind != SceneKind::Lab {
         let s = &loaded.summary;
         let mib = |b: usize| b as f64 / (1024.0 * 1024.0);
@@ -177,6 +181,7 @@ pub fn load_session(
         initial: loaded.view,
         loaded_with: args.clone(),
         needs: loaded.summary.needs,
+        animations,
     })
 }
 

@@ -27,7 +27,7 @@ use crate::lights::environment::{EnvError, Environment};
 use crate::memory::{GEOMETRY_BYTES_PER_TRIANGLE, Ledger, MemoryBudget, MemoryError, Needs};
 use crate::scene::{PointLight, Scene, SceneError};
 use cornell::MaterialChoice;
-use gltf::{GltfError, VariantChoice, load_gltf_variant};
+use gltf::{AnimationOptions, GltfError, VariantChoice, load_gltf_posed};
 use obj::{ObjError, load_obj, load_obj_scene_with};
 use shot::{ShotCamera, ShotError, ShotSettings, load_shot_variant};
 use transform::Transform;
@@ -87,6 +87,9 @@ pub struct LoadOptions {
     /// file without it is refused; in a scene file, the models that have it
     /// show it (at least one must).
     pub variant: Option<String>,
+    /// A glTF file's animation and the moment to pose it at (default: the
+    /// file as written).
+    pub animation: AnimationOptions,
 }
 
 /// Where an environment's radiance comes from.
@@ -249,6 +252,8 @@ pub struct Loaded {
     /// A scene file's render settings (empty for other scenes): what the
     /// command line leaves out is taken from here.
     pub settings: ShotSettings,
+    /// The names of a glTF file's animations (empty for other scenes).
+    pub animations: Vec<String>,
 }
 
 /// Why a scene cannot be loaded; the message names the file.
@@ -356,6 +361,11 @@ pub fn load(name: &str, options: &LoadOptions) -> Result<Loaded, LoadError> {
             crate::guard::one_line(v)
         )));
     }
+    if kind != SceneKind::Gltf && options.animation.is_given() {
+        return Err(LoadError::Usage(format!(
+            "--at and --animation pose a glTF file's animation; {name} is not a glTF file"
+        )));
+    }
     if kind != SceneKind::Lab && !options.materials.is_empty() {
         return Err(LoadError::Usage(format!(
             "--material names parts of the built-in box, not of {name}"
@@ -365,6 +375,7 @@ pub fn load(name: &str, options: &LoadOptions) -> Result<Loaded, LoadError> {
     let mut default_light = false;
     let mut settings = ShotSettings::default();
     let (mut variants, mut variant) = (Vec::new(), None);
+    let mut animations = Vec::new();
     // The environment first: a scene lit by one gets no default lighting.
     let ledger = Ledger::new(options.max_memory);
     let env_start = Instant::now();
@@ -468,9 +479,10 @@ pub fn load(name: &str, options: &LoadOptions) -> Result<Loaded, LoadError> {
                 Some(v) => VariantChoice::Named(v.clone()),
                 None => VariantChoice::Default,
             };
-            let loaded = load_gltf_variant(Path::new(name), &ledger, &choice)?;
+            let loaded = load_gltf_posed(Path::new(name), &ledger, &choice, &options.animation)?;
             warnings.extend(loaded.warnings);
             (variants, variant) = (loaded.variants, loaded.variant);
+            animations = loaded.animations;
             let mut parts = loaded.parts;
             parts.ambient = Vec3A::splat(options.ambient.unwrap_or(MESH_AMBIENT));
             let cameras = parts.cameras.len();
@@ -595,6 +607,7 @@ pub fn load(name: &str, options: &LoadOptions) -> Result<Loaded, LoadError> {
         warnings,
         default_light,
         settings,
+        animations,
     })
 }
 

@@ -9,6 +9,8 @@
 //! unchecked number.
 
 pub mod accessor;
+pub mod animation;
+pub(crate) mod skin;
 pub(crate) mod tangents;
 
 use std::collections::{HashMap, HashSet};
@@ -19,6 +21,8 @@ use gltf::json::{self, validation::Checked};
 use thiserror::Error;
 
 use accessor::{Buffers, read_floats, read_indices};
+use animation::Pose;
+pub use animation::{AnimationChoice, AnimationOptions, AnimationSummary};
 
 use crate::camera::{Lens, SceneCamera};
 use crate::geometry::triangle::Triangle;
@@ -129,6 +133,9 @@ pub struct GltfScene {
     /// Things worth telling that do not stop the load (skipped primitives,
     /// ignored extensions), each once.
     pub warnings: Vec<String>,
+    /// The names of the file's animations, in file order (empty strings for
+    /// unnamed ones).
+    pub animations: Vec<String>,
 }
 
 /// Reads a glTF or GLB file. Errors carry the file's name.
@@ -150,8 +157,19 @@ pub fn load_gltf_variant(
     ledger: &Ledger,
     variant: &VariantChoice,
 ) -> Result<GltfScene, GltfError> {
+    load_gltf_posed(path, ledger, variant, &AnimationOptions::default())
+}
+
+/// [`load_gltf_variant`], posed by one of the file's animations at a time
+/// (see [`animation`]); the default options pose nothing.
+pub fn load_gltf_posed(
+    path: &Path,
+    ledger: &Ledger,
+    variant: &VariantChoice,
+    animation: &AnimationOptions,
+) -> Result<GltfScene, GltfError> {
     let name = path.display().to_string();
-    load_gltf_inner(path, ledger, variant).map_err(|e| match e {
+    load_gltf_inner(path, ledger, variant, animation).map_err(|e| match e {
         GltfError::Invalid(m) => GltfError::Invalid(format!("{name}: {m}")),
         io => io,
     })
@@ -233,6 +251,7 @@ fn load_gltf_inner(
     path: &Path,
     ledger: &Ledger,
     variant: &VariantChoice,
+    animation: &AnimationOptions,
 ) -> Result<GltfScene, GltfError> {
     let mut held = 0;
     let bytes = read_file(path, ledger, &mut held)?;
@@ -295,6 +314,7 @@ fn load_gltf_inner(
         root: &root,
         data: &buffer_data,
     };
+    let pose = animation::pose(&root, &buffers, animation, &mut warnings)?;
     let mut loader = Loader {
         root: &root,
         buffers: &buffers,
@@ -314,6 +334,8 @@ fn load_gltf_inner(
         point_lights: Vec::new(),
         variant: shown,
         variant_count: variants.len(),
+        pose,
+        globals: None,
     };
     loader.walk_scene()?;
     let mut scene = loader.finish()?;
@@ -477,6 +499,10 @@ struct Loader<'a> {
     variant: Option<usize>,
     /// How many variants the file defines (mappings must name one of them).
     variant_count: usize,
+    /// The animation's pose, if the file is posed.
+    pose: Option<Pose>,
+    /// Every node's global transform (posed), made for the first skin.
+    globals: Option<Vec<Option<Mat4>>>,
 }
 
 impl Loader<'_> {
@@ -537,7 +563,7 @@ impl Loader<'_> {
                     "the node tree is deeper than {MAX_NODE_DEPTH} levels"
                 )));
             }
-            let world = parent * local_transform(node, index)?;
+            let world = parent * local_transform(node, index, self.pose.as_ref())?;
             if let Some(cam) = node.camera {
                 self.camera(cam.value(), &world)?;
             }
@@ -555,7 +581,7 @@ impl Loader<'_> {
                     .and_then(|e| e.others.get("EXT_mesh_gpu_instancing"))
                 {
                     Some(ext) => self.gpu_instances(index, ext, mesh.value(), &world)?,
-                    None => self.mesh_instance(mesh.value(), &world)?,
+                    None => self.mesh_instance(index, mesh.value(), &world)?,
                 }
             }
             for child in node.children.iter().flatten().rev() {
@@ -788,7 +814,7 @@ impl Loader<'_> {
             };
             let before = self.parts.triangles.len();
             let local = Mat4::from_scale_rotation_translation(s, q, t);
-            self.mesh_instance(mesh, &(*world * local))?;
+            self.mesh_instance(node, mesh, &(*world * local))?;
             let per = self.parts.triangles.len() - before;
             if k == 0 {
                 // The first instance read the mesh: the whole count is checked
@@ -809,7 +835,25 @@ impl Loader<'_> {
         Ok(())
     }
 
-    fn mesh_instance(&mut self, mesh_index: usize, world: &Mat4) -> Result<(), GltfError> {
+    /// Skin `s`'s joint matrices at the pose (the nodes' global transforms
+    /// are made once, for the first skin).
+    fn joint_matrices(&mut self, s: usize) -> Result<Vec<Mat4>, GltfError> {
+        let (root, pose) = (self.root, self.pose.as_ref());
+        let globals = match self.globals.take() {
+            Some(g) => g,
+            None => skin::node_globals(root, |i| local_transform(&root.nodes[i], i, pose))?,
+        };
+        let joints = skin::joint_matrices(root, self.buffers, s, &globals);
+        self.globals = Some(globals);
+        joints
+    }
+
+    fn mesh_instance(
+        &mut self,
+        node: usize,
+        mesh_index: usize,
+        world: &Mat4,
+    ) -> Result<(), GltfError> {
         let mesh = self
             .root
             .meshes
@@ -821,10 +865,29 @@ impl Loader<'_> {
                 "mesh {mesh_index}'s node transform is not finite"
             )));
         }
+        let posed_weights = self.pose.as_ref().and_then(|p| p.weights.get(&node));
+        let weights = skin::morph_weights(self.root, node, mesh_index, posed_weights)?;
+        let joints = match self.root.nodes[node].skin {
+            Some(s) => Some(self.joint_matrices(s.value())?),
+            None => None,
+        };
+        let deformation = skin::Deformation {
+            joints: joints.as_deref(),
+            weights: &weights,
+            node_global: *world,
+        };
         for p in 0..mesh.primitives.len() {
-            let Some(id) = self.primitive(mesh_index, p)? else {
+            let Some(mut id) = self.primitive(mesh_index, p)? else {
                 continue;
             };
+            let mut to_world = to_world;
+            if deformation.applies_to(&mesh.primitives[p]) {
+                id = self.deformed(mesh_index, p, id, &deformation)?;
+                if deformation.skins(&mesh.primitives[p]) {
+                    // Skinned vertices are in world space already.
+                    to_world = Affine3A::IDENTITY;
+                }
+            }
             let data = &self.parts.meshes[id as usize];
             let first = self.parts.triangles.len();
             if (first + data.indices.len()) as u64 > MAX_TRIANGLES {
@@ -856,6 +919,31 @@ impl Loader<'_> {
             self.parts.instances.push(instance);
         }
         Ok(())
+    }
+
+    /// A copy of mesh data `id` (primitive `p` of mesh `m`) deformed by a
+    /// node's skin and morph weights, charged to the budget; its index.
+    fn deformed(
+        &mut self,
+        m: usize,
+        p: usize,
+        id: u32,
+        deformation: &skin::Deformation,
+    ) -> Result<u32, GltfError> {
+        let base = &self.parts.meshes[id as usize];
+        let tangent_set = self.parts.materials[base.material as usize]
+            .normal_texture()
+            .map_or(0, |(t, _)| (t.tex_coord as usize).min(1));
+        let data = skin::deform(self.buffers, m, p, base, deformation, tangent_set)?;
+        self.ledger.charge(
+            &self.name,
+            Needs {
+                geometry: data.memory_bytes() as u64,
+                ..Needs::default()
+            },
+        )?;
+        self.parts.meshes.push(data);
+        Ok(self.parts.meshes.len() as u32 - 1)
     }
 
     /// Reads primitive `p` of mesh `m` once (instances share it); `None` when
@@ -1409,6 +1497,9 @@ impl Loader<'_> {
             variants: Vec::new(),
             variant: None,
             warnings: self.warnings,
+            animations: (self.root.animations.iter())
+                .map(|a| a.name.clone().unwrap_or_default())
+                .collect(),
         })
     }
 }
@@ -1421,15 +1512,26 @@ pub(crate) fn valid<T>(c: &Checked<T>) -> Option<&T> {
     }
 }
 
-/// A node's local transform: its matrix, or T·R·S.
-fn local_transform(node: &json::Node, index: usize) -> Result<Mat4, GltfError> {
+/// A node's local transform: its matrix, or T·R·S (each of them the pose's
+/// if it animates them).
+fn local_transform(
+    node: &json::Node,
+    index: usize,
+    pose: Option<&Pose>,
+) -> Result<Mat4, GltfError> {
     let m = if let Some(m) = node.matrix {
         Mat4::from_cols_array(&m)
     } else {
-        let t = Vec3::from(node.translation.unwrap_or([0.0; 3]));
+        let t = pose
+            .and_then(|p| p.translation.get(&index).copied())
+            .unwrap_or_else(|| Vec3::from(node.translation.unwrap_or([0.0; 3])));
         let r = node.rotation.map_or([0.0, 0.0, 0.0, 1.0], |q| q.0);
-        let s = Vec3::from(node.scale.unwrap_or([1.0; 3]));
-        let q = Quat::from_array(r);
+        let s = pose
+            .and_then(|p| p.scale.get(&index).copied())
+            .unwrap_or_else(|| Vec3::from(node.scale.unwrap_or([1.0; 3])));
+        let q = pose
+            .and_then(|p| p.rotation.get(&index).copied())
+            .unwrap_or_else(|| Quat::from_array(r));
         let q = if q.length_squared() > 0.0 {
             q.normalize()
         } else {

@@ -1,0 +1,95 @@
+//! A glTF file's animation in a job: the options that pick an animation and
+//! a moment (`--at`, `--animation`, `--fps`) and the frames of an animated
+//! file, each loaded posed at its time (`frame / fps` seconds).
+
+use clap::Args;
+
+use super::options::SceneOptions;
+use super::{Hooks, Session, load_session};
+use crate::load::gltf::{AnimationChoice, AnimationOptions};
+
+/// Frames per second of `--frames` on an animated file without `--fps`.
+pub const DEFAULT_FPS: f64 = 24.0;
+
+/// Longest time `--at` takes, in seconds (a day).
+pub const MAX_AT: f32 = 86_400.0;
+
+/// Most frames per second `--fps` takes.
+pub const MAX_FPS: f64 = 10_000.0;
+
+/// The options that pose a glTF file's animation (part of
+/// [`SceneOptions`]).
+#[derive(Debug, Clone, Default, Args)]
+pub struct AnimationArgs {
+    /// glTF: render the animation (see --animation) at this moment, in
+    /// seconds; times outside its keyframes take the first or last pose
+    /// [default: the file's nodes as written, unanimated; with --frames,
+    /// frame / --fps].
+    #[arg(long, value_name = "SECONDS", allow_hyphen_values = true, value_parser = parse_at)]
+    pub at: Option<f32>,
+    /// glTF: which animation --at and --frames play, by index (from 0) or
+    /// name [default: the first].
+    #[arg(long, value_name = "N|NAME")]
+    pub animation: Option<AnimationChoice>,
+}
+
+impl AnimationArgs {
+    /// The loader's animation options.
+    pub fn load_options(&self) -> AnimationOptions {
+        AnimationOptions {
+            animation: self.animation.clone(),
+            time: self.at,
+        }
+    }
+}
+
+fn parse_at(s: &str) -> Result<f32, String> {
+    match s.trim().parse::<f32>() {
+        Ok(v) if (0.0..=MAX_AT).contains(&v) => Ok(v),
+        _ => Err(format!("expected a time in seconds from 0 to {MAX_AT}")),
+    }
+}
+
+/// `--fps`: a frame rate above 0 and at most [`MAX_FPS`].
+pub(super) fn parse_fps(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v > 0.0 && v <= MAX_FPS => Ok(v),
+        _ => Err(format!(
+            "expected frames per second above 0 and at most {MAX_FPS}"
+        )),
+    }
+}
+
+/// The time of `frame` at `fps` frames per second, in seconds.
+pub fn frame_time(frame: u32, fps: f64) -> f32 {
+    (f64::from(frame) / fps) as f32
+}
+
+/// The scene of `options` loaded posed at `time`, quietly (the first load
+/// of the job, `first`, said its summary and warnings). A file without
+/// cameras keeps `first`'s view (framed once), so that the camera stays put
+/// while the scene moves.
+pub(super) fn posed_session(
+    options: &SceneOptions,
+    first: &Session,
+    time: f32,
+    aov_channels: usize,
+    hooks: &Hooks<'_>,
+) -> anyhow::Result<Session> {
+    let at_time = SceneOptions {
+        animation: AnimationArgs {
+            at: Some(time),
+            ..options.animation.clone()
+        },
+        ..options.clone()
+    };
+    let quiet = Hooks {
+        on_event: &|_| {},
+        stop: hooks.stop,
+    };
+    let mut posed = load_session(&at_time, true, aov_channels, &quiet)?;
+    if posed.scene.cameras.is_empty() {
+        posed.view = first.view;
+    }
+    Ok(posed)
+}
