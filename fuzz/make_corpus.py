@@ -290,7 +290,18 @@ def extension_gltf(doc):
     return d
 
 
+def animation_seeds():
+    """The animation demo of docs/gltf.md (a skin, a morph target, every interpolation), as
+    .gltf and .glb."""
+    text = open(os.path.join(HERE, "..", "scenes", "animation", "bend.gltf")).read()
+    put("gltf_json", "animation-bend.gltf", text)
+    d = json.loads(text)
+    buf = base64.b64decode(d["buffers"][0].pop("uri").split(",", 1)[1])
+    put("glb", "animation-bend.glb", glb(d, buf))
+
+
 def gltf_seeds(shared):
+    animation_seeds()
     doc, buf = feature_gltf()
     put("gltf_json", "features.gltf", gltf_text(doc, buf))
     put("glb", "features.glb", glb(doc, buf))
