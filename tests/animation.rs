@@ -557,3 +557,51 @@ fn frames_of_an_animated_file_equal_renders_at_their_times_on_any_thread_count()
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("--at 1 renders one moment"), "{err}");
 }
+
+/// `path`'s JSON changed by `edit` and written as `name` beside it.
+fn edited(path: &Path, name: &str, edit: impl FnOnce(&mut Value)) -> PathBuf {
+    let mut root: Value = serde_json::from_slice(&std::fs::read(path).unwrap()).unwrap();
+    edit(&mut root);
+    write_json(path.parent().unwrap(), name, &root)
+}
+
+#[test]
+fn bad_skins_and_channels_are_refused_in_one_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let skinned = skinned_file(dir.path());
+    // The skin loses joint 1, which vertices 0 and 2 name.
+    let path = edited(&skinned, "one-joint.gltf", |r| {
+        r["skins"][0]["joints"] = json!([1]);
+    });
+    let err = load_at(&path, None, None).unwrap_err();
+    assert!(!err.contains('\n'), "{err}");
+    assert!(
+        err.contains("one-joint.gltf") && err.contains("names joint 1, but the skin has 1"),
+        "{err}"
+    );
+    // Fewer inverse bind matrices than joints.
+    let path = edited(&skinned, "short-ibm.gltf", |r| {
+        r["skins"][0]["joints"] = json!([1, 0, 1]);
+    });
+    let err = load_at(&path, None, None).unwrap_err();
+    assert!(err.contains("2 matrices for 3 joints"), "{err}");
+    // A channel on a node given by a matrix.
+    let trs = trs_file(dir.path());
+    let path = edited(&trs, "matrix.gltf", |r| {
+        r["nodes"][0]["matrix"] = json!([1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]);
+    });
+    let err = load_at(&path, Some("step"), Some(1.0)).unwrap_err();
+    assert!(err.contains("node 0 has a matrix"), "{err}");
+    // Too few output values for the keyframes.
+    let path = edited(&trs, "short-output.gltf", |r| {
+        let out = r["animations"][0]["samplers"][0]["output"]
+            .as_u64()
+            .unwrap() as usize;
+        r["accessors"][out]["count"] = json!(2);
+    });
+    let err = load_at(&path, Some("step"), Some(1.0)).unwrap_err();
+    assert!(
+        err.contains("6 values for 3 keyframes of 3 values (expected 9)"),
+        "{err}"
+    );
+}
