@@ -630,6 +630,7 @@ impl Loader<'_> {
             rotation: Mat3A::from_cols(right, down, forward),
             lens,
             aspect_ratio,
+            depth_of_field: crate::camera::DepthOfField::default(),
         });
         Ok(())
     }
