@@ -6,8 +6,18 @@
 //! the ray through image point `(px, py)` (pixel units, `(0, 0)` the top-left
 //! corner) has direction `R·(px − W/2, py − H/2, f)`; an orthographic camera's
 //! rays all go along `R·z` from `R·((px − W/2)·s, (py − H/2)·s, 0)`.
+//!
+//! A thin lens ([`ThinLens`]) in the plane `z = 0` of camera space, centred on
+//! the position, focuses at distance `F` along the view axis: the ray through
+//! image point `(px, py)` and lens point `l` starts at `l` and goes through
+//! the point that the pinhole ray through `(px, py)` reaches at depth `F`
+//! (for an orthographic camera, the lens is centred on the ray's own origin).
+//! A point at depth `z` then spreads over a disk of diameter
+//! `2R · f · |z − F| / (z · F)` pixels (`R` the lens radius, `f` the focal
+//! length in pixels), the thin-lens circle of confusion of an image plane at
+//! distance `f`, as pbrt's and Cycles' thin lenses give.
 
-use glam::{Mat3A, Vec3A, Vec4};
+use glam::{Mat3A, Vec2, Vec3A, Vec4};
 
 use crate::geometry::ray::Ray;
 #[cfg(target_arch = "x86_64")]
@@ -42,6 +52,132 @@ impl Lens {
     }
 }
 
+/// How far a thin lens opens.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Aperture {
+    /// The lens's radius in scene units (pbrt's `lensradius`); 0 is a pinhole.
+    Radius(f32),
+    /// The f-number `N`: the lens's diameter is the focal length over `N`,
+    /// with the focal length of a 36 mm sensor across the image's longer side
+    /// (Blender's default sensor, fitted as its `Auto` fit does) and scene
+    /// units taken as metres, so that `f/2.8` blurs as it does in Blender.
+    FNumber(f32),
+}
+
+/// Width of the sensor that [`Aperture::FNumber`] takes the focal length
+/// from, in millimetres, across the image's longer side.
+pub const SENSOR_MM: f32 = 36.0;
+
+/// Largest lens radius and focus distance accepted, in scene units: beyond
+/// it the focus point of a wide view's corner pixel could overflow f32.
+pub const MAX_LENS_LENGTH: f32 = 1e20;
+
+/// Whether `x` is a lens radius (`>= 0`) or, when `positive`, a focus
+/// distance or f-number (`> 0`), finite and at most [`MAX_LENS_LENGTH`].
+pub fn lens_length_is_valid(x: f32, positive: bool) -> bool {
+    x.is_finite() && x <= MAX_LENS_LENGTH && if positive { x > 0.0 } else { x >= 0.0 }
+}
+
+/// Most blades a polygonal aperture may have (more look round anyway).
+pub const MAX_BLADES: u32 = 64;
+
+/// Whether `n` blades make an aperture: 0 (round) or 3 to [`MAX_BLADES`].
+pub fn blades_are_valid(n: u32) -> bool {
+    n == 0 || (3..=MAX_BLADES).contains(&n)
+}
+
+/// Where a thin lens focuses.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Focus {
+    /// At this distance from the lens along the view axis, in scene units.
+    Distance(f32),
+    /// At the first hit of the pinhole ray through the centre of this pixel
+    /// (column, row from the top-left), its distance along the view axis.
+    Pixel([u32; 2]),
+}
+
+/// A thin lens as a scene file or the options describe it, each part
+/// optional; [`DepthOfField::or`] fills what one source leaves out from
+/// another.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct DepthOfField {
+    /// The opening; `None` (or a radius of 0) keeps the pinhole.
+    pub aperture: Option<Aperture>,
+    /// The focus; `None` focuses on the first hit at the image's centre.
+    pub focus: Option<Focus>,
+    /// Blades of a polygonal aperture (3 or more); `None` or 0: round.
+    pub blades: Option<u32>,
+}
+
+impl DepthOfField {
+    /// Each part of `self`, else of `other`.
+    pub fn or(self, other: DepthOfField) -> DepthOfField {
+        DepthOfField {
+            aperture: self.aperture.or(other.aperture),
+            focus: self.focus.or(other.focus),
+            blades: self.blades.or(other.blades),
+        }
+    }
+
+    /// Whether the lens is more than a pinhole.
+    pub fn is_open(&self) -> bool {
+        match self.aperture {
+            Some(Aperture::Radius(r)) => r > 0.0,
+            Some(Aperture::FNumber(_)) => true,
+            None => false,
+        }
+    }
+}
+
+/// A thin lens focused at a distance, before an image size is chosen (an
+/// f-number's radius depends on the focal length in pixels and the image's
+/// longer side).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FocusedLens {
+    /// The opening.
+    pub aperture: Aperture,
+    /// Distance of the focus plane along the view axis, in scene units.
+    pub focus_distance: f32,
+    /// Blades of a polygonal aperture; below 3: round.
+    pub blades: u32,
+}
+
+/// A camera's thin lens, in scene units.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ThinLens {
+    /// The lens's radius (to a polygon's corners), above 0.
+    pub radius: f32,
+    /// Distance of the focus plane along the view axis, above 0.
+    pub focus_distance: f32,
+    /// Blades of a polygonal aperture; below 3: round.
+    pub blades: u32,
+}
+
+impl ThinLens {
+    /// The point of the lens for `u ∈ [0, 1)²`, in the lens plane (x right,
+    /// y down), uniform over its area: the concentric map onto the disk, or
+    /// for `n` blades a fan of `n` triangles from the centre to the polygon's
+    /// corners (the first corner straight up), `u.x` choosing the triangle.
+    #[inline]
+    pub fn point(&self, u: Vec2) -> Vec2 {
+        if self.blades < 3 {
+            return self.radius * crate::materials::concentric_disk(u);
+        }
+        let n = self.blades as f32;
+        let scaled = u.x * n;
+        let side = scaled.floor().min(n - 1.0);
+        let along = scaled - side;
+        let corner = |k: f32| {
+            let (sin, cos) = (std::f32::consts::TAU * k / n).sin_cos();
+            Vec2::new(sin, -cos)
+        };
+        let (a, b) = (corner(side), corner(side + 1.0));
+        // A uniform point of the triangle (centre, a, b): the square root
+        // spreads it evenly from the centre out.
+        self.radius * u.y.sqrt() * (a + along * (b - a))
+    }
+}
+
 /// A camera as a scene file describes it, before an image size is chosen.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SceneCamera {
@@ -55,6 +191,8 @@ pub struct SceneCamera {
     pub lens: Lens,
     /// Width over height the file asks for, if any.
     pub aspect_ratio: Option<f32>,
+    /// A thin lens the file asks for (glTF cameras are pinholes).
+    pub depth_of_field: DepthOfField,
 }
 
 /// A camera producing rays for an image of `width × height` pixels.
@@ -72,6 +210,9 @@ pub struct Camera {
     pub width: u32,
     /// Image height in pixels.
     pub height: u32,
+    /// The thin lens, `None` for a pinhole (or an orthographic camera's
+    /// parallel rays).
+    pub thin_lens: Option<ThinLens>,
 }
 
 impl Camera {
@@ -125,10 +266,35 @@ impl Camera {
             ortho_px,
             width,
             height,
+            thin_lens: None,
         }
     }
 
-    /// The ray through image point `(px, py)` in pixel units, with a unit direction.
+    /// This camera with `lens` in front: an f-number takes the focal length
+    /// of [`SENSOR_MM`] across the image's longer side (perspective cameras
+    /// only; an orthographic one has no focal length and keeps its parallel
+    /// rays); a radius of 0 leaves the pinhole as it is.
+    pub fn focused(self, lens: FocusedLens) -> Camera {
+        let radius = match (lens.aperture, self.ortho_px) {
+            (Aperture::Radius(r), _) => r,
+            (Aperture::FNumber(n), None) => {
+                let focal_mm = SENSOR_MM * self.focal_px / self.width.max(self.height) as f32;
+                // Millimetres to metres, the diameter to the radius.
+                0.5 * focal_mm / n * 1e-3
+            }
+            (Aperture::FNumber(_), Some(_)) => 0.0,
+        };
+        let thin_lens = (radius > 0.0).then_some(ThinLens {
+            radius,
+            focus_distance: lens.focus_distance,
+            blades: lens.blades,
+        });
+        Camera { thin_lens, ..self }
+    }
+
+    /// The ray through image point `(px, py)` in pixel units, with a unit
+    /// direction, from the centre of projection: a pinhole's, or the ray
+    /// through a thin lens's centre (renders take [`Camera::lens_ray`]).
     #[inline]
     pub fn ray(&self, px: f32, py: f32) -> Ray {
         let (x, y) = (px - 0.5 * self.width as f32, py - 0.5 * self.height as f32);
@@ -138,6 +304,40 @@ impl Camera {
         }
         let d = Vec3A::new(x, y, self.focal_px);
         Ray::new(self.position, (self.rotation * d).normalize())
+    }
+
+    /// The ray through image point `(px, py)` and the point of the thin lens
+    /// that `lens` (in `[0, 1)²`) picks ([`ThinLens::point`]), with a unit
+    /// direction: it starts on the lens and goes through the point that
+    /// [`Camera::ray`] reaches at the focus distance along the view axis.
+    /// Without a lens, [`Camera::ray`] itself, bit for bit.
+    #[inline]
+    pub fn lens_ray(&self, px: f32, py: f32, lens: Vec2) -> Ray {
+        let Some(thin) = self.thin_lens else {
+            return self.ray(px, py);
+        };
+        let (x, y) = (px - 0.5 * self.width as f32, py - 0.5 * self.height as f32);
+        let on_lens = thin.point(lens);
+        let f = thin.focus_distance;
+        // In camera space: where the pinhole ray meets the focus plane, and
+        // where this ray starts.
+        let (focus, start) = match self.ortho_px {
+            Some(s) => {
+                let centre = Vec3A::new(x * s, y * s, 0.0);
+                (
+                    centre + Vec3A::new(0.0, 0.0, f),
+                    centre + Vec3A::from(on_lens.extend(0.0)),
+                )
+            }
+            None => (
+                Vec3A::new(x, y, self.focal_px) * (f / self.focal_px),
+                Vec3A::from(on_lens.extend(0.0)),
+            ),
+        };
+        Ray::new(
+            self.position + self.rotation * start,
+            (self.rotation * (focus - start)).normalize(),
+        )
     }
 
     /// [`Camera::ray`] for four image points at once, bit for bit: the four
@@ -169,11 +369,12 @@ impl Camera {
 
     /// [`Camera::rays4`] for eight image points, as eight rays in the lanes of
     /// AVX2 registers (only inside AVX2 code), bit for bit; `None` for an
-    /// orthographic camera.
+    /// orthographic camera or one with a thin lens (whose rays need the
+    /// lens's samples: [`Camera::lens_ray`]).
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
     pub(crate) fn rays8(&self, px: &[f32; 8], py: &[f32; 8]) -> Option<Rays8> {
-        if self.ortho_px.is_some() {
+        if self.ortho_px.is_some() || self.thin_lens.is_some() {
             return None;
         }
         let x = F8::from_array(*px) - F8::splat(0.5 * self.width as f32);
@@ -374,6 +575,249 @@ mod tests {
         assert!((corner.origin - (pos + Vec3A::new(-4.0, 2.0, 0.0))).length() < 1e-6);
         let centre = cam.ray(20.0, 10.0);
         assert!((centre.origin - pos).length() < 1e-6);
+    }
+
+    /// A camera of 320×200 pixels (f = 250 px, so a 36 mm sensor across its
+    /// 320 px gives a 28.125 mm lens) turned and moved off the axes, with a
+    /// thin lens of radius `radius` focused at `focus`.
+    fn lens_camera(radius: f32, focus: f32, blades: u32) -> Camera {
+        let rotation = lab_rotation(23.0, -11.0);
+        Camera::with_lens(
+            Vec3A::new(0.3, -0.2, 1.5),
+            rotation,
+            Lens::Perspective { focal_scale: 1.25 },
+            320,
+            200,
+        )
+        .focused(FocusedLens {
+            aperture: Aperture::Radius(radius),
+            focus_distance: focus,
+            blades,
+        })
+    }
+
+    /// Lens samples over the whole square, its edges (the lens's rim)
+    /// included.
+    fn lens_samples() -> Vec<Vec2> {
+        let steps = [0.0, 0.1, 0.25, 0.4, 0.5, 0.6, 0.75, 0.9, 1.0 - 1e-7];
+        steps
+            .iter()
+            .flat_map(|&x| steps.iter().map(move |&y| Vec2::new(x, y)))
+            .collect()
+    }
+
+    /// The image point (pixel units) whose ray through lens point `u` passes
+    /// through world point `p`, found with the camera's rays alone: where a
+    /// ray meets the plane at `p`'s depth is affine in the image point, so
+    /// three rays give it exactly (to rounding).
+    fn image_of(camera: &Camera, p: Vec3A, u: Vec2) -> Vec2 {
+        let forward = camera.forward();
+        let depth = (p - camera.position).dot(forward);
+        let meet = |px: f32, py: f32| {
+            let ray = camera.lens_ray(px, py, u);
+            let t = (depth - (ray.origin - camera.position).dot(forward)) / ray.dir.dot(forward);
+            let q = ray.origin + t * ray.dir - camera.position;
+            glam::DVec2::new(q.dot(camera.right()) as f64, q.dot(camera.down()) as f64)
+        };
+        let (x0, y0) = (160.0f32, 100.0f32);
+        let o = meet(x0, y0);
+        let (ex, ey) = (meet(x0 + 50.0, y0) - o, meet(x0, y0 + 50.0) - o);
+        let offset = p - camera.position;
+        let target = glam::DVec2::new(
+            offset.dot(camera.right()) as f64,
+            offset.dot(camera.down()) as f64,
+        );
+        // Solve o + a·ex + b·ey = target (a, b in steps of 50 px).
+        let ab = glam::DMat2::from_cols(ex, ey).inverse() * (target - o);
+        Vec2::new(x0 + (50.0 * ab.x) as f32, y0 + (50.0 * ab.y) as f32)
+    }
+
+    /// A point at depth z spreads over the thin lens's circle of confusion,
+    /// of diameter 2R·f·|z − F| / (z·F) pixels, whatever the lens sample;
+    /// a point on the focus plane images to one point for every lens sample.
+    #[test]
+    fn out_of_focus_points_spread_over_the_circle_of_confusion() {
+        let (radius, focus) = (0.05, 4.0);
+        let camera = lens_camera(radius, focus, 0);
+        let f = camera.focal_px;
+        assert_eq!(f, 250.0);
+        let off_axis = |z: f32| {
+            // A point at depth z, seen 40 px right of and 25 px above the
+            // image's centre by the pinhole.
+            let d = camera.rotation * Vec3A::new(40.0, -25.0, f);
+            camera.position + d * (z / f)
+        };
+        for z in [1.0f32, 2.5, 3.9, 4.0, 4.2, 7.0, 40.0] {
+            let p = off_axis(z);
+            let images: Vec<Vec2> = lens_samples()
+                .into_iter()
+                .map(|u| image_of(&camera, p, u))
+                .collect();
+            let centre = image_of(&camera, p, Vec2::splat(0.5));
+            // The lens's centre sees the point where the pinhole does.
+            assert!(
+                (centre - Vec2::new(200.0, 75.0)).length() < 1e-3,
+                "{z}: {centre}"
+            );
+            let want = 2.0 * radius * f * (z - focus).abs() / (z * focus);
+            let spread = images
+                .iter()
+                .flat_map(|a| images.iter().map(move |b| (*a - *b).length()))
+                .fold(0.0f32, f32::max);
+            let tolerance = 2e-3 + 1e-3 * want;
+            assert!(
+                (spread - want).abs() <= tolerance,
+                "z = {z}: the image spreads over {spread} px, the thin-lens formula says {want}"
+            );
+            for image in &images {
+                assert!(
+                    (*image - centre).length() <= 0.5 * want + tolerance,
+                    "{z}: {image}"
+                );
+            }
+        }
+    }
+
+    /// Every ray starts on the lens (in the plane through the position across
+    /// the view axis, within the radius) and passes through the point the
+    /// pinhole ray through the same image point reaches at the focus distance.
+    #[test]
+    fn lens_rays_start_on_the_lens_and_meet_the_pinhole_ray_at_the_focus() {
+        for blades in [0, 5] {
+            let camera = lens_camera(0.2, 3.0, blades);
+            for (px, py) in [(0.0, 0.0), (160.0, 100.0), (319.5, 17.25), (5.5, 199.0)] {
+                let pinhole = camera.ray(px, py);
+                let focus_point =
+                    pinhole.origin + pinhole.dir * (3.0 / pinhole.dir.dot(camera.forward()));
+                for u in lens_samples() {
+                    let ray = camera.lens_ray(px, py, u);
+                    let offset = ray.origin - camera.position;
+                    assert!(offset.dot(camera.forward()).abs() < 1e-6);
+                    assert!(offset.length() <= 0.2 * (1.0 + 1e-5), "{offset}");
+                    let t = (focus_point - ray.origin).dot(ray.dir);
+                    let miss = (ray.origin + t * ray.dir - focus_point).length();
+                    assert!(miss < 2e-5, "{px} {py} {u}: {miss}");
+                    assert!((ray.dir.length() - 1.0).abs() < 1e-6);
+                }
+            }
+        }
+    }
+
+    /// With a radius of 0 the camera stays a pinhole: `lens_ray` is `ray`,
+    /// bit for bit, for any lens sample.
+    #[test]
+    fn a_closed_lens_is_the_pinhole_bit_for_bit() {
+        let closed = lens_camera(0.0, 2.0, 6);
+        assert_eq!(closed.thin_lens, None);
+        let pinhole = Camera::with_lens(
+            closed.position,
+            closed.rotation,
+            Lens::Perspective { focal_scale: 1.25 },
+            320,
+            200,
+        );
+        assert_eq!(closed, pinhole);
+        let bits = |r: Ray| [r.origin, r.dir].map(|v| v.to_array().map(f32::to_bits));
+        for u in lens_samples() {
+            for (px, py) in [(0.5, 0.5), (100.25, 33.75), (319.0, 199.0)] {
+                assert_eq!(bits(closed.lens_ray(px, py, u)), bits(pinhole.ray(px, py)));
+            }
+        }
+    }
+
+    /// An f-number's radius is half the focal length of a 36 mm sensor across
+    /// the image's longer side over N, in metres; an orthographic camera
+    /// keeps its parallel rays.
+    #[test]
+    fn an_f_number_opens_the_lens_as_a_36_mm_camera_does() {
+        let camera = lens_camera(0.0, 2.0, 0).focused(FocusedLens {
+            aperture: Aperture::FNumber(2.8125),
+            focus_distance: 2.0,
+            blades: 0,
+        });
+        // f = 250 px across 320 px: 28.125 mm, so f/2.8125 is 10 mm wide.
+        let lens = camera.thin_lens.expect("open");
+        assert!((lens.radius - 0.005).abs() < 1e-8, "{}", lens.radius);
+        let ortho = Camera::with_lens(
+            Vec3A::ZERO,
+            Mat3A::IDENTITY,
+            Lens::Orthographic { half_height: 1.0 },
+            40,
+            20,
+        );
+        let focused = |aperture| {
+            ortho.focused(FocusedLens {
+                aperture,
+                focus_distance: 2.0,
+                blades: 0,
+            })
+        };
+        assert_eq!(focused(Aperture::FNumber(2.0)).thin_lens, None);
+        // An orthographic camera with a radius: rays from the lens around
+        // the pixel's own origin, through the point 2 units along the axis.
+        let camera = focused(Aperture::Radius(0.1));
+        let ray = camera.lens_ray(0.0, 0.0, Vec2::new(0.0, 0.5));
+        let centre = ortho.ray(0.0, 0.0);
+        assert!((ray.origin - (centre.origin + Vec3A::new(-0.1, 0.0, 0.0))).length() < 1e-6);
+        let t = 2.0 / ray.dir.z;
+        assert!((ray.origin + t * ray.dir - (centre.origin + Vec3A::Z * 2.0)).length() < 1e-5);
+    }
+
+    /// Lens points are uniform over the disk or the polygon: each of four
+    /// quadrants gets its share of a grid of samples, and a polygon's points
+    /// stay inside it (within its inscribed circle's reach past the sides).
+    #[test]
+    fn lens_points_cover_the_aperture_uniformly() {
+        for blades in [0, 3, 6] {
+            let lens = ThinLens {
+                radius: 2.0,
+                focus_distance: 1.0,
+                blades,
+            };
+            let n = 200;
+            let mut quadrants = [0u32; 4];
+            let mut inside_half = 0;
+            for i in 0..n {
+                for j in 0..n {
+                    let u = Vec2::new((i as f32 + 0.5) / n as f32, (j as f32 + 0.5) / n as f32);
+                    let p = lens.point(u);
+                    assert!(p.length() <= 2.0 * (1.0 + 1e-6), "{blades}: {p}");
+                    if blades >= 3 {
+                        // Inside every side: the side's normal at angle
+                        // (k + ½)·2π/n from straight up, at distance r·cos(π/n).
+                        let apothem = 2.0 * (std::f32::consts::PI / blades as f32).cos();
+                        for k in 0..blades {
+                            let a = std::f32::consts::TAU * (k as f32 + 0.5) / blades as f32;
+                            let normal = Vec2::new(a.sin(), -a.cos());
+                            assert!(p.dot(normal) <= apothem * (1.0 + 1e-5), "{blades}: {p}");
+                        }
+                    }
+                    quadrants[(p.x >= 0.0) as usize + 2 * (p.y >= 0.0) as usize] += 1;
+                    inside_half += (p.length() < 1.0) as u32;
+                }
+            }
+            let total = (n * n) as f32;
+            if blades != 3 {
+                for q in quadrants {
+                    assert!(
+                        (q as f32 / total - 0.25).abs() < 0.01,
+                        "{blades}: {quadrants:?}"
+                    );
+                }
+            }
+            // A disk of half the radius holds a quarter of the area (of a
+            // polygon's, with its corners cut: 1/4 × π/(n/2·sin(2π/n))).
+            let area = match blades {
+                0 => std::f32::consts::PI,
+                n => 0.5 * n as f32 * (std::f32::consts::TAU / n as f32).sin(),
+            };
+            let want = 0.25 * std::f32::consts::PI / area;
+            assert!(
+                (inside_half as f32 / total - want).abs() < 0.01,
+                "{blades}: {} against {want}",
+                inside_half as f32 / total
+            );
+        }
     }
 
     #[test]

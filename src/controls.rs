@@ -3,7 +3,7 @@
 
 use glam::{Mat3A, Vec3A};
 
-use crate::camera::{Camera, Lens, lab_rotation};
+use crate::camera::{Camera, FocusedLens, Lens, lab_rotation};
 use crate::integrators::Integrator;
 
 /// Camera turn per key press, in degrees.
@@ -68,18 +68,24 @@ pub struct ViewState {
     pub integrator: Integrator,
     /// The camera's projection.
     pub lens: Lens,
+    /// A thin lens in front of it, focused; `None`: a pinhole.
+    pub thin_lens: Option<FocusedLens>,
 }
 
 impl ViewState {
     /// The camera for an image of `width × height`.
     pub fn camera(&self, width: u32, height: u32) -> Camera {
-        Camera::with_lens(
+        let pinhole = Camera::with_lens(
             self.camera_pos,
             self.base * lab_rotation(self.yaw_deg, self.pitch_deg),
             self.lens,
             width,
             height,
-        )
+        );
+        match self.thin_lens {
+            Some(lens) => pinhole.focused(lens),
+            None => pinhole,
+        }
     }
 
     /// Applies a state-changing action; returns whether anything changed.
@@ -147,6 +153,7 @@ mod tests {
             light_pos: Vec3A::new(0.0, -0.5, -0.7),
             integrator: Integrator::Direct,
             lens: Lens::LAB,
+            thin_lens: None,
         }
     }
 

@@ -19,6 +19,7 @@ use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
 use glam::Vec3A;
+use raylab::camera::{Focus, FocusedLens};
 use raylab::load::{EnvSource, LoadOptions};
 use raylab::render::{RenderSettings, render};
 use raylab::{Camera, Integrator};
@@ -200,7 +201,19 @@ pub fn load_and_render(path: &Path, options: &LoadOptions) {
                 check_message(w);
             }
             let v = loaded.view;
-            let camera = Camera::with_lens(v.position, v.rotation, v.lens, 6, 4);
+            let mut camera = Camera::with_lens(v.position, v.rotation, v.lens, 6, 4);
+            // A scene file's thin lens with a focus distance (a focus pixel
+            // needs the job's session): its rays from the fuzzed lens.
+            let dof = v.depth_of_field;
+            if let (Some(aperture), Some(Focus::Distance(focus_distance))) =
+                (dof.aperture, dof.focus)
+            {
+                camera = camera.focused(FocusedLens {
+                    aperture,
+                    focus_distance,
+                    blades: dof.blades.unwrap_or(0),
+                });
+            }
             for integrator in [Integrator::Flat, Integrator::Direct, Integrator::path()] {
                 let settings = RenderSettings {
                     integrator,

@@ -12,6 +12,7 @@ use std::path::PathBuf;
 use clap::Args;
 use glam::Vec3A;
 
+use crate::camera::{Aperture, DepthOfField, Focus};
 use crate::integrators::Integrator;
 use crate::load::SceneKind;
 use crate::load::cornell::{self, MaterialChoice};
@@ -91,6 +92,27 @@ pub struct SceneOptions {
     /// Camera pitch in degrees (positive looks up), within ±89.
     #[arg(long, default_value_t = 0.0, value_name = "DEG", allow_hyphen_values = true, value_parser = parse_pitch)]
     pub pitch: f32,
+    /// A thin lens of this radius in scene units, for depth of field (0: a
+    /// pinhole) [default: a pinhole, or the scene file's lens].
+    #[arg(long, value_name = "RADIUS", conflicts_with = "f_number", allow_hyphen_values = true, value_parser = parse_aperture)]
+    pub aperture: Option<f32>,
+    /// A thin lens of this f-number: its diameter is the focal length over N,
+    /// the focal length that of a 36 mm sensor across the image's longer side,
+    /// scene units taken as metres (as in Blender); perspective cameras only.
+    #[arg(long, value_name = "N", allow_hyphen_values = true, value_parser = parse_f_number)]
+    pub f_number: Option<f32>,
+    /// Distance of the thin lens's focus plane along the view axis, in scene
+    /// units [default: the first hit through the image's centre].
+    #[arg(long, value_name = "D", conflicts_with = "focus_pixel", allow_hyphen_values = true, value_parser = parse_focus_distance)]
+    pub focus_distance: Option<f32>,
+    /// Focus the thin lens on the first hit through the centre of pixel X,Y
+    /// (column and row from the top-left corner), at its distance along the
+    /// view axis.
+    #[arg(long, value_name = "X,Y", allow_hyphen_values = true, value_parser = parse_pixel)]
+    pub focus_pixel: Option<[u32; 2]>,
+    /// Blades of a polygonal aperture, 3 to 64 (0: round) [default: round].
+    #[arg(long, value_name = "N", allow_hyphen_values = true, value_parser = parse_blades)]
+    pub aperture_blades: Option<u32>,
     /// Point light position [default: 0,-0.5,-0.7 in the box; near the camera otherwise].
     #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true, value_parser = parse_vec3)]
     pub light_pos: Option<Vec3A>,
@@ -429,6 +451,22 @@ impl SceneOptions {
         }
     }
 
+    /// The thin lens the options ask for (each part `None` where they leave
+    /// it to the scene file).
+    pub fn depth_of_field(&self) -> DepthOfField {
+        DepthOfField {
+            aperture: self
+                .aperture
+                .map(Aperture::Radius)
+                .or(self.f_number.map(Aperture::FNumber)),
+            focus: self
+                .focus_distance
+                .map(Focus::Distance)
+                .or(self.focus_pixel.map(Focus::Pixel)),
+            blades: self.aperture_blades,
+        }
+    }
+
     /// `--max-memory`, or its default.
     pub fn memory_budget(&self) -> crate::memory::MemoryBudget {
         self.max_memory
@@ -725,6 +763,44 @@ fn parse_non_negative(s: &str) -> Result<f32, String> {
     match parse_finite(s) {
         Ok(v) if v >= 0.0 => Ok(v),
         _ => Err("expected a finite number >= 0".into()),
+    }
+}
+
+/// A lens length (`positive`: above 0, else at least 0) up to
+/// [`crate::camera::MAX_LENS_LENGTH`], or `expected` as the error.
+fn parse_lens_length(s: &str, positive: bool, expected: &str) -> Result<f32, String> {
+    match parse_finite(s) {
+        Ok(v) if crate::camera::lens_length_is_valid(v, positive) => Ok(v),
+        _ => Err(format!(
+            "expected {expected}, at most {:e}",
+            crate::camera::MAX_LENS_LENGTH
+        )),
+    }
+}
+
+fn parse_aperture(s: &str) -> Result<f32, String> {
+    parse_lens_length(s, false, "a lens radius >= 0 in scene units")
+}
+
+fn parse_f_number(s: &str) -> Result<f32, String> {
+    parse_lens_length(s, true, "an f-number above 0, e.g. 2.8")
+}
+
+fn parse_focus_distance(s: &str) -> Result<f32, String> {
+    parse_lens_length(s, true, "a distance above 0 in scene units")
+}
+
+/// `X,Y`: a pixel's column and row (checked against the image later).
+fn parse_pixel(s: &str) -> Result<[u32; 2], String> {
+    let (x, y) = parse_two(s, ",", "X,Y, a pixel's column and row from 0")?;
+    Ok([x, y])
+}
+
+fn parse_blades(s: &str) -> Result<u32, String> {
+    let most = crate::camera::MAX_BLADES;
+    match s.trim().parse::<u32>() {
+        Ok(n) if crate::camera::blades_are_valid(n) => Ok(n),
+        _ => Err(format!("expected 0 (round) or 3 to {most} blades")),
     }
 }
 

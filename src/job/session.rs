@@ -6,6 +6,7 @@ use std::sync::Arc;
 
 use super::Hooks;
 use super::options::SceneOptions;
+use crate::camera::{Aperture, Camera, DepthOfField, Focus, FocusedLens};
 use crate::film::{Display, ToneMap};
 use crate::load::{InitialView, SceneKind};
 
@@ -54,7 +55,7 @@ impl Session {
             args,
             self.kind,
             &self.initial,
-            self.scene.light.position,
+            &self.scene,
             self.needs,
             aov_channels,
         )?;
@@ -123,7 +124,7 @@ pub fn load_session(
         args,
         loaded.kind,
         &loaded.view,
-        loaded.scene.light.position,
+        &loaded.scene,
         loaded.summary.needs,
         aov_channels,
     )?;
@@ -164,6 +165,19 @@ pub fn load_session(
             ));
         }
     }
+    if !quiet && let Some(lens) = view.camera(size.0, size.1).thin_lens {
+        // The focus a pixel gave, and an f-number's radius, are worked out
+        // here: say them.
+        hooks.say(&format!(
+            "thin lens: radius {:.4}, {}focused at {:.4} along the view axis",
+            lens.radius,
+            match lens.blades {
+                0 => String::new(),
+                n => format!("{n} blades, "),
+            },
+            lens.focus_distance
+        ));
+    }
     if !quiet && let Some([w, h]) = loaded.summary.environment_size {
         let s = &loaded.summary;
         hooks.say(&format!(
@@ -185,14 +199,15 @@ pub fn load_session(
     })
 }
 
-/// The view, image size and tone mapping of `args` for a scene of `kind`
-/// loaded with the view `initial` and its light at `light_pos`, checked
-/// (with a film of `aov_channels` AOV channels) against the memory budget.
+/// The view, image size and tone mapping of `args` for `scene` of `kind`
+/// loaded with the view `initial`, checked (with a film of `aov_channels` AOV
+/// channels) against the memory budget; its thin lens focused
+/// ([`focused_lens`]).
 fn frame(
     args: &SceneOptions,
     kind: SceneKind,
     initial: &InitialView,
-    light_pos: glam::Vec3A,
+    scene: &crate::scene::Scene,
     needs: crate::memory::Needs,
     aov_channels: usize,
 ) -> anyhow::Result<(crate::controls::ViewState, (u32, u32), ToneMap)> {
@@ -206,19 +221,98 @@ fn frame(
         ..needs
     };
     args.memory_budget().check(&args.scene, &needs)?;
-    let view = crate::controls::ViewState {
+    let mut view = crate::controls::ViewState {
         camera_pos: args.camera_pos.unwrap_or(initial.position),
         base: initial.rotation,
         step: initial.step,
         yaw_deg: args.yaw,
         pitch_deg: args.pitch,
-        light_pos,
+        light_pos: scene.light.position,
         integrator: args.integrator(kind),
         lens: initial.lens,
+        thin_lens: None,
     };
+    let pinhole = view.camera(size.0, size.1);
+    view.thin_lens = focused_lens(args, initial.depth_of_field, &pinhole, scene)?;
     let tonemap = args.tonemap.unwrap_or(match kind {
         SceneKind::Gltf | SceneKind::Shot => ToneMap::KhronosPbrNeutral,
         _ => ToneMap::Clamp,
     });
     Ok((view, size, tonemap))
+}
+
+/// The thin lens that the options (else the scene file's camera, `file`) ask
+/// for, focused for `camera` (the pinhole, at the image's size) in `scene`:
+/// at the focus distance given, else on the first hit of the ray through the
+/// centre of the focus pixel given, else of the image's centre pixel (its
+/// distance along the view axis). `None` for a pinhole. A focus or blades
+/// without an aperture, an f-number for an orthographic camera, a focus
+/// pixel outside the image or one whose ray hits nothing are refused, naming
+/// the option (or the file's key).
+pub fn focused_lens(
+    args: &SceneOptions,
+    file: DepthOfField,
+    camera: &Camera,
+    scene: &crate::scene::Scene,
+) -> anyhow::Result<Option<FocusedLens>> {
+    let given = args.depth_of_field();
+    let wanted = given.or(file);
+    let Some(aperture) = wanted.aperture else {
+        let without = [
+            (args.focus_distance.is_some(), "--focus-distance"),
+            (args.focus_pixel.is_some(), "--focus-pixel"),
+            (args.aperture_blades.is_some(), "--aperture-blades"),
+        ];
+        if let Some((_, option)) = without.iter().find(|(given, _)| *given) {
+            anyhow::bail!("{option} needs a thin lens: give --aperture RADIUS or --f-number N");
+        }
+        return Ok(None);
+    };
+    if !wanted.is_open() {
+        return Ok(None);
+    }
+    // What the file gave is named with the file.
+    let in_file = |key: &str| format!("{}: [camera] {key}", args.scene);
+    if matches!(aperture, Aperture::FNumber(_)) && camera.ortho_px.is_some() {
+        let option = match given.aperture {
+            Some(_) => "--f-number".to_string(),
+            None => in_file("f_number"),
+        };
+        anyhow::bail!(
+            "{option}: an orthographic camera has no focal length; give the lens's radius (--aperture)"
+        );
+    }
+    let (w, h) = (camera.width, camera.height);
+    let (pixel, option) = match (wanted.focus, given.focus) {
+        (Some(Focus::Distance(d)), _) => {
+            return Ok(Some(FocusedLens {
+                aperture,
+                focus_distance: d,
+                blades: wanted.blades.unwrap_or(0),
+            }));
+        }
+        (Some(Focus::Pixel(p)), Some(_)) => (p, "--focus-pixel".to_string()),
+        (Some(Focus::Pixel(p)), None) => (p, in_file("focus_pixel")),
+        (None, _) => (
+            [w / 2, h / 2],
+            "the thin lens's focus (the image's centre pixel)".to_string(),
+        ),
+    };
+    let [x, y] = pixel;
+    if x >= w || y >= h {
+        anyhow::bail!("{option} {x},{y} is outside the {w}×{h} image");
+    }
+    let ray = camera.ray(x as f32 + 0.5, y as f32 + 0.5);
+    let hit = scene.intersect(&ray, f32::INFINITY);
+    let focus_distance = hit.map_or(0.0, |h| h.t * ray.dir.dot(camera.forward()));
+    if !(focus_distance.is_finite() && focus_distance > 0.0) {
+        anyhow::bail!(
+            "{option} {x},{y}: the ray through that pixel hits nothing to focus on; give --focus-distance D"
+        );
+    }
+    Ok(Some(FocusedLens {
+        aperture,
+        focus_distance,
+        blades: wanted.blades.unwrap_or(0),
+    }))
 }

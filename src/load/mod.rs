@@ -21,7 +21,7 @@ use std::time::{Duration, Instant};
 use glam::{Mat3A, Vec3A};
 use thiserror::Error;
 
-use crate::camera::{Lens, SceneCamera, Y_UP_TOWARDS_MINUS_Z};
+use crate::camera::{DepthOfField, Lens, SceneCamera, Y_UP_TOWARDS_MINUS_Z};
 use crate::geometry::triangle::Triangle;
 use crate::lights::environment::{EnvError, Environment};
 use crate::memory::{GEOMETRY_BYTES_PER_TRIANGLE, Ledger, MemoryBudget, MemoryError, Needs};
@@ -194,6 +194,8 @@ pub struct InitialView {
     pub lens: Lens,
     /// Width over height the scene's camera asks for, if any.
     pub aspect_ratio: Option<f32>,
+    /// The thin lens the scene's camera asks for (a scene file's).
+    pub depth_of_field: DepthOfField,
     /// Viewer travel per key press.
     pub step: f32,
 }
@@ -433,6 +435,7 @@ pub fn load(name: &str, options: &LoadOptions) -> Result<Loaded, LoadError> {
                 rotation: Mat3A::IDENTITY,
                 lens: Lens::LAB,
                 aspect_ratio: None,
+                depth_of_field: DepthOfField::default(),
                 step: cornell::LAB_STEP,
             };
             (scene, view)
@@ -470,6 +473,7 @@ pub fn load(name: &str, options: &LoadOptions) -> Result<Loaded, LoadError> {
                 rotation: framing.base,
                 lens: Lens::LAB,
                 aspect_ratio: None,
+                depth_of_field: DepthOfField::default(),
                 step: framing.step,
             };
             (scene, view)
@@ -620,6 +624,7 @@ fn view_through(camera: Option<&SceneCamera>, framing: &framing::Framing) -> Ini
             rotation: c.rotation,
             lens: c.lens,
             aspect_ratio: c.aspect_ratio,
+            depth_of_field: c.depth_of_field,
             step: framing.step,
         },
         None => InitialView {
@@ -627,6 +632,7 @@ fn view_through(camera: Option<&SceneCamera>, framing: &framing::Framing) -> Ini
             rotation: Y_UP_TOWARDS_MINUS_Z,
             lens: Lens::LAB,
             aspect_ratio: None,
+            depth_of_field: DepthOfField::default(),
             step: framing.step,
         },
     }

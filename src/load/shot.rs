@@ -16,7 +16,9 @@ use serde::Deserialize;
 use thiserror::Error;
 
 use super::cornell::{self, MaterialChoice};
-use crate::camera::{Lens, SceneCamera};
+use crate::camera::{
+    Aperture, DepthOfField, Focus, Lens, MAX_LENS_LENGTH, SceneCamera, lens_length_is_valid,
+};
 use crate::film::ToneMap;
 use crate::geometry::triangle::Triangle;
 use crate::integrators::Integrator;
@@ -123,6 +125,16 @@ pub struct CameraSection {
     pub model: Option<String>,
     /// Which of that file's cameras (depth-first order, default 0).
     pub index: Option<usize>,
+    /// A thin lens of this radius in scene units (0: a pinhole).
+    pub aperture: Option<f32>,
+    /// Or a thin lens of this f-number (a 36 mm sensor's focal length).
+    pub f_number: Option<f32>,
+    /// The lens's focus distance along the view axis, in scene units.
+    pub focus_distance: Option<f32>,
+    /// Or focus on the first hit through this pixel's centre, `[x, y]`.
+    pub focus_pixel: Option<[u32; 2]>,
+    /// Blades of a polygonal aperture (3 or more; 0: round).
+    pub aperture_blades: Option<u32>,
 }
 
 /// `[environment]`: a map or a constant colour.
@@ -628,6 +640,7 @@ fn load_model(
                 rotation: glam::Mat3A::IDENTITY,
                 lens: Lens::LAB,
                 aspect_ratio: Some(1.0),
+                depth_of_field: DepthOfField::default(),
             };
             parts.cameras.clear();
             // Turn the lab's y-down box to +y up: half a turn about z.
@@ -1147,7 +1160,10 @@ fn camera(
                 ),
             ));
         }
-        return Ok(cameras[range.start + index].clone());
+        return Ok(SceneCamera {
+            depth_of_field: depth_of_field(path, c)?,
+            ..cameras[range.start + index].clone()
+        });
     }
     if c.index.is_some() {
         return Err(invalid(path, "[camera] index needs model".into()));
@@ -1182,6 +1198,72 @@ fn camera(
         rotation,
         lens: Lens::from_yfov(fov.to_radians()),
         aspect_ratio: None,
+        depth_of_field: depth_of_field(path, c)?,
+    })
+}
+
+/// The `[camera]` section's thin lens, checked (a focus pixel is checked
+/// against the image once its size is known).
+fn depth_of_field(path: &Path, c: &CameraSection) -> Result<DepthOfField, ShotError> {
+    let aperture = match (c.aperture, c.f_number) {
+        (Some(_), Some(_)) => {
+            return Err(invalid(
+                path,
+                "[camera]: give aperture or f_number, not both".into(),
+            ));
+        }
+        (Some(r), None) if lens_length_is_valid(r, false) => Some(Aperture::Radius(r)),
+        (None, Some(n)) if lens_length_is_valid(n, true) => Some(Aperture::FNumber(n)),
+        (Some(r), None) => {
+            return Err(invalid(
+                path,
+                format!("[camera] aperture = {r}: expected a radius from 0 to {MAX_LENS_LENGTH:e}"),
+            ));
+        }
+        (None, Some(n)) => {
+            return Err(invalid(
+                path,
+                format!(
+                    "[camera] f_number = {n}: expected a number above 0, at most {MAX_LENS_LENGTH:e}"
+                ),
+            ));
+        }
+        (None, None) => None,
+    };
+    let focus = match (c.focus_distance, c.focus_pixel) {
+        (Some(_), Some(_)) => {
+            return Err(invalid(
+                path,
+                "[camera]: give focus_distance or focus_pixel, not both".into(),
+            ));
+        }
+        (Some(d), None) if lens_length_is_valid(d, true) => Some(Focus::Distance(d)),
+        (Some(d), None) => {
+            return Err(invalid(
+                path,
+                format!(
+                    "[camera] focus_distance = {d}: expected a distance above 0, at most {MAX_LENS_LENGTH:e}"
+                ),
+            ));
+        }
+        (None, Some(p)) => Some(Focus::Pixel(p)),
+        (None, None) => None,
+    };
+    if let Some(n) = c.aperture_blades
+        && !crate::camera::blades_are_valid(n)
+    {
+        return Err(invalid(
+            path,
+            format!(
+                "[camera] aperture_blades = {n}: expected 0 (round) or 3 to {}",
+                crate::camera::MAX_BLADES
+            ),
+        ));
+    }
+    Ok(DepthOfField {
+        aperture,
+        focus,
+        blades: c.aperture_blades,
     })
 }
 

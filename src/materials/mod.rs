@@ -397,7 +397,7 @@ fn ggx_sample_visible_normal(alpha: f32, wo: Vec3A, u: Vec2) -> Vec3A {
 /// Maps `u ∈ [0,1)²` to the unit disk, preserving area and strata (Shirley and
 /// Chiu 1997, concentric mapping).
 #[inline]
-fn concentric_disk(u: Vec2) -> Vec2 {
+pub(crate) fn concentric_disk(u: Vec2) -> Vec2 {
     let o = 2.0 * u - Vec2::ONE;
     if o.x == 0.0 && o.y == 0.0 {
         return Vec2::ZERO;

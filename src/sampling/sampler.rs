@@ -35,6 +35,16 @@ pub fn pixel_jitter(seed: u64, pixel: u64, sample: u32) -> (f32, f32) {
     )
 }
 
+/// Two uniform numbers in `[0, 1)` for the thin lens of sample `sample` of
+/// pixel `pixel` (the lab's integrators; `path` takes its own): the numbers
+/// [`pixel_jitter`] gives for a seed of their own, so that the lens point is
+/// independent of the point in the pixel.
+#[inline]
+pub fn lens_jitter(seed: u64, pixel: u64, sample: u32) -> (f32, f32) {
+    // "lens" in ASCII, mixed: another seed for any seed.
+    pixel_jitter(mix64(seed ^ 0x6c65_6e73), pixel, sample)
+}
+
 /// [`pixel_jitter`] of eight pixels, `first[0]..first[0] + 4` and
 /// `first[1]..first[1] + 4` (a 4×2 block's two rows), in the lanes of AVX2
 /// registers (only inside AVX2 code): the eight x and the eight y offsets, bit

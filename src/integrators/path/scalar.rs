@@ -117,6 +117,13 @@ pub struct SobolSampler {
 
 const _: () = assert!(SOBOL_PAIRS as usize <= sobol::FIRST_PAIRS);
 
+/// The Sobol' pair a thin lens takes its point from: the first after the
+/// path's, made with them at no cost ([`sobol::first_pairs`]), so that the
+/// lens is stratified as the pixel is and the path's own pairs stay as they
+/// are with a pinhole.
+pub const LENS_PAIR: usize = SOBOL_PAIRS as usize;
+const _: () = assert!(LENS_PAIR < sobol::FIRST_PAIRS);
+
 impl SobolSampler {
     /// The sampler of sample `index` of pixel `pixel` in a render seeded `seed`.
     #[inline]
@@ -128,6 +135,13 @@ impl SobolSampler {
             rng: Rng::for_sample(seed, pixel, index),
             next_pair: 0,
         }
+    }
+
+    /// The point of the camera's thin lens (the Sobol' pair `LENS_PAIR`);
+    /// the path's pairs are left as they are.
+    #[inline]
+    pub fn lens_2d(&self) -> Vec2 {
+        Vec2::new(self.xs[LENS_PAIR], self.ys[LENS_PAIR])
     }
 }
 

@@ -260,9 +260,7 @@ fn load_gltf_inner(
     } else {
         (&bytes[..], None)
     };
-    let root = crate::guard::catch("gltf-json", || json::Root::from_slice(json_bytes))
-        .map_err(GltfError::invalid)?
-        .map_err(|e| GltfError::invalid(format!("not valid glTF JSON: {e}")))?;
+    let root = parse_root(json_bytes, path, ledger, held)?;
     let mut warnings = Vec::new();
     if let Some(ext) = root
         .extensions_required
@@ -352,6 +350,129 @@ pub fn variant_list(variants: &[String]) -> String {
     } else {
         format!("variants: {}", variants.join(", "))
     }
+}
+
+/// Reads the glTF JSON (of a `.gltf`, or a GLB's JSON chunk) into
+/// `gltf-json`'s structures. Its types are stricter than the specification in
+/// two ways that the Khronos glTF-Validator accepts: an integer written with a
+/// fraction (`"count": 3.0`, `"mesh": 1.0`: JSON has one kind of number) and
+/// an animation channel whose `target` has no `node` (the specification
+/// allows that; an extension may name the target instead). A file refused for
+/// such a reason is read again as a JSON tree, with integral numbers written
+/// as integers and node-less channels dropped (raylab ignores animations), and
+/// then deserialized from the tree; files that parse as they are take the
+/// first reading alone, so they load exactly as before. A fraction such as
+/// `1.5` where an integer is required is still refused.
+fn parse_root(
+    json_bytes: &[u8],
+    path: &Path,
+    ledger: &Ledger,
+    held: u64,
+) -> Result<json::Root, GltfError> {
+    let refused = |e: serde_json::Error| GltfError::invalid(format!("not valid glTF JSON: {e}"));
+    let strict = crate::guard::catch("gltf-json", || json::Root::from_slice(json_bytes))
+        .map_err(GltfError::invalid)?;
+    let strict_error = match strict {
+        Ok(root) => return Ok(root),
+        Err(e) => e,
+    };
+    // Only a value of the wrong type or a missing field can be one of the
+    // tolerated forms; malformed JSON is reported with its line and column.
+    if strict_error.classify() != serde_json::error::Category::Data {
+        return Err(refused(strict_error));
+    }
+    // The tree takes more memory than the text: checked before it is built.
+    let tree = Needs {
+        geometry: held.saturating_add(json_tree_bytes(json_bytes)),
+        ..Needs::default()
+    };
+    ledger.fits(&path.display().to_string(), tree)?;
+    let mut tree = match crate::guard::catch("serde_json", || {
+        serde_json::from_slice::<serde_json::Value>(json_bytes)
+    })
+    .map_err(GltfError::invalid)?
+    {
+        Ok(tree) => tree,
+        Err(_) => return Err(refused(strict_error)),
+    };
+    if !tolerate(&mut tree) {
+        return Err(refused(strict_error));
+    }
+    crate::guard::catch("gltf-json", || serde_json::from_value::<json::Root>(tree))
+        .map_err(GltfError::invalid)?
+        .map_err(refused)
+}
+
+/// Bytes that a `serde_json::Value` of JSON text `text` may take at most: the
+/// text (strings are copied) and, for every value, a `Value` and its share of
+/// an array or a map node (128 bytes, more than either takes). Every value
+/// but the first follows a `[`, `{`, `,` or `:` outside a string, so those
+/// are counted.
+fn json_tree_bytes(text: &[u8]) -> u64 {
+    const BYTES_PER_VALUE: u64 = 128;
+    let (mut values, mut in_string, mut escaped) = (1u64, false, false);
+    for &c in text {
+        if in_string {
+            match c {
+                _ if escaped => escaped = false,
+                b'\\' => escaped = true,
+                b'"' => in_string = false,
+                _ => {}
+            }
+        } else {
+            match c {
+                b'"' => in_string = true,
+                b'[' | b'{' | b',' | b':' => values += 1,
+                _ => {}
+            }
+        }
+    }
+    (text.len() as u64).saturating_add(values.saturating_mul(BYTES_PER_VALUE))
+}
+
+/// Rewrites a glTF JSON tree into the form `gltf-json` reads (see
+/// [`parse_root`]): every number written with a fraction that is a whole
+/// number from 0 to below 2⁶⁴ becomes that integer (a float field reads it
+/// as the same value), and animation channels whose target has no `node` are
+/// dropped. Returns whether anything changed.
+fn tolerate(tree: &mut serde_json::Value) -> bool {
+    use serde_json::Value;
+    let mut changed = false;
+    if let Some(animations) = tree.get_mut("animations").and_then(Value::as_array_mut) {
+        for animation in animations {
+            if let Some(channels) = animation.get_mut("channels").and_then(Value::as_array_mut) {
+                let before = channels.len();
+                channels.retain(
+                    |c| !matches!(c.get("target"), Some(Value::Object(t)) if !t.contains_key("node")),
+                );
+                changed |= channels.len() != before;
+            }
+        }
+    }
+    // Depth-first with a stack (serde_json nests at most 128 deep, but the
+    // walk needs no recursion at all).
+    let mut stack = vec![tree];
+    while let Some(value) = stack.pop() {
+        match value {
+            Value::Number(n) => {
+                if let Some(whole) = n.as_f64().filter(|_| n.is_f64()).and_then(whole_number) {
+                    *n = whole.into();
+                    changed = true;
+                }
+            }
+            Value::Array(items) => stack.extend(items.iter_mut()),
+            Value::Object(members) => stack.extend(members.values_mut()),
+            _ => {}
+        }
+    }
+    changed
+}
+
+/// `x` as an integer if it is a whole number from +0 to below 2⁶⁴ (−0 stays a
+/// float, so that a float field keeps its sign).
+fn whole_number(x: f64) -> Option<u64> {
+    const TWO_TO_64: f64 = 18_446_744_073_709_551_616.0;
+    (x.is_sign_positive() && x.fract() == 0.0 && x < TWO_TO_64).then_some(x as u64)
 }
 
 /// Reads every buffer: the GLB's binary chunk, a data URI or a file beside the
@@ -647,6 +768,7 @@ impl Loader<'_> {
             rotation: Mat3A::from_cols(right, down, forward),
             lens,
             aspect_ratio,
+            depth_of_field: crate::camera::DepthOfField::default(),
         });
         Ok(())
     }
