@@ -1845,4 +1845,16 @@ fn a_webp_texture_replaces_its_png_fallback() {
     };
     let want = Vec3A::new(0.0, srgb(webp_texel[1]), srgb(webp_texel[2]));
     assert_near(loaded.scene.base_color(&hit), want, 1e-4, "the WebP texel");
+    // A file that requires the extension may leave the core `source` out.
+    g.textures[texture]
+        .as_object_mut()
+        .unwrap()
+        .remove("source");
+    g.extensions_required.push("EXT_texture_webp".into());
+    let loaded = load(&g.write(dir.path(), "webp-only.gltf"));
+    let hit = loaded
+        .scene
+        .intersect(&Ray::new(Vec3A::new(0.3, 0.3, 1.0), -Vec3A::Z), 2.0)
+        .expect("the ray hits the square");
+    assert_near(loaded.scene.base_color(&hit), want, 1e-4, "WebP only");
 }

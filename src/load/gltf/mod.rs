@@ -354,12 +354,15 @@ pub fn variant_list(variants: &[String]) -> String {
 
 /// Reads the glTF JSON (of a `.gltf`, or a GLB's JSON chunk) into
 /// `gltf-json`'s structures. Its types are stricter than the specification in
-/// two ways that the Khronos glTF-Validator accepts: an integer written with a
-/// fraction (`"count": 3.0`, `"mesh": 1.0`: JSON has one kind of number) and
-/// an animation channel whose `target` has no `node` (the specification
-/// allows that; an extension may name the target instead). A file refused for
-/// such a reason is read again as a JSON tree, with integral numbers written
-/// as integers and node-less channels dropped (raylab ignores animations), and
+/// three ways that the Khronos glTF-Validator accepts: an integer written with a
+/// fraction (`"count": 3.0`, `"mesh": 1.0`: JSON has one kind of number), an
+/// animation channel whose `target` has no `node` (the specification
+/// allows that; an extension may name the target instead), and a texture
+/// without a core `source` whose `EXT_texture_webp` names its image. A file
+/// refused for such a reason is read again as a JSON tree, with integral
+/// numbers written as integers, node-less channels dropped (raylab reads no
+/// extension that animates such targets) and such textures given their WebP
+/// image as `source`, and
 /// then deserialized from the tree; files that parse as they are take the
 /// first reading alone, so they load exactly as before. A fraction such as
 /// `1.5` where an integer is required is still refused.
@@ -433,11 +436,29 @@ fn json_tree_bytes(text: &[u8]) -> u64 {
 /// Rewrites a glTF JSON tree into the form `gltf-json` reads (see
 /// [`parse_root`]): every number written with a fraction that is a whole
 /// number from 0 to below 2⁶⁴ becomes that integer (a float field reads it
-/// as the same value), and animation channels whose target has no `node` are
-/// dropped. Returns whether anything changed.
+/// as the same value), animation channels whose target has no `node` are
+/// dropped, and a texture without `source` takes its `EXT_texture_webp`
+/// image's (files that require the extension may leave the core fallback
+/// out). Returns whether anything changed.
 fn tolerate(tree: &mut serde_json::Value) -> bool {
     use serde_json::Value;
     let mut changed = false;
+    if let Some(textures) = tree.get_mut("textures").and_then(Value::as_array_mut) {
+        for texture in textures.iter_mut().filter_map(Value::as_object_mut) {
+            if texture.contains_key("source") {
+                continue;
+            }
+            let webp = texture
+                .get("extensions")
+                .and_then(|e| e.get("EXT_texture_webp"))
+                .and_then(|w| w.get("source"))
+                .cloned();
+            if let Some(source) = webp {
+                texture.insert("source".into(), source);
+                changed = true;
+            }
+        }
+    }
     if let Some(animations) = tree.get_mut("animations").and_then(Value::as_array_mut) {
         for animation in animations {
             if let Some(channels) = animation.get_mut("channels").and_then(Value::as_array_mut) {
