@@ -155,10 +155,9 @@ impl SpecularGlossiness {
             Some(t) => (self.specular * Vec3A::from(t.xyz()), self.glossiness * t.w),
             None => (self.specular, self.glossiness),
         };
-        let clamp01 = |x: f32| if x.is_nan() { 0.0 } else { x.clamp(0.0, 1.0) };
         // (Finite: the factor is checked at load and texels are finite.)
         let specular = specular.clamp(Vec3A::ZERO, Vec3A::ONE);
-        let roughness = 1.0 - clamp01(glossiness);
+        let roughness = 1.0 - unit_interval(glossiness);
         let ior = 1.5;
         PbrBsdf {
             base_color: (diffuse * (1.0 - specular.max_element())).clamp(Vec3A::ZERO, Vec3A::ONE),
@@ -168,13 +167,35 @@ impl SpecularGlossiness {
             specular: 1.0,
             // `F0 = min(dielectric_f0 · specular_color, 1)` in the BSDF.
             specular_color: specular / dielectric_f0(ior),
-            transmission: clamp01(transmission),
+            transmission: unit_interval(transmission),
             thin_walled: true,
             coat: 0.0,
             coat_alpha: 1.0,
             coat_normal: Vec3A::Z,
         }
     }
+}
+
+impl GltfMaterial {
+    /// The clear coat's weight at a hit, `clearcoatFactor` ×
+    /// `clearcoatTexture`.r in `[0, 1]` (0 without a coat; the texture is
+    /// read only where the factor is positive).
+    #[inline]
+    pub fn coat_at(&self, attrs: &HitAttributes, textures: &TextureStore) -> f32 {
+        let mut w = self.clearcoat;
+        if w > 0.0
+            && let Some(t) = &self.clearcoat_texture
+        {
+            w *= lookup(t, attrs, textures, ColorSpace::Linear).x;
+        }
+        unit_interval(w)
+    }
+}
+
+/// `x` clamped to `[0, 1]`, NaN as 0.
+#[inline]
+fn unit_interval(x: f32) -> f32 {
+    if x.is_nan() { 0.0 } else { x.clamp(0.0, 1.0) }
 }
 
 impl Default for GltfMaterial {
@@ -384,28 +405,25 @@ impl SurfaceMaterial {
         if let Some(t) = &g.specular_color_texture {
             specular_color *= Vec3A::from(lookup(t, attrs, textures, ColorSpace::Srgb).xyz());
         }
-        let clamp01 = |x: f32| if x.is_nan() { 0.0 } else { x.clamp(0.0, 1.0) };
-        let roughness = clamp01(roughness);
-        let (mut coat, mut coat_roughness) = (g.clearcoat, g.clearcoat_roughness);
-        if coat > 0.0 {
-            if let Some(t) = &g.clearcoat_texture {
-                coat *= lookup(t, attrs, textures, ColorSpace::Linear).x;
-            }
-            if let Some(t) = &g.clearcoat_roughness_texture {
-                coat_roughness *= lookup(t, attrs, textures, ColorSpace::Linear).y;
-            }
+        let roughness = unit_interval(roughness);
+        let coat = g.coat_at(attrs, textures);
+        let mut coat_roughness = g.clearcoat_roughness;
+        if coat > 0.0
+            && let Some(t) = &g.clearcoat_roughness_texture
+        {
+            coat_roughness *= lookup(t, attrs, textures, ColorSpace::Linear).y;
         }
-        let coat_roughness = clamp01(coat_roughness);
+        let coat_roughness = unit_interval(coat_roughness);
         Material::Pbr(PbrBsdf {
             base_color: base.clamp(Vec3A::ZERO, Vec3A::ONE),
-            metallic: clamp01(metallic),
+            metallic: unit_interval(metallic),
             alpha: PbrBsdf::alpha_from_roughness(roughness),
             ior: g.ior,
-            specular: clamp01(specular),
+            specular: unit_interval(specular),
             specular_color: specular_color.max(Vec3A::ZERO),
-            transmission: clamp01(transmission),
+            transmission: unit_interval(transmission),
             thin_walled: g.thin_walled,
-            coat: clamp01(coat),
+            coat,
             coat_alpha: PbrBsdf::alpha_from_roughness(coat_roughness),
             coat_normal: Vec3A::Z,
         })
@@ -452,15 +470,10 @@ impl SurfaceMaterial {
         let MaterialKind::Gltf(g) = &self.kind else {
             return 1.0;
         };
-        // (Finite and in [0, 1]: checked at load.)
-        if g.clearcoat <= 0.0 {
+        let w = g.coat_at(attrs, textures);
+        if w <= 0.0 {
             return 1.0;
         }
-        let mut w = g.clearcoat;
-        if let Some(t) = &g.clearcoat_texture {
-            w *= lookup(t, attrs, textures, ColorSpace::Linear).x;
-        }
-        let w = if w.is_nan() { 0.0 } else { w.clamp(0.0, 1.0) };
         let cos = dir.dot(n_c).abs().min(1.0);
         let dim = 1.0 - w * crate::materials::pbr::coat_fresnel(cos);
         if dim.is_finite() { dim } else { 1.0 }
