@@ -3,8 +3,8 @@
 //! colour, whatever the integrator, and no light of its own),
 //! `KHR_materials_pbrSpecularGlossiness` (the extension's BRDF inputs, and the
 //! BRDF they make), `KHR_materials_variants` (`--variant`, in scene files too)
-//! and `EXT_mesh_gpu_instancing` (instances at their transforms, counts
-//! checked). Every file is written by the test itself (see
+//! `EXT_mesh_gpu_instancing` (instances at their transforms, counts
+//! checked) and `KHR_materials_sheen` (factors, textures, layering). Every file is written by the test itself (see
 //! `common/gltf_builder.rs`).
 
 // Shared with tests/gltf.rs, which uses all of it; this file only a part.
@@ -728,4 +728,100 @@ fn gpu_instancing_counts_are_checked_before_the_instances_are_made() {
             "case {k}: {err}"
         );
     }
+}
+
+/// `KHR_materials_sheen`: the factors times the textures (colour in sRGB
+/// RGB, roughness in the alpha channel) reach the BSDF, clamped to
+/// `[0, 1]`; a material without the extension has no sheen; a sheen makes
+/// a black, non-specular square reflect (its colour × `E`); a factor that is
+/// not finite is refused naming the material and the factor.
+#[test]
+fn a_sheen_takes_its_factors_and_textures() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut g = Gltf::new();
+    // Colour sRGB (200, 100, 50), roughness alpha 128/255 (linear).
+    let color = g.png_texture(&png(1, 1, 4, &[200, 100, 50, 255]), None);
+    let rough = g.png_texture(&png(1, 1, 4, &[0, 0, 0, 128]), None);
+    let black = json!({ "baseColorFactor": [0.0, 0.0, 0.0, 1.0], "metallicFactor": 0.0 });
+    let factors = g.material(json!({
+        "pbrMetallicRoughness": black.clone(),
+        "extensions": { "KHR_materials_sheen": {
+            "sheenColorFactor": [0.9, 0.4, 2.0],
+            "sheenRoughnessFactor": 0.7
+        } }
+    }));
+    let textured = g.material(json!({
+        "pbrMetallicRoughness": black.clone(),
+        "extensions": { "KHR_materials_sheen": {
+            "sheenColorFactor": [1.0, 0.5, 1.0],
+            "sheenColorTexture": { "index": color },
+            "sheenRoughnessFactor": 0.8,
+            "sheenRoughnessTexture": { "index": rough }
+        } }
+    }));
+    let plain = g.material(json!({ "pbrMetallicRoughness": black }));
+    let uv = g.floats(&[[0.5, 0.5]; 4]);
+    for (k, m) in [factors, textured, plain].into_iter().enumerate() {
+        let mut p = quad(
+            &mut g,
+            square([3.0 * k as f32, 0.0, 0.0], 1.0),
+            &[("TEXCOORD_0", uv)],
+        );
+        p["material"] = json!(m);
+        let mesh = g.mesh(vec![p]);
+        g.root(json!({ "mesh": mesh }));
+    }
+    g.extensions_used = vec!["KHR_materials_sheen".into()];
+    let loaded = load(&g.write(dir.path(), "sheen.gltf"));
+    let scene = &loaded.scene;
+    let srgb = |b: u8| srgb_to_linear(b as f32 / 255.0);
+    let cases = [
+        (Vec3A::new(0.9, 0.4, 1.0), 0.7f32),
+        (
+            Vec3A::new(srgb(200), 0.5 * srgb(100), srgb(50)),
+            0.8 * 128.0 / 255.0,
+        ),
+        (Vec3A::ZERO, 0.0),
+    ];
+    let attrs = HitAttributes {
+        uv: [glam::Vec2::splat(0.5); 2],
+        color: Vec4::ONE,
+    };
+    for (k, (color, roughness)) in cases.into_iter().enumerate() {
+        let material = scene.material(2 * k as u32);
+        let Material::Pbr(p) = material.bsdf(&attrs, scene.textures()) else {
+            panic!("material {k} is not the glTF BSDF");
+        };
+        assert_near(p.sheen_color, color, 1e-6, "sheen colour");
+        assert!((p.sheen_roughness - roughness).abs() < 1e-6, "{k}: {p:?}");
+        // Head-on light, view at 60°: the black base reflects only its
+        // specular part; the sheen adds C f_sheen, by channel.
+        let wo = Vec3A::new(0.75f32.sqrt(), 0.0, 0.5);
+        let f = Material::Pbr(p).eval(wo, Vec3A::Z);
+        let no_sheen = raylab::materials::PbrBsdf {
+            sheen_color: Vec3A::ZERO,
+            ..p
+        };
+        let base = Material::Pbr(no_sheen).eval(wo, Vec3A::Z);
+        let value = raylab::materials::sheen::eval(wo, Vec3A::Z, roughness);
+        let scaling = (1.0
+            - color.max_element() * raylab::materials::sheen::albedo(0.5, roughness))
+        .min(1.0 - color.max_element() * raylab::materials::sheen::albedo(1.0, roughness));
+        assert_near(f, base * scaling + color * value, 1e-6, "layering");
+        if k < 2 {
+            assert!(value > 0.0 && (f - base).max_element() > 0.0, "{k}: {f}");
+        }
+    }
+    // Not finite (as f32): refused with the material named.
+    g.materials[0]["extensions"]["KHR_materials_sheen"]["sheenRoughnessFactor"] = json!(1e39);
+    let Err(err) = load_with(
+        &g.write(dir.path(), "sheen-inf.gltf"),
+        &LoadOptions::default(),
+    ) else {
+        panic!("an infinite sheenRoughnessFactor loaded");
+    };
+    assert!(
+        err.contains("material 0") && err.contains("sheenRoughnessFactor"),
+        "{err}"
+    );
 }

@@ -60,6 +60,8 @@ use glam::{Vec2, Vec3A};
 use std::f32::consts::{FRAC_1_PI, FRAC_PI_4, PI};
 
 pub mod pbr;
+pub mod sheen;
+pub mod sheen_table;
 pub mod surface;
 #[cfg(test)]
 pub(crate) mod test_util;

@@ -102,6 +102,14 @@ pub struct GltfMaterial {
     pub clearcoat_normal_texture: Option<TextureRef>,
     /// That normal map's `scale`.
     pub clearcoat_normal_scale: f32,
+    /// `KHR_materials_sheen`: `sheenColorFactor` (linear, black: no sheen).
+    pub sheen_color: Vec3A,
+    /// Its `sheenColorTexture` (sRGB).
+    pub sheen_color_texture: Option<TextureRef>,
+    /// `sheenRoughnessFactor`.
+    pub sheen_roughness: f32,
+    /// Its `sheenRoughnessTexture` (alpha channel).
+    pub sheen_roughness_texture: Option<TextureRef>,
     /// `KHR_materials_pbrSpecularGlossiness`: when present, it replaces the
     /// metallic–roughness parameters (the diffuse colour is `base_color` and
     /// `base_color_texture`), converted per hit by
@@ -172,6 +180,8 @@ impl SpecularGlossiness {
             coat: 0.0,
             coat_alpha: 1.0,
             coat_normal: Vec3A::Z,
+            sheen_color: Vec3A::ZERO,
+            sheen_roughness: 0.0,
         }
     }
 }
@@ -189,6 +199,29 @@ impl GltfMaterial {
             w *= lookup(t, attrs, textures, ColorSpace::Linear).x;
         }
         unit_interval(w)
+    }
+
+    /// The sheen's colour and roughness at a hit, each in `[0, 1]` (black
+    /// without a sheen; the textures are read only where there is one).
+    #[inline]
+    pub fn sheen_at(&self, attrs: &HitAttributes, textures: &TextureStore) -> (Vec3A, f32) {
+        if self.sheen_color.max_element().is_nan() || self.sheen_color.max_element() <= 0.0 {
+            return (Vec3A::ZERO, 0.0);
+        }
+        let mut color = self.sheen_color;
+        if let Some(t) = &self.sheen_color_texture {
+            color *= Vec3A::from(lookup(t, attrs, textures, ColorSpace::Srgb).xyz());
+        }
+        let mut roughness = self.sheen_roughness;
+        if let Some(t) = &self.sheen_roughness_texture {
+            roughness *= lookup(t, attrs, textures, ColorSpace::Linear).w;
+        }
+        let color = Vec3A::new(
+            unit_interval(color.x),
+            unit_interval(color.y),
+            unit_interval(color.z),
+        );
+        (color, unit_interval(roughness))
     }
 }
 
@@ -228,6 +261,10 @@ impl Default for GltfMaterial {
             clearcoat_roughness_texture: None,
             clearcoat_normal_texture: None,
             clearcoat_normal_scale: 1.0,
+            sheen_color: Vec3A::ZERO,
+            sheen_color_texture: None,
+            sheen_roughness: 0.0,
+            sheen_roughness_texture: None,
             specular_glossiness: None,
         }
     }
@@ -414,6 +451,7 @@ impl SurfaceMaterial {
             coat_roughness *= lookup(t, attrs, textures, ColorSpace::Linear).y;
         }
         let coat_roughness = unit_interval(coat_roughness);
+        let (sheen_color, sheen_roughness) = g.sheen_at(attrs, textures);
         Material::Pbr(PbrBsdf {
             base_color: base.clamp(Vec3A::ZERO, Vec3A::ONE),
             metallic: unit_interval(metallic),
@@ -426,6 +464,8 @@ impl SurfaceMaterial {
             coat,
             coat_alpha: PbrBsdf::alpha_from_roughness(coat_roughness),
             coat_normal: Vec3A::Z,
+            sheen_color,
+            sheen_roughness,
         })
     }
 
@@ -553,6 +593,8 @@ pub fn texture_refs(m: &SurfaceMaterial) -> impl Iterator<Item = &TextureRef> {
             &g.clearcoat_texture,
             &g.clearcoat_roughness_texture,
             &g.clearcoat_normal_texture,
+            &g.sheen_color_texture,
+            &g.sheen_roughness_texture,
         ]
         .into_iter()
         .chain(specular_glossiness)
@@ -582,6 +624,8 @@ pub fn texture_refs_mut(m: &mut SurfaceMaterial) -> impl Iterator<Item = &mut Te
             &mut g.clearcoat_texture,
             &mut g.clearcoat_roughness_texture,
             &mut g.clearcoat_normal_texture,
+            &mut g.sheen_color_texture,
+            &mut g.sheen_roughness_texture,
         ]
         .into_iter()
         .chain(specular_glossiness)

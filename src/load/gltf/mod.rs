@@ -36,12 +36,13 @@ use crate::scene::{NO_INSTANCE, PointLight, SceneParts};
 use crate::textures::{TextureError, TextureRef, TextureStore, TextureTransform, Wrap};
 
 /// Extensions raylab reads; a file that requires any other is refused.
-pub const SUPPORTED_EXTENSIONS: [&str; 14] = [
+pub const SUPPORTED_EXTENSIONS: [&str; 15] = [
     "KHR_lights_punctual",
     "KHR_materials_clearcoat",
     "KHR_materials_emissive_strength",
     "KHR_materials_ior",
     "KHR_materials_pbrSpecularGlossiness",
+    "KHR_materials_sheen",
     "KHR_materials_specular",
     "KHR_materials_transmission",
     "KHR_materials_unlit",
@@ -67,6 +68,21 @@ struct Clearcoat {
     clearcoat_roughness_factor: f32,
     clearcoat_roughness_texture: Option<json::texture::Info>,
     clearcoat_normal_texture: Option<json::material::NormalTexture>,
+}
+
+/// The sheen extension's name.
+const SHEEN: &str = "KHR_materials_sheen";
+
+/// `KHR_materials_sheen`'s object (`gltf-json` does not know it).
+#[derive(serde::Deserialize)]
+#[serde(rename_all = "camelCase")]
+struct Sheen {
+    #[serde(default)]
+    sheen_color_factor: [f32; 3],
+    sheen_color_texture: Option<json::texture::Info>,
+    #[serde(default)]
+    sheen_roughness_factor: f32,
+    sheen_roughness_texture: Option<json::texture::Info>,
 }
 
 /// Deepest node hierarchy accepted.
@@ -1395,6 +1411,9 @@ impl Loader<'_> {
         if let Some(value) = ext.and_then(|e| e.others.get(CLEARCOAT)) {
             self.clearcoat(value, &mut g, &what)?;
         }
+        if let Some(value) = ext.and_then(|e| e.others.get(SHEEN)) {
+            self.sheen(value, &mut g, &what)?;
+        }
         let strength = ext
             .and_then(|e| e.emissive_strength.as_ref())
             .map_or(1.0, |s| s.emissive_strength.0);
@@ -1449,6 +1468,33 @@ impl Loader<'_> {
             }
             g.clearcoat_normal_scale = n.scale;
         }
+        Ok(())
+    }
+
+    /// Reads `KHR_materials_sheen` (`value`, the extension's object) into `g`.
+    fn sheen(
+        &mut self,
+        value: &serde_json::Value,
+        g: &mut GltfMaterial,
+        what: &str,
+    ) -> Result<(), GltfError> {
+        let s: Sheen = serde_json::from_value(value.clone())
+            .map_err(|e| GltfError::invalid(format!("{what}: {SHEEN}: {e}")))?;
+        let color = Vec3A::from(s.sheen_color_factor);
+        if !color.is_finite() {
+            return Err(GltfError::invalid(format!(
+                "{what}: {SHEEN}: sheenColorFactor is not finite"
+            )));
+        }
+        if !s.sheen_roughness_factor.is_finite() {
+            return Err(GltfError::invalid(format!(
+                "{what}: {SHEEN}: sheenRoughnessFactor is not finite"
+            )));
+        }
+        g.sheen_color = color.clamp(Vec3A::ZERO, Vec3A::ONE);
+        g.sheen_roughness = s.sheen_roughness_factor.clamp(0.0, 1.0);
+        g.sheen_color_texture = self.texture(s.sheen_color_texture.as_ref(), what)?;
+        g.sheen_roughness_texture = self.texture(s.sheen_roughness_texture.as_ref(), what)?;
         Ok(())
     }
 
