@@ -144,6 +144,12 @@ pub struct PbrBsdf {
     /// shading normal), above its horizon; set per hit by
     /// [`PbrBsdf::orient_coat`].
     pub coat_normal: Vec3A,
+    /// `KHR_materials_dispersion`: `20 / V_d` (`V_d` the Abbe number; 0, the
+    /// default, disperses nothing). Only a refracting volume disperses
+    /// ([`PbrBsdf::dispersive`]); a path that meets one is carried at one
+    /// wavelength from there on, with `ior` replaced by the index at that
+    /// wavelength ([`PbrBsdf::at_wavelength`]).
+    pub dispersion: f32,
 }
 
 /// The clear coat's `F0`: an index of 1.5, `((1.5 − 1)/(1.5 + 1))²`.
@@ -298,6 +304,31 @@ impl PbrBsdf {
             coat: 0.0,
             coat_alpha: 1.0,
             coat_normal: Vec3A::Z,
+            dispersion: 0.0,
+        }
+    }
+
+    /// Whether this BSDF disperses light (`KHR_materials_dispersion`): a
+    /// positive dispersion on a refracting volume that transmits something.
+    /// Thin walls do not disperse (the extension builds on
+    /// `KHR_materials_volume`).
+    #[inline]
+    pub fn dispersive(&self) -> bool {
+        self.dispersion > 0.0 && self.transmission_scale() > 0.0 && !self.thin_walled
+    }
+
+    /// This BSDF at wavelength `lambda` (nm): `ior` becomes the extension's
+    /// `n(λ)` ([`super::spectrum::dispersed_ior`]), for every lobe (the
+    /// Fresnel terms and the refraction). A BSDF that is not
+    /// [`PbrBsdf::dispersive`] is returned unchanged, bit for bit.
+    #[inline]
+    pub fn at_wavelength(&self, lambda: f32) -> PbrBsdf {
+        if !self.dispersive() {
+            return *self;
+        }
+        PbrBsdf {
+            ior: super::spectrum::dispersed_ior(self.ior, self.dispersion, lambda),
+            ..*self
         }
     }
 

@@ -102,6 +102,10 @@ pub struct GltfMaterial {
     pub clearcoat_normal_texture: Option<TextureRef>,
     /// That normal map's `scale`.
     pub clearcoat_normal_scale: f32,
+    /// `KHR_materials_dispersion` `dispersion`, `20 / V_d` (0 by default: no
+    /// dispersion); it disperses only with a volume (see
+    /// [`PbrBsdf::dispersive`]).
+    pub dispersion: f32,
     /// `KHR_materials_pbrSpecularGlossiness`: when present, it replaces the
     /// metallic–roughness parameters (the diffuse colour is `base_color` and
     /// `base_color_texture`), converted per hit by
@@ -172,6 +176,7 @@ impl SpecularGlossiness {
             coat: 0.0,
             coat_alpha: 1.0,
             coat_normal: Vec3A::Z,
+            dispersion: 0.0,
         }
     }
 }
@@ -228,6 +233,7 @@ impl Default for GltfMaterial {
             clearcoat_roughness_texture: None,
             clearcoat_normal_texture: None,
             clearcoat_normal_scale: 1.0,
+            dispersion: 0.0,
             specular_glossiness: None,
         }
     }
@@ -426,6 +432,7 @@ impl SurfaceMaterial {
             coat,
             coat_alpha: PbrBsdf::alpha_from_roughness(coat_roughness),
             coat_normal: Vec3A::Z,
+            dispersion: g.dispersion,
         })
     }
 

@@ -5,7 +5,7 @@ use glam::{Vec2, Vec3A};
 
 use crate::geometry::ray::{Hit, Ray};
 use crate::lights::environment::SkyRadiance;
-use crate::materials::{Frame, Material};
+use crate::materials::{Frame, Material, spectrum};
 use crate::sampling::sampler::Rng;
 use crate::sampling::sobol;
 use crate::scene::{Facing, LightSample, Scene, SurfaceHit};
@@ -302,6 +302,9 @@ pub fn radiance_traced(
     let mut depth = 0u32;
     // Beer–Lambert attenuation per unit length of the medium the ray is in.
     let mut medium = Vec3A::ZERO;
+    // The wavelength (nm) the path is carried at since it met a dispersive
+    // surface; `None` while it is RGB.
+    let mut wavelength: Option<f32> = None;
     let textures = scene.textures();
     let lights_need_samples = scene.light_needs_samples();
     loop {
@@ -382,6 +385,21 @@ pub fn radiance_traced(
         let mut bsdf = material.bsdf(&surface.attrs, textures);
         if depth == 0 {
             observe(&surface, &bsdf);
+        }
+        // `KHR_materials_dispersion`: the first dispersive surface a path
+        // meets draws the path's wavelength (from the path's own stream, so
+        // that images stay the same on any number of threads) and weighs the
+        // throughput by that wavelength's RGB response, white in expectation;
+        // from there on every dispersive surface takes its index at that
+        // wavelength, for its light sample and its BSDF sample alike. A path
+        // that meets none draws nothing and stays RGB.
+        if bsdf.dispersive() {
+            let lambda = *wavelength.get_or_insert_with(|| {
+                let (lambda, w) = spectrum::sample_weighted(sampler.next_1d());
+                beta *= w;
+                lambda
+            });
+            bsdf.set_wavelength(lambda);
         }
         let wo_world = -ray.dir;
         let shading = surface.ns != ng;

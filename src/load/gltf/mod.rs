@@ -36,9 +36,10 @@ use crate::scene::{NO_INSTANCE, PointLight, SceneParts};
 use crate::textures::{TextureError, TextureRef, TextureStore, TextureTransform, Wrap};
 
 /// Extensions raylab reads; a file that requires any other is refused.
-pub const SUPPORTED_EXTENSIONS: [&str; 14] = [
+pub const SUPPORTED_EXTENSIONS: [&str; 15] = [
     "KHR_lights_punctual",
     "KHR_materials_clearcoat",
+    "KHR_materials_dispersion",
     "KHR_materials_emissive_strength",
     "KHR_materials_ior",
     "KHR_materials_pbrSpecularGlossiness",
@@ -67,6 +68,17 @@ struct Clearcoat {
     clearcoat_roughness_factor: f32,
     clearcoat_roughness_texture: Option<json::texture::Info>,
     clearcoat_normal_texture: Option<json::material::NormalTexture>,
+}
+
+/// The dispersion extension's name.
+const DISPERSION: &str = "KHR_materials_dispersion";
+
+/// `KHR_materials_dispersion`'s object (`gltf-json` does not know it).
+#[derive(serde::Deserialize)]
+struct Dispersion {
+    /// `20 / V_d`; 0 (the default) disperses nothing.
+    #[serde(default)]
+    dispersion: f32,
 }
 
 /// Deepest node hierarchy accepted.
@@ -1394,6 +1406,13 @@ impl Loader<'_> {
         }
         if let Some(value) = ext.and_then(|e| e.others.get(CLEARCOAT)) {
             self.clearcoat(value, &mut g, &what)?;
+        }
+        if let Some(value) = ext.and_then(|e| e.others.get(DISPERSION)) {
+            let d: Dispersion = serde_json::from_value(value.clone())
+                .map_err(|e| GltfError::invalid(format!("{what}: {DISPERSION}: {e}")))?;
+            // Any value from 0 up is valid (above 1 exaggerates); a negative
+            // one, outside the schema, reads as none.
+            g.dispersion = finite(d.dispersion, "dispersion")?.max(0.0);
         }
         let strength = ext
             .and_then(|e| e.emissive_strength.as_ref())
