@@ -24,8 +24,11 @@
 //! ([`rgb_norm`]).
 //!
 //! `p` is pbrt-v4's density for visible wavelengths, `∝ 1 / cosh²(0.0072 (λ −
-//! 538))`, sampled by inverting its CDF exactly; it follows the sum of the
-//! matching functions closely enough that `W` stays within about ±4.
+//! 538))`, sampled by inverting its CDF exactly. It follows the luminance
+//! rather than the blue, so `|W|` reaches 7.7 in the blue at 440 nm (the
+//! second moments of `W` are 6.7, 3.4 and 6.3 per channel; a density
+//! proportional to `Σ |r|`, which would need a tabulated inverse, would give
+//! 5.0, 2.9 and 3.9).
 //!
 //! Nothing here allocates (but [`rgb_norm`]'s one-time integral).
 
@@ -69,7 +72,10 @@ const CENTRE: f32 = 538.0;
 /// / (lo + hi)`.
 #[inline]
 fn cdf_ends() -> (f32, f32) {
-    ((K * (CENTRE - LAMBDA_MIN)).tanh(), (K * (LAMBDA_MAX - CENTRE)).tanh())
+    (
+        (K * (CENTRE - LAMBDA_MIN)).tanh(),
+        (K * (LAMBDA_MAX - CENTRE)).tanh(),
+    )
 }
 
 /// The density with which [`sample_wavelength`] draws `lambda` (per nm; 0
@@ -182,14 +188,15 @@ mod tests {
                 // Blue bends more than red.
                 if dispersion > 0.0 {
                     assert!(
-                        dispersed_ior(ior, dispersion, 450.0) > dispersed_ior(ior, dispersion, 650.0)
+                        dispersed_ior(ior, dispersion, 450.0)
+                            > dispersed_ior(ior, dispersion, 650.0)
                     );
                 }
             }
         }
         // Clamped at 1 far into the red with an absurd dispersion.
         assert_eq!(dispersed_ior(1.1, 50.0, 830.0), 1.0);
-        assert_eq!(dispersed_ior(1.5, f32::MAX, 400.0), 1.5);
+        assert_eq!(dispersed_ior(1.5, f32::INFINITY, 400.0), 1.5);
     }
 
     /// The density integrates to 1, and the sampler's CDF is the density's:
@@ -212,7 +219,10 @@ mod tests {
             let cdf: f64 = (0..steps)
                 .map(|i| wavelength_pdf(LAMBDA_MIN + ((i as f64 + 0.5) * hh) as f32) as f64 * hh)
                 .sum();
-            assert!((below - cdf).abs() < 1e-3, "λ {lambda}: {below} drawn below, CDF {cdf}");
+            assert!(
+                (below - cdf).abs() < 1e-3,
+                "λ {lambda}: {below} drawn below, CDF {cdf}"
+            );
         }
         assert_eq!(sample_wavelength(0.0), LAMBDA_MIN);
         assert!(sample_wavelength(0.999_999_9) <= LAMBDA_MAX);
@@ -236,9 +246,14 @@ mod tests {
         }
         // The weights stay bounded (the density follows the response).
         let most = (0..10_000)
-            .map(|i| sample_weighted((i as f32 + 0.5) / 1e4).1.abs().max_element())
+            .map(|i| {
+                sample_weighted((i as f32 + 0.5) / 1e4)
+                    .1
+                    .abs()
+                    .max_element()
+            })
             .fold(0.0f32, f32::max);
-        assert!(most < 5.0, "largest |W| = {most}");
+        assert!(most < 8.0, "largest |W| = {most}");
         // Tabulated CIE 1931 values (ȳ(555) = 1.0002, x̄(600) = 1.0622,
         // z̄(445) = 1.7826 at 5 nm resolution).
         let xyz = cie_xyz(555.0);
@@ -246,7 +261,11 @@ mod tests {
         assert!((cie_xyz(600.0).x - 1.0622).abs() < 0.05);
         assert!((cie_xyz(445.0).z - 1.7826).abs() < 0.09);
         // Red, green and blue where they should be.
-        let (r, g, b) = (rgb_response(620.0), rgb_response(530.0), rgb_response(450.0));
+        let (r, g, b) = (
+            rgb_response(620.0),
+            rgb_response(530.0),
+            rgb_response(450.0),
+        );
         assert!(r.x > r.y && r.x > r.z && g.y > g.x && g.y > g.z && b.z > b.x && b.z > b.y);
     }
 }
