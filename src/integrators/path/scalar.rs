@@ -67,7 +67,9 @@ impl Default for PathOptions {
 /// asks for a 2D pair for the pixel position, then per bounce a pair for the
 /// point on the light, a pair for the BSDF direction, a "minor" pair for the
 /// choices of light and lobe (only when there is a choice), and one number for
-/// Russian roulette (only where it may end the path).
+/// Russian roulette (only where it may end the path); a path that meets a
+/// dispersive surface (`KHR_materials_dispersion`) takes one more number there,
+/// once, for its wavelength.
 pub trait PathSampler {
     /// The next two values in `[0, 1)` for a decision that gains little from
     /// stratification (which light, which lobe).

@@ -1300,7 +1300,7 @@ impl Loader<'_> {
         let ext = m.extensions.as_ref();
         if let Some(e) = ext {
             for name in e.others.keys() {
-                if name != CLEARCOAT {
+                if ![CLEARCOAT, DISPERSION].contains(&name.as_str()) {
                     self.warn_once(name, format!("ignoring the material extension {name}"));
                 }
             }
