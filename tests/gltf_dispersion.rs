@@ -240,7 +240,7 @@ fn dispersion_without_a_volume_changes_nothing_and_bad_values_are_refused() {
         ..LoadOptions::default()
     };
     let bad = slab_file(dir.path(), "bad.gltf", glass(Some(json!(1e39)), true));
-    let err = load_with(&bad, &options).err().expect("refused");
+    let err = load_with(&bad, &options).expect_err("refused");
     assert!(
         err.contains("material 1") && err.contains("dispersion"),
         "{err}"
@@ -250,6 +250,6 @@ fn dispersion_without_a_volume_changes_nothing_and_bad_values_are_refused() {
         "bad-type.gltf",
         glass(Some(json!("lots")), true),
     );
-    let err = load_with(&bad, &options).err().expect("refused");
+    let err = load_with(&bad, &options).expect_err("refused");
     assert!(err.contains("KHR_materials_dispersion"), "{err}");
 }
