@@ -1692,6 +1692,8 @@ mod tests {
         let wo = frame.to_local(-d);
         // u_lobe near 1 takes the transmission (there is no diffuse or coat).
         let s = bsdf.sample(wo, 0.999_999, Vec2::new(0.5, 0.5))?;
+        // Clear smooth glass at any wavelength: R + T = 1, weight 1.
+        assert!((s.weight - Vec3A::ONE).abs().max_element() < 1e-5, "{s:?}");
         (s.specular && s.wi.z * wo.z < 0.0).then(|| frame.to_world(s.wi))
     }
 
@@ -1784,5 +1786,29 @@ mod tests {
             ],
             900,
         );
+    }
+
+    /// A white furnace for the rough dispersive dielectric: at the ends of
+    /// the spectrum, where its index is furthest from `ior`, from outside
+    /// and inside, it never returns more than it receives (single
+    /// scattering GGX loses a little).
+    #[test]
+    fn furnace_rough_dispersive_dielectric_at_every_wavelength() {
+        for (k, lambda) in [380.0f32, 480.0, 700.0].into_iter().enumerate() {
+            for roughness in [0.1f32, 0.5, 1.0] {
+                let glass = dispersive_glass(2.04, roughness).at_wavelength(lambda);
+                for theta in [0.0f32, 45.0, 80.0] {
+                    for wo in [dir(theta, 0.4), -dir(theta, 0.4)] {
+                        let key = 1000 + k as u64;
+                        let (a, se) = albedo(Material::Pbr(glass), wo, 20_000, key);
+                        assert!(
+                            a <= 1.0 + 4.0 * se + 1e-6,
+                            "λ {lambda}, r {roughness}, wo {wo}: albedo {a} ± {se}"
+                        );
+                        assert!(a > 0.3, "λ {lambda}, r {roughness}, wo {wo}: {a}");
+                    }
+                }
+            }
+        }
     }
 }
