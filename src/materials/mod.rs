@@ -62,6 +62,7 @@ use std::f32::consts::{FRAC_1_PI, FRAC_PI_4, PI};
 pub mod pbr;
 pub mod sheen;
 pub mod sheen_table;
+pub mod spectrum;
 pub mod surface;
 #[cfg(test)]
 pub(crate) mod test_util;
@@ -445,6 +446,24 @@ impl Material {
     pub fn orient_coat(&mut self, frame: &Frame, n_c: Vec3A) {
         if let Material::Pbr(p) = self {
             p.orient_coat(frame, n_c);
+        }
+    }
+
+    /// Whether the material disperses light (a [`Material::Pbr`] that is
+    /// [`PbrBsdf::dispersive`]): a path that meets it is carried at one
+    /// wavelength from there on.
+    #[inline]
+    pub fn dispersive(&self) -> bool {
+        matches!(self, Material::Pbr(p) if p.dispersive())
+    }
+
+    /// The material at wavelength `lambda` (nm) ([`PbrBsdf::at_wavelength`]):
+    /// a dispersive glTF material takes the index of refraction there; every
+    /// other material is unchanged.
+    #[inline]
+    pub fn set_wavelength(&mut self, lambda: f32) {
+        if let Material::Pbr(p) = self {
+            *p = p.at_wavelength(lambda);
         }
     }
 

@@ -110,6 +110,10 @@ pub struct GltfMaterial {
     pub sheen_roughness: f32,
     /// Its `sheenRoughnessTexture` (alpha channel).
     pub sheen_roughness_texture: Option<TextureRef>,
+    /// `KHR_materials_dispersion` `dispersion`, `20 / V_d` (0 by default: no
+    /// dispersion); it disperses only with a volume (see
+    /// [`PbrBsdf::dispersive`]).
+    pub dispersion: f32,
     /// `KHR_materials_pbrSpecularGlossiness`: when present, it replaces the
     /// metallic–roughness parameters (the diffuse colour is `base_color` and
     /// `base_color_texture`), converted per hit by
@@ -182,6 +186,7 @@ impl SpecularGlossiness {
             coat_normal: Vec3A::Z,
             sheen_color: Vec3A::ZERO,
             sheen_roughness: 0.0,
+            dispersion: 0.0,
         }
     }
 }
@@ -265,6 +270,7 @@ impl Default for GltfMaterial {
             sheen_color_texture: None,
             sheen_roughness: 0.0,
             sheen_roughness_texture: None,
+            dispersion: 0.0,
             specular_glossiness: None,
         }
     }
@@ -466,6 +472,7 @@ impl SurfaceMaterial {
             coat_normal: Vec3A::Z,
             sheen_color,
             sheen_roughness,
+            dispersion: g.dispersion,
         })
     }
 

@@ -13,6 +13,11 @@
 //! triangles radiance `Le`, diffuse surfaces reflect `ρ/π`. Nothing is added for
 //! ambient light: the path tracer computes it.
 //!
+//! Colour is linear RGB, but for paths that meet a dispersive glTF material
+//! (`KHR_materials_dispersion`): from there on such a path is carried at one
+//! wavelength, drawn once, its throughput weighted by that wavelength's RGB
+//! response ([`crate::materials::spectrum`]).
+//!
 //! The path tracer is `scalar`'s, one path at a time; `lanes` shades eight
 //! paths at once in AVX2 registers where the scene allows, with the same
 //! values bit for bit.

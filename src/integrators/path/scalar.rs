@@ -5,7 +5,7 @@ use glam::{Vec2, Vec3A};
 
 use crate::geometry::ray::{Hit, Ray};
 use crate::lights::environment::SkyRadiance;
-use crate::materials::{Frame, Material};
+use crate::materials::{Frame, Material, spectrum};
 use crate::sampling::sampler::Rng;
 use crate::sampling::sobol;
 use crate::scene::{Facing, LightSample, Scene, SurfaceHit};
@@ -67,7 +67,9 @@ impl Default for PathOptions {
 /// asks for a 2D pair for the pixel position, then per bounce a pair for the
 /// point on the light, a pair for the BSDF direction, a "minor" pair for the
 /// choices of light and lobe (only when there is a choice), and one number for
-/// Russian roulette (only where it may end the path).
+/// Russian roulette (only where it may end the path); a path that meets a
+/// dispersive surface (`KHR_materials_dispersion`) takes one more number there,
+/// once, for its wavelength.
 pub trait PathSampler {
     /// The next two values in `[0, 1)` for a decision that gains little from
     /// stratification (which light, which lobe).
@@ -302,6 +304,9 @@ pub fn radiance_traced(
     let mut depth = 0u32;
     // Beer–Lambert attenuation per unit length of the medium the ray is in.
     let mut medium = Vec3A::ZERO;
+    // The wavelength (nm) the path is carried at since it met a dispersive
+    // surface; `None` while it is RGB.
+    let mut wavelength: Option<f32> = None;
     let textures = scene.textures();
     let lights_need_samples = scene.light_needs_samples();
     loop {
@@ -382,6 +387,21 @@ pub fn radiance_traced(
         let mut bsdf = material.bsdf(&surface.attrs, textures);
         if depth == 0 {
             observe(&surface, &bsdf);
+        }
+        // `KHR_materials_dispersion`: the first dispersive surface a path
+        // meets draws the path's wavelength (from the path's own stream, so
+        // that images stay the same on any number of threads) and weighs the
+        // throughput by that wavelength's RGB response, white in expectation;
+        // from there on every dispersive surface takes its index at that
+        // wavelength, for its light sample and its BSDF sample alike. A path
+        // that meets none draws nothing and stays RGB.
+        if bsdf.dispersive() {
+            let lambda = *wavelength.get_or_insert_with(|| {
+                let (lambda, w) = spectrum::sample_weighted(sampler.next_1d());
+                beta *= w;
+                lambda
+            });
+            bsdf.set_wavelength(lambda);
         }
         let wo_world = -ray.dir;
         let shading = surface.ns != ng;

@@ -36,9 +36,10 @@ use crate::scene::{NO_INSTANCE, PointLight, SceneParts};
 use crate::textures::{TextureError, TextureRef, TextureStore, TextureTransform, Wrap};
 
 /// Extensions raylab reads; a file that requires any other is refused.
-pub const SUPPORTED_EXTENSIONS: [&str; 15] = [
+pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_lights_punctual",
     "KHR_materials_clearcoat",
+    "KHR_materials_dispersion",
     "KHR_materials_emissive_strength",
     "KHR_materials_ior",
     "KHR_materials_pbrSpecularGlossiness",
@@ -83,6 +84,17 @@ struct Sheen {
     #[serde(default)]
     sheen_roughness_factor: f32,
     sheen_roughness_texture: Option<json::texture::Info>,
+}
+
+/// The dispersion extension's name.
+const DISPERSION: &str = "KHR_materials_dispersion";
+
+/// `KHR_materials_dispersion`'s object (`gltf-json` does not know it).
+#[derive(serde::Deserialize)]
+struct Dispersion {
+    /// `20 / V_d`; 0 (the default) disperses nothing.
+    #[serde(default)]
+    dispersion: f32,
 }
 
 /// Deepest node hierarchy accepted.
@@ -1304,7 +1316,7 @@ impl Loader<'_> {
         let ext = m.extensions.as_ref();
         if let Some(e) = ext {
             for name in e.others.keys() {
-                if name != CLEARCOAT {
+                if ![CLEARCOAT, SHEEN, DISPERSION].contains(&name.as_str()) {
                     self.warn_once(name, format!("ignoring the material extension {name}"));
                 }
             }
@@ -1413,6 +1425,13 @@ impl Loader<'_> {
         }
         if let Some(value) = ext.and_then(|e| e.others.get(SHEEN)) {
             self.sheen(value, &mut g, &what)?;
+        }
+        if let Some(value) = ext.and_then(|e| e.others.get(DISPERSION)) {
+            let d: Dispersion = serde_json::from_value(value.clone())
+                .map_err(|e| GltfError::invalid(format!("{what}: {DISPERSION}: {e}")))?;
+            // Any value from 0 up is valid (above 1 exaggerates); a negative
+            // one, outside the schema, reads as none.
+            g.dispersion = finite(d.dispersion, "dispersion")?.max(0.0);
         }
         let strength = ext
             .and_then(|e| e.emissive_strength.as_ref())
