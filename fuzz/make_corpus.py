@@ -650,6 +650,56 @@ def cli_seeds():
         put("cli", "args%02d" % i, "\0".join(words))
 
 
+# ------------------------------------------------------------------ meshopt
+
+# The fuzz target's view table (fuzz/src/targets.rs, MESHOPT_VIEWS), in
+# order: extension, mode, filter, byte stride.
+MESHOPT_VIEWS = [
+    ("EXT", "ATTRIBUTES", "NONE", 12), ("EXT", "ATTRIBUTES", "NONE", 4),
+    ("KHR", "ATTRIBUTES", "NONE", 8), ("KHR", "ATTRIBUTES", "EXPONENTIAL", 12),
+    ("EXT", "ATTRIBUTES", "OCTAHEDRAL", 8), ("KHR", "ATTRIBUTES", "OCTAHEDRAL", 4),
+    ("EXT", "ATTRIBUTES", "QUATERNION", 8), ("KHR", "ATTRIBUTES", "COLOR", 4),
+    ("KHR", "ATTRIBUTES", "COLOR", 8), ("EXT", "TRIANGLES", "NONE", 2),
+    ("KHR", "TRIANGLES", "NONE", 4), ("EXT", "INDICES", "NONE", 2), ("KHR", "INDICES", "NONE", 4),
+]
+
+
+def meshopt_seeds():
+    """Every compressed stream of the gltfpack-made test files
+    (tests/data/compressed/), each prefixed with the target's pick of a view
+    of its extension, mode and stride (the filters may differ: the target
+    then filters the stream's bytes anyway) and its element count."""
+    data = os.path.join(HERE, "..", "tests", "data", "compressed")
+    for name in sorted(os.listdir(data)):
+        path = os.path.join(data, name)
+        if name.endswith(".glb"):
+            b = open(path, "rb").read()
+            n = struct.unpack("<I", b[12:16])[0]
+            doc = json.loads(b[20:20 + n])
+            bins = [b[28 + n:]]
+        elif name.startswith("meshopt") and name.endswith(".gltf"):
+            doc = json.load(open(path))
+            bins = [open(os.path.join(data, doc["buffers"][0]["uri"]), "rb").read()]
+        else:
+            continue
+        for i, v in enumerate(doc.get("bufferViews", [])):
+            for ext in ("EXT", "KHR"):
+                e = v.get("extensions", {}).get(ext + "_meshopt_compression")
+                if not e or e["buffer"] != 0:
+                    continue
+                stride, mode, flt = e["byteStride"], e["mode"], e.get("filter", "NONE")
+                picks = [k for k, (x, m, f, s) in enumerate(MESHOPT_VIEWS)
+                         if (x, m, s) == (ext, mode, stride)]
+                picks.sort(key=lambda k: MESHOPT_VIEWS[k][2] != flt)
+                if not picks:
+                    continue
+                count = e["count"] // 3 if mode == "TRIANGLES" else e["count"]
+                start = e.get("byteOffset", 0)
+                stream = bins[0][start:start + e["byteLength"]]
+                put("meshopt", "%s-view%d" % (name.rsplit(".", 1)[0], i),
+                    bytes([picks[0]]) + struct.pack("<H", count) + stream)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--shared", default=os.path.join(HERE, "..", "..", "shared"))
@@ -663,6 +713,7 @@ def main():
     ray_seeds(a.shared)
     checkpoint_seeds()
     cli_seeds()
+    meshopt_seeds()
     for t in sorted(os.listdir(os.path.join(HERE, "corpus"))):
         files = os.listdir(os.path.join(HERE, "corpus", t))
         size = sum(os.path.getsize(os.path.join(HERE, "corpus", t, f)) for f in files)

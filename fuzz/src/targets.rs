@@ -106,6 +106,67 @@ pub fn webp(data: &[u8]) {
     texture(data, "webp");
 }
 
+/// The compressed buffer views [`meshopt`] tries, one per input's first
+/// byte (modulo their number): extension, mode, filter, byte stride, and the
+/// component type and type of the accessor reading the decoded bytes.
+pub const MESHOPT_VIEWS: [(&str, &str, &str, u32, u32, &str); 13] = [
+    ("EXT", "ATTRIBUTES", "NONE", 12, 5126, "VEC3"),
+    ("EXT", "ATTRIBUTES", "NONE", 4, 5121, "VEC3"),
+    ("KHR", "ATTRIBUTES", "NONE", 8, 5123, "VEC3"),
+    ("KHR", "ATTRIBUTES", "EXPONENTIAL", 12, 5126, "VEC3"),
+    ("EXT", "ATTRIBUTES", "OCTAHEDRAL", 8, 5122, "VEC3"),
+    ("KHR", "ATTRIBUTES", "OCTAHEDRAL", 4, 5120, "VEC3"),
+    ("EXT", "ATTRIBUTES", "QUATERNION", 8, 5122, "VEC3"),
+    ("KHR", "ATTRIBUTES", "COLOR", 4, 5121, "VEC3"),
+    ("KHR", "ATTRIBUTES", "COLOR", 8, 5123, "VEC3"),
+    ("EXT", "TRIANGLES", "NONE", 2, 5123, "SCALAR"),
+    ("KHR", "TRIANGLES", "NONE", 4, 5125, "SCALAR"),
+    ("EXT", "INDICES", "NONE", 2, 5123, "SCALAR"),
+    ("KHR", "INDICES", "NONE", 4, 5125, "SCALAR"),
+];
+
+/// A `EXT_`/`KHR_meshopt_compression` stream: the input's first byte picks
+/// the view's mode, filter and stride ([`MESHOPT_VIEWS`]), the next two
+/// (little-endian) the element count (of triangles for `TRIANGLES`), and the
+/// rest is the compressed bytes (`meshopt.bin`), read
+/// by a glTF as its positions or its indices; the other comes from the
+/// fixture buffer. Loaded and rendered.
+pub fn meshopt(data: &[u8]) {
+    let [pick, c0, c1, stream @ ..] = data else {
+        return;
+    };
+    let count = u16::from_le_bytes([*c0, *c1]) as u32;
+    let (ext, mode, filter, stride, component, kind) =
+        MESHOPT_VIEWS[*pick as usize % MESHOPT_VIEWS.len()];
+    let count = if mode == "TRIANGLES" {
+        3 * count
+    } else {
+        count
+    };
+    put("meshopt.bin", stream);
+    let name = format!("{ext}_meshopt_compression");
+    // The fixture's positions (view 0) and indices (view 1), and the
+    // compressed view 2 over a placeholder buffer 2.
+    let (positions, indices) = if kind == "SCALAR" { (0, 2) } else { (2, 1) };
+    let json = format!(
+        r#"{{"asset":{{"version":"2.0"}},"extensionsUsed":["{name}","KHR_mesh_quantization"],
+"extensionsRequired":["{name}","KHR_mesh_quantization"],"scene":0,"scenes":[{{"nodes":[0]}}],
+"nodes":[{{"mesh":0}}],"meshes":[{{"primitives":[{{"attributes":{{"POSITION":{positions}}},"indices":{indices}}}]}}],
+"buffers":[{{"uri":"fixture.bin","byteLength":44}},{{"uri":"meshopt.bin","byteLength":{len}}},
+{{"byteLength":{decoded},"extensions":{{"{name}":{{"fallback":true}}}}}}],
+"bufferViews":[{{"buffer":0,"byteLength":36}},{{"buffer":0,"byteOffset":36,"byteLength":6}},
+{{"buffer":2,"byteLength":{decoded},"extensions":{{"{name}":{{"buffer":1,"byteLength":{len},
+"byteStride":{stride},"count":{count},"mode":"{mode}","filter":"{filter}"}}}}}}],
+"accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3"}},
+{{"bufferView":1,"componentType":5123,"count":3,"type":"SCALAR"}},
+{{"bufferView":2,"byteOffset":0,"componentType":{component},"count":{count},"type":"{kind}"}}]}}"#,
+        len = stream.len(),
+        decoded = count * stride,
+    );
+    let path = put("meshopt.gltf", json.as_bytes());
+    load_and_render(&path, &LoadOptions::default());
+}
+
 /// A `raylab bench --rays` file, read as the bench reads it and cast at a
 /// small mesh by every query kind, each answer compared with brute force.
 pub fn rays(data: &[u8]) {
@@ -164,6 +225,7 @@ pub fn by_name(name: &str) -> Option<fn(&[u8])> {
         "exr" => exr,
         "png" => png,
         "jpeg" => jpeg,
+        "meshopt" => meshopt,
         "rays" => rays,
         "bvh" => bvh,
         "checkpoint" => checkpoint,

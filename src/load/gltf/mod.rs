@@ -10,6 +10,7 @@
 
 pub mod accessor;
 pub mod animation;
+pub mod meshopt;
 pub(crate) mod skin;
 pub(crate) mod tangents;
 
@@ -53,6 +54,8 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_mesh_quantization",
     "EXT_mesh_gpu_instancing",
     "EXT_texture_webp",
+    meshopt::EXT,
+    meshopt::KHR,
 ];
 
 /// The clear coat extension's name.
@@ -288,7 +291,7 @@ fn load_gltf_inner(
     } else {
         (&bytes[..], None)
     };
-    let root = parse_root(json_bytes, path, ledger, held)?;
+    let mut root = parse_root(json_bytes, path, ledger, held)?;
     let mut warnings = Vec::new();
     if let Some(ext) = root
         .extensions_required
@@ -335,7 +338,17 @@ fn load_gltf_inner(
         }
     };
     let base = path.parent().unwrap_or(Path::new("."));
-    let buffer_data = load_buffers(&root, base, glb_bin, ledger, &mut held)?;
+    let mut buffer_data = load_buffers(&root, base, glb_bin, ledger, &mut held)?;
+    // Compressed views are decoded into buffers of their own, the bytes held
+    // with the rest until the scene is built.
+    meshopt::decode_views(&mut root, &mut buffer_data, |bytes| {
+        held = held.saturating_add(bytes);
+        let needs = Needs {
+            geometry: held,
+            ..Needs::default()
+        };
+        Ok(ledger.fits(&path.display().to_string(), needs)?)
+    })?;
     let buffers = Buffers {
         root: &root,
         data: &buffer_data,
@@ -534,8 +547,18 @@ fn load_buffers(
     held: &mut u64,
 ) -> Result<Vec<Vec<u8>>, GltfError> {
     let mut out = Vec::with_capacity(root.buffers.len().min(1024));
+    let meshopt_used = meshopt::used(root);
     for (i, b) in root.buffers.iter().enumerate() {
         let want = b.byte_length.0;
+        // A meshopt fallback buffer (marked, or a placeholder without a URI
+        // beside the GLB's chunk) holds only what the compressed views
+        // decode to: it is never read, and stays empty.
+        if meshopt_used
+            && (meshopt::is_fallback(b) || (b.uri.is_none() && (i > 0 || glb_bin.is_none())))
+        {
+            out.push(Vec::new());
+            continue;
+        }
         let data = match &b.uri {
             None if i == 0 => glb_bin
                 .ok_or_else(|| {

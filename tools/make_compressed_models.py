@@ -1,0 +1,222 @@
+#!/usr/bin/env python3
+"""Writes tests/data/compressed/: one small textured torus, stored plain and
+compressed every way a downloaded glTF may be, for the tests that load both
+versions and compare their triangles (tests/gltf_compressed.rs).
+
+    python3 tools/make_compressed_models.py [OUT_DIR]
+
+Needs gltfpack 1.3 (npm's `gltfpack` package; `GLTFPACK=path` or `npx
+gltfpack`) for the meshopt files, which it writes exactly as it does for
+users, and DracoPy (PyPI) for the Draco files. Neither is needed to run the
+tests: the files are committed.
+
+The files (all from one source torus with normals, texture coordinates and
+an 8×8 checker texture):
+
+- `plain-noq.glb`, `meshopt-noq.glb`: unquantized floats, plain and
+  `EXT_meshopt_compression` (`-c`): lossless, identical triangles expected.
+- `plain-q.glb`, `meshopt-q.glb`: gltfpack's default quantization
+  (`KHR_mesh_quantization`), plain and `-c`: the same quantized values.
+- `meshopt-cc.glb`: `-cc`, which adds the octahedral filter to the normals
+  (and the stronger codec), so its normals differ from `plain-q.glb`'s within
+  the filter's quantization step.
+- `meshopt-khr.glb`: `-cc -ce khr`, `KHR_meshopt_compression` (vertex codec
+  version 1).
+- `meshopt-fallback.gltf` (+ `.bin`, `.fallback.bin`): `-cf`, the extension
+  used but not required, with the uncompressed fallback buffer beside it.
+- `draco-required.gltf`: `KHR_draco_mesh_compression` required, no
+  uncompressed data (refused: raylab has no Draco decoder).
+- `draco-fallback.gltf`: the extension used but not required, with the
+  uncompressed accessors beside the Draco data (read from the core data).
+- `basisu-required.gltf`: `KHR_texture_basisu` required, a KTX2 image only.
+- `basisu-fallback.gltf`: the extension used, with a PNG fallback.
+"""
+
+import base64
+import json
+import math
+import os
+import shutil
+import struct
+import subprocess
+import sys
+import tempfile
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import gltfgen  # noqa: E402
+
+RINGS, SIDES = 24, 12
+R_MAJOR, R_MINOR = 1.0, 0.35
+
+
+def torus():
+    """Vertices (position, normal, uv) and triangles of a torus with UV
+    seams (the seam vertices are duplicated, as exporters write them)."""
+    verts, tris = [], []
+    for i in range(RINGS + 1):
+        u = i / RINGS
+        a = 2 * math.pi * u
+        for j in range(SIDES + 1):
+            v = j / SIDES
+            b = 2 * math.pi * v
+            n = (math.cos(a) * math.cos(b), math.sin(b), math.sin(a) * math.cos(b))
+            c = (R_MAJOR * math.cos(a), 0.0, R_MAJOR * math.sin(a))
+            p = tuple(c[k] + R_MINOR * n[k] for k in range(3))
+            verts.append((p, n, (u * 2.0, v)))
+    for i in range(RINGS):
+        for j in range(SIDES):
+            a = i * (SIDES + 1) + j
+            b = a + SIDES + 1
+            tris.append((a, a + 1, b))
+            tris.append((b, a + 1, b + 1))
+    return verts, tris
+
+
+def checker_png():
+    rows = []
+    for y in range(8):
+        row = []
+        for x in range(8):
+            row += [230, 90, 40] if (x + y) % 2 else [40, 120, 220]
+        rows.append(bytes(row))
+    return gltfgen.png_bytes(8, 8, rows)
+
+
+def source_gltf(path):
+    """The uncompressed source .gltf (one buffer, a data-URI texture)."""
+    verts, tris = torus()
+    bb = gltfgen.BufferBuilder()
+    pos = bb.floats([v[0] for v in verts], "VEC3", with_bounds=True)
+    nrm = bb.floats([v[1] for v in verts], "VEC3")
+    uv = bb.floats([v[2] for v in verts], "VEC2")
+    idx = bb.indices(tris, len(verts))
+    png = base64.b64encode(checker_png()).decode()
+    doc = {
+        "asset": {"version": "2.0", "generator": "tools/make_compressed_models.py"},
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"mesh": 0}],
+        "meshes": [{"primitives": [{
+            "attributes": {"POSITION": pos, "NORMAL": nrm, "TEXCOORD_0": uv},
+            "indices": idx, "material": 0}]}],
+        "materials": [{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0},
+                                                "metallicFactor": 0.0}}],
+        "textures": [{"source": 0}],
+        "images": [{"uri": "data:image/png;base64," + png}],
+        "buffers": [{"byteLength": len(bb.bin),
+                     "uri": "data:application/octet-stream;base64,"
+                            + base64.b64encode(bytes(bb.bin)).decode()}],
+        "bufferViews": bb.views,
+        "accessors": bb.accessors,
+    }
+    with open(path, "w") as f:
+        json.dump(doc, f)
+    return doc, verts, tris
+
+
+def gltfpack(args):
+    exe = os.environ.get("GLTFPACK")
+    cmd = [exe] if exe else ["npx", "--yes", "gltfpack"]
+    subprocess.run(cmd + args, check=True)
+
+
+def draco_files(out, doc, verts, tris):
+    """The Draco pair: the torus encoded by DracoPy (positions 14 bits,
+    normals 10, texture coordinates 12), required without core data, and
+    used-only with the core accessors kept."""
+    import DracoPy  # PyPI
+    import numpy as np
+
+    points = np.array([v[0] for v in verts], dtype=np.float64)
+    normals = np.array([v[1] for v in verts], dtype=np.float64)
+    uvs = np.array([v[2] for v in verts], dtype=np.float64)
+    faces = np.array(tris, dtype=np.uint32)
+    blob = DracoPy.encode(points, faces, quantization_bits=14, normals=normals,
+                          normal_quantization_bits=10, tex_coord=uvs,
+                          tex_coord_quantization_bits=12, preserve_order=True)
+    # DracoPy adds position, then texture coordinates, then normals: unique
+    # ids 0, 1, 2 (checked by decoding below).
+    back = DracoPy.decode(blob)
+    assert len(back.points) == len(verts) and len(back.faces) == len(tris)
+    ids = {"POSITION": 0, "TEXCOORD_0": 1, "NORMAL": 2}
+
+    for required in (True, False):
+        d = json.loads(json.dumps(doc))
+        core = base64.b64decode(d["buffers"][0]["uri"].split(",", 1)[1])
+        prim = d["meshes"][0]["primitives"][0]
+        if required:
+            # No core data at all: the accessors keep only their counts,
+            # types and bounds, as Draco exporters write them.
+            for a in d["accessors"]:
+                a.pop("bufferView", None)
+                a.pop("byteOffset", None)
+            data = b""
+            d["bufferViews"] = []
+        else:
+            data = core
+        while len(data) % 4:
+            data += b"\0"
+        d["bufferViews"].append({"buffer": 0, "byteOffset": len(data),
+                                 "byteLength": len(blob)})
+        prim["extensions"] = {"KHR_draco_mesh_compression": {
+            "bufferView": len(d["bufferViews"]) - 1, "attributes": ids}}
+        data += blob
+        d["buffers"] = [{"byteLength": len(data),
+                         "uri": "data:application/octet-stream;base64,"
+                                + base64.b64encode(data).decode()}]
+        d["extensionsUsed"] = ["KHR_draco_mesh_compression"]
+        if required:
+            d["extensionsRequired"] = ["KHR_draco_mesh_compression"]
+        name = "draco-required.gltf" if required else "draco-fallback.gltf"
+        with open(os.path.join(out, name), "w") as f:
+            json.dump(d, f)
+
+
+def basisu_files(out, doc):
+    """The BasisU pair. The KTX2 image is a bare KTX2 header (raylab does
+    not decode Basis Universal, so only the JSON's rules are tested: the
+    required file is refused, the other falls back to its PNG)."""
+    ktx2 = b"\xabKTX 20\xbb\r\n\x1a\n" + bytes(68)
+    for required in (True, False):
+        d = json.loads(json.dumps(doc))
+        png_uri = d["images"][0]["uri"]
+        d["images"] = [{"uri": "data:image/ktx2;base64," + base64.b64encode(ktx2).decode()}]
+        tex = {"extensions": {"KHR_texture_basisu": {"source": 0}}}
+        if not required:
+            d["images"].append({"uri": png_uri})
+            tex["source"] = 1
+        d["textures"] = [tex]
+        d["extensionsUsed"] = ["KHR_texture_basisu"]
+        if required:
+            d["extensionsRequired"] = ["KHR_texture_basisu"]
+        name = "basisu-required.gltf" if required else "basisu-fallback.gltf"
+        with open(os.path.join(out, name), "w") as f:
+            json.dump(d, f)
+
+
+def main():
+    here = os.path.dirname(os.path.abspath(__file__))
+    out = sys.argv[1] if len(sys.argv) > 1 else os.path.join(here, "..", "tests", "data", "compressed")
+    os.makedirs(out, exist_ok=True)
+    tmp = tempfile.mkdtemp()
+    try:
+        src = os.path.join(tmp, "torus.gltf")
+        doc, verts, tris = source_gltf(src)
+        for name, args in [
+            ("plain-noq.glb", ["-noq"]),
+            ("meshopt-noq.glb", ["-noq", "-c"]),
+            ("plain-q.glb", []),
+            ("meshopt-q.glb", ["-c"]),
+            ("meshopt-cc.glb", ["-cc"]),
+            ("meshopt-khr.glb", ["-cc", "-ce", "khr"]),
+            ("meshopt-fallback.gltf", ["-c", "-cf"]),
+        ]:
+            gltfpack(["-i", src, "-o", os.path.join(out, name)] + args)
+        draco_files(out, doc, verts, tris)
+        basisu_files(out, doc)
+    finally:
+        shutil.rmtree(tmp)
+
+
+if __name__ == "__main__":
+    main()
