@@ -63,6 +63,7 @@ pub mod pbr;
 pub mod surface;
 #[cfg(test)]
 pub(crate) mod test_util;
+pub mod thin_film;
 
 pub use pbr::PbrBsdf;
 

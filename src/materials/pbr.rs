@@ -1,6 +1,7 @@
 //! The glTF 2.0 metallic–roughness BSDF (glTF specification, Appendix B), with
 //! `KHR_materials_specular`, `KHR_materials_ior`, `KHR_materials_transmission`,
-//! `KHR_materials_volume` and `KHR_materials_clearcoat`.
+//! `KHR_materials_volume`, `KHR_materials_clearcoat` and
+//! `KHR_materials_iridescence`.
 //!
 //! The frame, side and estimator conventions are those of the parent module
 //! ([`crate::materials`]): local frame with the shading normal as `+z`, `wo` and
@@ -44,6 +45,20 @@
 //! normal, and is smooth (a mirror about `n_c`) below
 //! [`ALPHA_SMOOTH`](super::ALPHA_SMOOTH). Seen from inside a refracting volume
 //! there is no coat (it lies on the outside).
+//!
+//! # Iridescence
+//!
+//! `KHR_materials_iridescence` puts a thin film on the base: every Fresnel
+//! term of the base, the metal's `F(c)` and the dielectric's `F_d` (which
+//! also weights the diffuse and transmitted parts by `1 − s max(F_d)`),
+//! becomes `mix(F, F_film, ι)` with `ι` the iridescence weight and `F_film`
+//! the film's Fresnel ([`super::thin_film`]) at the same cosine, for the
+//! base's `F0`: the dielectric's `F0` for `F_d`, the base colour for the
+//! metal. Nothing else changes: the lobes, their sampling and the estimates
+//! that choose them take the mixed Fresnel where they took Schlick's, so
+//! densities and weights stay consistent. A film of thickness 0 is no film.
+//! Under a clear coat the film's outside index is the coat's (see
+//! [`PbrBsdf::iridescence`]).
 //!
 //! # Transmission
 //!
@@ -93,6 +108,7 @@
 //!
 //! Nothing here allocates.
 
+use super::thin_film::{COAT_IOR, ThinFilm};
 use super::{
     BsdfSample, Frame, GUIDE_ALPHA, GuideLobes, Material, concentric_disk, finite_or_zero, ggx_d,
     ggx_lambda, ggx_sample_visible_normal, reflect_z,
@@ -144,6 +160,18 @@ pub struct PbrBsdf {
     /// shading normal), above its horizon; set per hit by
     /// [`PbrBsdf::orient_coat`].
     pub coat_normal: Vec3A,
+    /// `KHR_materials_iridescence`: `iridescenceFactor` ×
+    /// `iridescenceTexture.r` in `[0, 1]` (0: no film, and so is a film of
+    /// thickness 0). Under a clear coat of weight `w` the film lies under a
+    /// medium of index `mix(1, 1.5, w)`: the coat's 1.5 under a full coat, as
+    /// the specification has it, air without one.
+    pub iridescence: f32,
+    /// The film's index of refraction (`iridescenceIor`, default 1.3).
+    pub film_ior: f32,
+    /// The film's thickness at this point in nanometres:
+    /// `mix(iridescenceThicknessMinimum, iridescenceThicknessMaximum,
+    /// iridescenceThicknessTexture.g)`, the maximum without a texture.
+    pub film_thickness: f32,
 }
 
 /// The clear coat's `F0`: an index of 1.5, `((1.5 − 1)/(1.5 + 1))²`.
@@ -298,6 +326,55 @@ impl PbrBsdf {
             coat: 0.0,
             coat_alpha: 1.0,
             coat_normal: Vec3A::Z,
+            iridescence: 0.0,
+            film_ior: 1.3,
+            film_thickness: 400.0,
+        }
+    }
+
+    /// The thin film, where there is one (`ι > 0` and a positive thickness).
+    #[inline]
+    fn film(&self) -> Option<ThinFilm> {
+        (self.iridescence > 0.0 && self.film_thickness > 0.0).then(|| {
+            let outside_ior = if self.coat > 0.0 {
+                1.0 + (COAT_IOR - 1.0) * self.coat.min(1.0)
+            } else {
+                1.0
+            };
+            ThinFilm {
+                ior: self.film_ior,
+                thickness: self.film_thickness,
+                outside_ior,
+            }
+        })
+    }
+
+    /// The metal's Fresnel term at `cos = |wo·h|`: Schlick's of the base
+    /// colour, mixed with the film's by `ι` where there is a film (the
+    /// film is evaluated only where the metal has weight).
+    #[inline]
+    fn fresnel_m(&self, cos: f32) -> Vec3A {
+        let c = self.base_color;
+        let f = schlick(c, cos);
+        match self.film() {
+            Some(film) if self.metallic > 0.0 => {
+                f.lerp(film.fresnel(cos, c), self.iridescence.min(1.0))
+            }
+            _ => f,
+        }
+    }
+
+    /// The dielectric's Fresnel term at the air-side cosine `cos`: Schlick's
+    /// of `f0`, mixed with the film's by `ι` where there is a film (the film
+    /// is evaluated only where the dielectric has weight).
+    #[inline]
+    fn fresnel_air(&self, f0: Vec3A, cos: f32) -> Vec3A {
+        let f = schlick(f0, cos);
+        match self.film() {
+            Some(film) if self.metallic < 1.0 => {
+                f.lerp(film.fresnel(cos, f0), self.iridescence.min(1.0))
+            }
+            _ => f,
         }
     }
 
@@ -348,9 +425,9 @@ impl PbrBsdf {
     pub fn albedo(&self, cos_o: f32) -> Vec3A {
         let cos = cos_o.abs().min(1.0);
         let (m, s, c) = (self.metallic, self.specular, self.base_color);
-        let fd = schlick(self.f0(), cos);
+        let fd = self.fresnel_air(self.f0(), cos);
         let dielectric = s * fd + (1.0 - s * fd.max_element()) * c;
-        let mut a = m * schlick(c, cos) + (1.0 - m) * dielectric;
+        let mut a = m * self.fresnel_m(cos) + (1.0 - m) * dielectric;
         if self.coat > 0.0 {
             // About the shading normal (the coat's tilt is ignored here).
             let w = self.coat * schlick_grey(COAT_F0, cos);
@@ -413,7 +490,7 @@ impl PbrBsdf {
         let (m, s, c) = (self.metallic, self.specular, self.base_color);
         let fd = self.fresnel_d(l.f0, cos_o, l.inside);
         let kd = 1.0 - s * fd.max_element();
-        let reflect = m * schlick(c, cos_o) + (1.0 - m) * s * fd;
+        let reflect = m * self.fresnel_m(cos_o) + (1.0 - m) * s * fd;
         let transmit = if self.transmission_scale() > 0.0 {
             let wi = if l.volume {
                 refract(wo_l, Vec3A::Z, self.eta(&l))
@@ -456,10 +533,23 @@ impl PbrBsdf {
         (r * r * self.specular_color).min(Vec3A::ONE)
     }
 
-    /// `1 − s max(F0)`: the largest value of the base's Fresnel factor.
+    /// `1 − s max(F0)`: the largest value of the base's Fresnel factor
+    /// `1 − s max(F)` (Schlick's `F ≥ F0`). With a film mixed in by `ι`, whose
+    /// term is at least 0, `F ≥ (1 − ι) F0`: the bound is `1 − s (1 − ι) max(F0)`.
     #[inline]
     fn kd_max(&self) -> f32 {
-        1.0 - self.specular * self.f0().max_element()
+        self.kd_max_of(self.f0())
+    }
+
+    /// [`PbrBsdf::kd_max`] with the dielectric's `F0` at hand.
+    #[inline]
+    fn kd_max_of(&self, f0: Vec3A) -> f32 {
+        let sf = self.specular * f0.max_element();
+        if self.film().is_some() {
+            1.0 - sf * (1.0 - self.iridescence.min(1.0))
+        } else {
+            1.0 - sf
+        }
     }
 
     /// The cosine on the air side of the interface for the microfacet cosine
@@ -484,7 +574,7 @@ impl PbrBsdf {
     #[inline]
     fn fresnel_d(&self, f0: Vec3A, cos: f32, inside: bool) -> Vec3A {
         match self.air_cos(cos, inside) {
-            Some(c) => schlick(f0, c),
+            Some(c) => self.fresnel_air(f0, c),
             None => Vec3A::ONE,
         }
     }
@@ -506,11 +596,11 @@ impl PbrBsdf {
         let smooth = Material::is_smooth(self.alpha);
         let (m, s, c) = (self.metallic, self.specular, self.base_color);
         let f0 = self.f0();
-        let kd_max = 1.0 - s * f0.max_element();
+        let kd_max = self.kd_max_of(f0);
         let cos_o = wo.z.min(1.0);
         let air = self.air_cos(cos_o, inside);
-        let fd = air.map_or(1.0, |a| schlick(f0, a).max_element());
-        let fm = schlick(c, cos_o).max_element();
+        let fd = air.map_or(1.0, |a| self.fresnel_air(f0, a).max_element());
+        let fm = self.fresnel_m(cos_o).max_element();
         let lum = luminance(c);
         let kd = 1.0 - s * fd;
         let (w_spec, w_trans) = if smooth {
@@ -655,7 +745,7 @@ impl PbrBsdf {
                 // D G2 / (4 cos θo); the numerator first so that a subnormal
                 // cos θo next to G2 = 0 gives 0, not 0 · ∞.
                 let spec = (ggx_d(a, h) * g2(a, wo, wi)) / (4.0 * wo.z);
-                f += (m * schlick(c, cos_oh) + (1.0 - m) * s * fd) * spec;
+                f += (m * self.fresnel_m(cos_oh) + (1.0 - m) * s * fd) * spec;
             }
             f
         } else if wi.z < 0.0 && !l.smooth && self.transmission_scale() != 0.0 {
@@ -665,7 +755,7 @@ impl PbrBsdf {
                     return Vec3A::ZERO;
                 };
                 let air = if l.inside { -cos_ih } else { cos_oh };
-                let kd = 1.0 - s * schlick(l.f0, air).max_element();
+                let kd = 1.0 - s * self.fresnel_air(l.f0, air).max_element();
                 let denom = cos_ih + cos_oh / eta;
                 // D G2 |wi·h| |wo·h| / (cos θo (wi·h + wo·h/η)²), without 1/η².
                 let t = (ggx_d(a, h) * g2(a, wo, wi) * (-cos_ih * cos_oh)) / (wo.z * denom * denom);
@@ -674,7 +764,7 @@ impl PbrBsdf {
                 let wr = Vec3A::new(wi.x, wi.y, -wi.z);
                 let h = (wo + wr).normalize();
                 let cos_oh = wo.dot(h).min(1.0);
-                let kd = 1.0 - s * schlick(l.f0, cos_oh).max_element();
+                let kd = 1.0 - s * self.fresnel_air(l.f0, cos_oh).max_element();
                 let spec = (ggx_d(a, h) * g2(a, wo, wr)) / (4.0 * wo.z);
                 c * (self.transmission_scale() * kd * spec)
             }
@@ -716,7 +806,7 @@ impl PbrBsdf {
         if !l.smooth {
             let d = ggx_d(a, h);
             let spec = (d * g2(a, wo, wi)) / (4.0 * wo.z);
-            f += (m * schlick(c, cos_oh) + (1.0 - m) * s * fd) * spec;
+            f += (m * self.fresnel_m(cos_oh) + (1.0 - m) * s * fd) * spec;
             if l.p_spec > 0.0 {
                 p += l.p_spec * ((g1(a, wo) * d) / (4.0 * wo.z));
             }
@@ -868,8 +958,8 @@ impl PbrBsdf {
             }
             Lobe::Specular if l.smooth => {
                 let cos_o = wo_l.z.min(1.0);
-                let value =
-                    m * schlick(c, cos_o) + (1.0 - m) * s * self.fresnel_d(l.f0, cos_o, l.inside);
+                let value = m * self.fresnel_m(cos_o)
+                    + (1.0 - m) * s * self.fresnel_d(l.f0, cos_o, l.inside);
                 return Self::delta(l.map(reflect_z(wo_l)), value * under, l.p_spec);
             }
             Lobe::Transmission if l.smooth => {
