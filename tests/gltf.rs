@@ -1904,7 +1904,10 @@ fn iridescence_reads_its_factors_and_textures() {
         panic!("not the glTF BSDF");
     };
     assert!((p.iridescence - 0.5 * 0.8).abs() < 1e-6, "{p:?}");
-    assert!((p.film_thickness - (200.0 + 500.0 * 0.2)).abs() < 1e-3, "{p:?}");
+    assert!(
+        (p.film_thickness - (200.0 + 500.0 * 0.2)).abs() < 1e-3,
+        "{p:?}"
+    );
     assert_eq!(p.film_ior, 1.8);
     // The defaults: index 1.3, 100–400 nm, the maximum without a texture.
     let dir2 = tempfile::tempdir().unwrap();
@@ -1916,10 +1919,14 @@ fn iridescence_reads_its_factors_and_textures() {
         .intersect(&Ray::new(Vec3A::new(0.1, 0.2, 2.0), -Vec3A::Z), 3.0)
         .unwrap();
     let m = scene.material(hit.prim);
-    let raylab::materials::Material::Pbr(p) = m.bsdf(&scene.surface(&hit).attrs, scene.textures()) else {
+    let raylab::materials::Material::Pbr(p) = m.bsdf(&scene.surface(&hit).attrs, scene.textures())
+    else {
         panic!("not the glTF BSDF");
     };
-    assert_eq!((p.iridescence, p.film_ior, p.film_thickness), (1.0, 1.3, 400.0));
+    assert_eq!(
+        (p.iridescence, p.film_ior, p.film_thickness),
+        (1.0, 1.3, 400.0)
+    );
     // Not finite (as f32): refused with the material and the value named;
     // the extension is known (no warning).
     let mut g = Gltf::new();
@@ -1937,8 +1944,7 @@ fn iridescence_reads_its_factors_and_textures() {
         "{err}"
     );
     assert_eq!(err.lines().count(), 1, "{err}");
-    g.materials[0]["extensions"]["KHR_materials_iridescence"] =
-        json!({ "iridescenceFactor": 0.7 });
+    g.materials[0]["extensions"]["KHR_materials_iridescence"] = json!({ "iridescenceFactor": 0.7 });
     let loaded = load(&g.write(dir.path(), "film-ok.gltf"));
     assert!(
         !loaded.warnings.iter().any(|w| w.contains("iridescence")),

@@ -216,7 +216,8 @@ impl GltfMaterial {
     /// is positive.
     #[inline]
     pub fn film_at(&self, attrs: &HitAttributes, textures: &TextureStore) -> (f32, f32) {
-        if !(self.iridescence > 0.0) {
+        // (NaN counts as no film.)
+        if self.iridescence.is_nan() || self.iridescence <= 0.0 {
             return (0.0, 0.0);
         }
         let mut w = self.iridescence;

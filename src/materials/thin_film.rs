@@ -153,7 +153,7 @@ impl ThinFilm {
         };
         let ratio = n0 / n1;
         let sin2_2 = ratio * ratio * (1.0 - cos1 * cos1);
-        if !(sin2_2 < 1.0) {
+        if sin2_2.is_nan() || sin2_2 >= 1.0 {
             // Total internal reflection into the film (or a NaN index).
             return Vec3A::ONE;
         }
