@@ -1858,3 +1858,97 @@ fn a_webp_texture_replaces_its_png_fallback() {
         .expect("the ray hits the square");
     assert_near(loaded.scene.base_color(&hit), want, 1e-4, "WebP only");
 }
+
+/// `KHR_materials_iridescence`: the factors and textures are read (the
+/// weight from the texture's red channel, the thickness mixed between the
+/// minimum and the maximum by its green channel), the schema's defaults
+/// apply, the extension is not reported as ignored, and a value that is not
+/// finite is refused naming the material.
+#[test]
+fn iridescence_reads_its_factors_and_textures() {
+    let dir = tempfile::tempdir().unwrap();
+    // One texel: red 204 (0.8), green 51 (0.2), linear.
+    let texel = png(1, 1, 4, &[204, 51, 0, 255]);
+    let film = json!({
+        "iridescenceFactor": 0.5,
+        "iridescenceTexture": { "index": 0 },
+        "iridescenceIor": 1.8,
+        "iridescenceThicknessMinimum": 200.0,
+        "iridescenceThicknessMaximum": 700.0,
+        "iridescenceThicknessTexture": { "index": 0 }
+    });
+    let material = json!({
+        "pbrMetallicRoughness": { "metallicFactor": 1.0, "roughnessFactor": 0.5 },
+        "extensions": { "KHR_materials_iridescence": film }
+    });
+    let scene = alpha_scene(dir.path(), "film.gltf", material, Some(&texel));
+    let hit = scene
+        .intersect(&Ray::new(Vec3A::new(0.1, 0.2, 2.0), -Vec3A::Z), 3.0)
+        .expect("the ray hits the square");
+    let m = scene.material(hit.prim);
+    let MaterialKind::Gltf(g) = &m.kind else {
+        panic!("not a glTF material");
+    };
+    assert_eq!(
+        (g.iridescence, g.iridescence_ior),
+        (0.5, 1.8),
+        "the factors"
+    );
+    assert_eq!(
+        (g.iridescence_thickness_min, g.iridescence_thickness_max),
+        (200.0, 700.0)
+    );
+    assert!(g.iridescence_texture.is_some() && g.iridescence_thickness_texture.is_some());
+    let s = scene.surface(&hit);
+    let raylab::materials::Material::Pbr(p) = m.bsdf(&s.attrs, scene.textures()) else {
+        panic!("not the glTF BSDF");
+    };
+    assert!((p.iridescence - 0.5 * 0.8).abs() < 1e-6, "{p:?}");
+    assert!(
+        (p.film_thickness - (200.0 + 500.0 * 0.2)).abs() < 1e-3,
+        "{p:?}"
+    );
+    assert_eq!(p.film_ior, 1.8);
+    // The defaults: index 1.3, 100–400 nm, the maximum without a texture.
+    let dir2 = tempfile::tempdir().unwrap();
+    let material = json!({
+        "extensions": { "KHR_materials_iridescence": { "iridescenceFactor": 1.0 } }
+    });
+    let scene = alpha_scene(dir2.path(), "film-defaults.gltf", material, None);
+    let hit = scene
+        .intersect(&Ray::new(Vec3A::new(0.1, 0.2, 2.0), -Vec3A::Z), 3.0)
+        .unwrap();
+    let m = scene.material(hit.prim);
+    let raylab::materials::Material::Pbr(p) = m.bsdf(&scene.surface(&hit).attrs, scene.textures())
+    else {
+        panic!("not the glTF BSDF");
+    };
+    assert_eq!(
+        (p.iridescence, p.film_ior, p.film_thickness),
+        (1.0, 1.3, 400.0)
+    );
+    // Not finite (as f32): refused with the material and the value named;
+    // the extension is known (no warning).
+    let mut g = Gltf::new();
+    let mat = g.material(json!({
+        "extensions": { "KHR_materials_iridescence": { "iridescenceThicknessMaximum": 1e39 } }
+    }));
+    let mut p = quad(&mut g, XY_SQUARE, &[]);
+    p["material"] = json!(mat);
+    let mesh = g.mesh(vec![p]);
+    g.root(json!({ "mesh": mesh }));
+    g.extensions_used.push("KHR_materials_iridescence".into());
+    let err = load_err(&g.write(dir.path(), "film-inf.gltf"));
+    assert!(
+        err.contains("material 0") && err.contains("iridescenceThicknessMaximum"),
+        "{err}"
+    );
+    assert_eq!(err.lines().count(), 1, "{err}");
+    g.materials[0]["extensions"]["KHR_materials_iridescence"] = json!({ "iridescenceFactor": 0.7 });
+    let loaded = load(&g.write(dir.path(), "film-ok.gltf"));
+    assert!(
+        !loaded.warnings.iter().any(|w| w.contains("iridescence")),
+        "{:?}",
+        loaded.warnings
+    );
+}

@@ -66,6 +66,7 @@ pub mod spectrum;
 pub mod surface;
 #[cfg(test)]
 pub(crate) mod test_util;
+pub mod thin_film;
 
 pub use pbr::PbrBsdf;
 

@@ -114,6 +114,20 @@ pub struct GltfMaterial {
     /// dispersion); it disperses only with a volume (see
     /// [`PbrBsdf::dispersive`]).
     pub dispersion: f32,
+    /// `KHR_materials_iridescence`: `iridescenceFactor` (0: no film).
+    pub iridescence: f32,
+    /// Its `iridescenceTexture` (red channel).
+    pub iridescence_texture: Option<TextureRef>,
+    /// `iridescenceIor`, the film's index (1.3 by default, at least 1).
+    pub iridescence_ior: f32,
+    /// `iridescenceThicknessMinimum` in nanometres (100 by default).
+    pub iridescence_thickness_min: f32,
+    /// `iridescenceThicknessMaximum` in nanometres (400 by default): the
+    /// thickness without a thickness texture.
+    pub iridescence_thickness_max: f32,
+    /// `iridescenceThicknessTexture` (green channel), mixing the minimum and
+    /// the maximum.
+    pub iridescence_thickness_texture: Option<TextureRef>,
     /// `KHR_materials_pbrSpecularGlossiness`: when present, it replaces the
     /// metallic–roughness parameters (the diffuse colour is `base_color` and
     /// `base_color_texture`), converted per hit by
@@ -187,6 +201,9 @@ impl SpecularGlossiness {
             sheen_color: Vec3A::ZERO,
             sheen_roughness: 0.0,
             dispersion: 0.0,
+            iridescence: 0.0,
+            film_ior: 1.3,
+            film_thickness: 0.0,
         }
     }
 }
@@ -227,6 +244,40 @@ impl GltfMaterial {
             unit_interval(color.z),
         );
         (color, unit_interval(roughness))
+    }
+
+    /// The thin film at a hit (`KHR_materials_iridescence`): its weight
+    /// `iridescenceFactor` × `iridescenceTexture`.r in `[0, 1]` and its
+    /// thickness in nanometres, `mix(minimum, maximum,
+    /// iridescenceThicknessTexture.g)` or the maximum without that texture.
+    /// `(0, 0)` without a film; the textures are read only where the factor
+    /// is positive.
+    #[inline]
+    pub fn film_at(&self, attrs: &HitAttributes, textures: &TextureStore) -> (f32, f32) {
+        // (NaN counts as no film.)
+        if self.iridescence.is_nan() || self.iridescence <= 0.0 {
+            return (0.0, 0.0);
+        }
+        let mut w = self.iridescence;
+        if let Some(t) = &self.iridescence_texture {
+            w *= lookup(t, attrs, textures, ColorSpace::Linear).x;
+        }
+        let w = unit_interval(w);
+        if w == 0.0 {
+            return (0.0, 0.0);
+        }
+        let (lo, hi) = (
+            self.iridescence_thickness_min,
+            self.iridescence_thickness_max,
+        );
+        let thickness = match &self.iridescence_thickness_texture {
+            Some(t) => {
+                let g = lookup(t, attrs, textures, ColorSpace::Linear).y;
+                lo + (hi - lo) * g
+            }
+            None => hi,
+        };
+        (w, thickness.max(0.0))
     }
 }
 
@@ -271,6 +322,12 @@ impl Default for GltfMaterial {
             sheen_roughness: 0.0,
             sheen_roughness_texture: None,
             dispersion: 0.0,
+            iridescence: 0.0,
+            iridescence_texture: None,
+            iridescence_ior: 1.3,
+            iridescence_thickness_min: 100.0,
+            iridescence_thickness_max: 400.0,
+            iridescence_thickness_texture: None,
             specular_glossiness: None,
         }
     }
@@ -458,6 +515,7 @@ impl SurfaceMaterial {
         }
         let coat_roughness = unit_interval(coat_roughness);
         let (sheen_color, sheen_roughness) = g.sheen_at(attrs, textures);
+        let (iridescence, film_thickness) = g.film_at(attrs, textures);
         Material::Pbr(PbrBsdf {
             base_color: base.clamp(Vec3A::ZERO, Vec3A::ONE),
             metallic: unit_interval(metallic),
@@ -473,6 +531,9 @@ impl SurfaceMaterial {
             sheen_color,
             sheen_roughness,
             dispersion: g.dispersion,
+            iridescence,
+            film_ior: g.iridescence_ior,
+            film_thickness,
         })
     }
 
@@ -602,6 +663,8 @@ pub fn texture_refs(m: &SurfaceMaterial) -> impl Iterator<Item = &TextureRef> {
             &g.clearcoat_normal_texture,
             &g.sheen_color_texture,
             &g.sheen_roughness_texture,
+            &g.iridescence_texture,
+            &g.iridescence_thickness_texture,
         ]
         .into_iter()
         .chain(specular_glossiness)
@@ -633,6 +696,8 @@ pub fn texture_refs_mut(m: &mut SurfaceMaterial) -> impl Iterator<Item = &mut Te
             &mut g.clearcoat_normal_texture,
             &mut g.sheen_color_texture,
             &mut g.sheen_roughness_texture,
+            &mut g.iridescence_texture,
+            &mut g.iridescence_thickness_texture,
         ]
         .into_iter()
         .chain(specular_glossiness)

@@ -46,6 +46,7 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_materials_dispersion",
     "KHR_materials_emissive_strength",
     "KHR_materials_ior",
+    "KHR_materials_iridescence",
     "KHR_materials_pbrSpecularGlossiness",
     "KHR_materials_sheen",
     "KHR_materials_specular",
@@ -101,6 +102,40 @@ struct Dispersion {
     /// `20 / V_d`; 0 (the default) disperses nothing.
     #[serde(default)]
     dispersion: f32,
+}
+
+/// The thin-film extension's name.
+const IRIDESCENCE: &str = "KHR_materials_iridescence";
+
+/// `KHR_materials_iridescence`'s object (`gltf-json` does not know it), with
+/// the schema's defaults.
+#[derive(serde::Deserialize)]
+#[serde(rename_all = "camelCase")]
+struct Iridescence {
+    #[serde(default)]
+    iridescence_factor: f32,
+    iridescence_texture: Option<json::texture::Info>,
+    /// The schema's spelling; the specification's prose and example write
+    /// `iridescenceIOR`, read too.
+    #[serde(default = "Iridescence::default_ior", alias = "iridescenceIOR")]
+    iridescence_ior: f32,
+    #[serde(default = "Iridescence::default_minimum")]
+    iridescence_thickness_minimum: f32,
+    #[serde(default = "Iridescence::default_maximum")]
+    iridescence_thickness_maximum: f32,
+    iridescence_thickness_texture: Option<json::texture::Info>,
+}
+
+impl Iridescence {
+    fn default_ior() -> f32 {
+        1.3
+    }
+    fn default_minimum() -> f32 {
+        100.0
+    }
+    fn default_maximum() -> f32 {
+        400.0
+    }
 }
 
 /// Deepest node hierarchy accepted.
@@ -1342,7 +1377,7 @@ impl Loader<'_> {
         let ext = m.extensions.as_ref();
         if let Some(e) = ext {
             for name in e.others.keys() {
-                if ![CLEARCOAT, SHEEN, DISPERSION].contains(&name.as_str()) {
+                if ![CLEARCOAT, SHEEN, DISPERSION, IRIDESCENCE].contains(&name.as_str()) {
                     self.warn_once(name, format!("ignoring the material extension {name}"));
                 }
             }
@@ -1459,6 +1494,9 @@ impl Loader<'_> {
             // one, outside the schema, reads as none.
             g.dispersion = finite(d.dispersion, "dispersion")?.max(0.0);
         }
+        if let Some(value) = ext.and_then(|e| e.others.get(IRIDESCENCE)) {
+            self.iridescence(value, &mut g, &what)?;
+        }
         let strength = ext
             .and_then(|e| e.emissive_strength.as_ref())
             .map_or(1.0, |s| s.emissive_strength.0);
@@ -1540,6 +1578,48 @@ impl Loader<'_> {
         g.sheen_roughness = s.sheen_roughness_factor.clamp(0.0, 1.0);
         g.sheen_color_texture = self.texture(s.sheen_color_texture.as_ref(), what)?;
         g.sheen_roughness_texture = self.texture(s.sheen_roughness_texture.as_ref(), what)?;
+        Ok(())
+    }
+
+    /// Reads `KHR_materials_iridescence` (`value`, the extension's object)
+    /// into `g`: a value that is not finite is refused; out of the schema's
+    /// ranges, the factor is clamped to `[0, 1]`, the index to at least 1 and
+    /// the thicknesses to `[0, 1 mm]` (see
+    /// [`MAX_THICKNESS_NM`](crate::materials::thin_film::MAX_THICKNESS_NM)).
+    fn iridescence(
+        &mut self,
+        value: &serde_json::Value,
+        g: &mut GltfMaterial,
+        what: &str,
+    ) -> Result<(), GltfError> {
+        use crate::materials::thin_film::MAX_THICKNESS_NM;
+        let f: Iridescence = serde_json::from_value(value.clone())
+            .map_err(|e| GltfError::invalid(format!("{what}: {IRIDESCENCE}: {e}")))?;
+        let finite = |v: f32, name: &str| -> Result<f32, GltfError> {
+            if v.is_finite() {
+                Ok(v)
+            } else {
+                Err(GltfError::invalid(format!(
+                    "{what}: {IRIDESCENCE}: {name} is not finite"
+                )))
+            }
+        };
+        g.iridescence = finite(f.iridescence_factor, "iridescenceFactor")?.clamp(0.0, 1.0);
+        g.iridescence_ior = finite(f.iridescence_ior, "iridescenceIor")?.max(1.0);
+        let thickness = |v: f32, name: &str| -> Result<f32, GltfError> {
+            Ok(finite(v, name)?.clamp(0.0, MAX_THICKNESS_NM))
+        };
+        g.iridescence_thickness_min = thickness(
+            f.iridescence_thickness_minimum,
+            "iridescenceThicknessMinimum",
+        )?;
+        g.iridescence_thickness_max = thickness(
+            f.iridescence_thickness_maximum,
+            "iridescenceThicknessMaximum",
+        )?;
+        g.iridescence_texture = self.texture(f.iridescence_texture.as_ref(), what)?;
+        g.iridescence_thickness_texture =
+            self.texture(f.iridescence_thickness_texture.as_ref(), what)?;
         Ok(())
     }
 
