@@ -95,10 +95,10 @@
 
 use super::{
     BsdfSample, Frame, GUIDE_ALPHA, GuideLobes, Material, concentric_disk, finite_or_zero, ggx_d,
-    ggx_lambda, ggx_sample_visible_normal, reflect_z,
+    ggx_lambda, ggx_sample_visible_normal, ggx_sample_visible_normal_xy, reflect_z,
 };
 use glam::{Vec2, Vec3A};
-use std::f32::consts::FRAC_1_PI;
+use std::f32::consts::{FRAC_1_PI, PI};
 
 /// The smallest GGX `α` [`PbrBsdf::alpha_from_roughness`] returns.
 pub const MIN_ALPHA: f32 = 1e-4;
@@ -144,6 +144,15 @@ pub struct PbrBsdf {
     /// shading normal), above its horizon; set per hit by
     /// [`PbrBsdf::orient_coat`].
     pub coat_normal: Vec3A,
+    /// `KHR_materials_anisotropy`: `anisotropyStrength` ×
+    /// `anisotropyTexture.b` in `[0, 1]` (0: isotropic, the base's GGX as
+    /// without the extension).
+    pub anisotropy: f32,
+    /// The unit direction of increased roughness: as the material gives it,
+    /// in the mesh's tangent space (`x` along the tangent, `y` along the
+    /// bitangent); [`PbrBsdf::orient_anisotropy`] turns it into the shading
+    /// frame's tangent plane (`x`, `y` of the local frame) at each hit.
+    pub anisotropy_direction: Vec2,
 }
 
 /// The clear coat's `F0`: an index of 1.5, `((1.5 − 1)/(1.5 + 1))²`.
@@ -159,6 +168,107 @@ impl Default for PbrBsdf {
     /// glTF's default material: white, fully metallic, roughness 1.
     fn default() -> PbrBsdf {
         PbrBsdf::new(Vec3A::ONE, 1.0, 1.0)
+    }
+}
+
+/// The base's GGX distribution at one hit (the metal's and the dielectric's
+/// specular reflection and the transmission; not the coat's).
+#[derive(Clone, Copy, Debug)]
+enum Ggx {
+    /// Width `α` in every direction: the functions of the parent module, so
+    /// that a material without `KHR_materials_anisotropy` is evaluated and
+    /// sampled exactly as before it existed.
+    Isotropic(f32),
+    /// Width `at` along the unit direction `dir = (cos φ, sin φ)` of the
+    /// local tangent plane and `ab` across it: `D(m) = 1 / (π at ab ((m_t /
+    /// at)² + (m_b / ab)² + m_z²)²)` and `Λ(w) = (√(1 + (at² w_t² + ab²
+    /// w_b²) / w_z²) − 1) / 2`, with `m_t = m·t`, `m_b = m·b`, `t = (cos φ,
+    /// sin φ, 0)` and `b = n × t` (Heitz 2014, "Understanding the
+    /// Masking-Shadowing Function", §5.4), as `KHR_materials_anisotropy`'s
+    /// `D_GGX_anisotropic` and `V_GGX_anisotropic` write them.
+    Anisotropic { at: f32, ab: f32, dir: Vec2 },
+}
+
+impl Ggx {
+    /// `w` with its tangent-plane part turned into `(t, b)` coordinates.
+    #[inline]
+    fn to_tb(dir: Vec2, w: Vec3A) -> Vec3A {
+        Vec3A::new(
+            dir.x * w.x + dir.y * w.y,
+            dir.x * w.y - dir.y * w.x,
+            w.z,
+        )
+    }
+
+    /// The inverse of [`Ggx::to_tb`].
+    #[inline]
+    fn from_tb(dir: Vec2, w: Vec3A) -> Vec3A {
+        Vec3A::new(
+            dir.x * w.x - dir.y * w.y,
+            dir.y * w.x + dir.x * w.y,
+            w.z,
+        )
+    }
+
+    /// The microfacet density `D(m)` (zero below the horizon).
+    #[inline]
+    fn d(&self, m: Vec3A) -> f32 {
+        match *self {
+            Ggx::Isotropic(a) => ggx_d(a, m),
+            Ggx::Anisotropic { at, ab, dir } => {
+                if m.z <= 0.0 {
+                    return 0.0;
+                }
+                let m = Self::to_tb(dir, m);
+                let (x, y) = (m.x / at, m.y / ab);
+                let s = x * x + y * y + m.z * m.z;
+                1.0 / (PI * at * ab * s * s)
+            }
+        }
+    }
+
+    /// Smith's `Λ(w)`; infinite at the horizon.
+    #[inline]
+    fn lambda(&self, w: Vec3A) -> f32 {
+        match *self {
+            Ggx::Isotropic(a) => ggx_lambda(a, w),
+            Ggx::Anisotropic { at, ab, dir } => {
+                let z2 = w.z * w.z;
+                if z2 == 0.0 {
+                    return f32::INFINITY;
+                }
+                let w = Self::to_tb(dir, w);
+                let (x, y) = (at * w.x, ab * w.y);
+                let a2_tan2 = (x * x + y * y) / z2;
+                a2_tan2 / (2.0 * ((1.0 + a2_tan2).sqrt() + 1.0))
+            }
+        }
+    }
+
+    /// Smith's height-correlated `G2 = 1 / (1 + Λ(wo) + Λ(wi))`.
+    #[inline]
+    fn g2(&self, wo: Vec3A, wi: Vec3A) -> f32 {
+        1.0 / (1.0 + self.lambda(wo) + self.lambda(wi))
+    }
+
+    /// Smith's masking `G1(wo) = 1 / (1 + Λ(wo))`.
+    #[inline]
+    fn g1(&self, wo: Vec3A) -> f32 {
+        1.0 / (1.0 + self.lambda(wo))
+    }
+
+    /// A normal visible from `wo` (`wo.z > 0`), of density `G1(wo) max(0,
+    /// wo·m) D(m) / cos θo` (Heitz 2018: the view stretched by `(at, ab)` in
+    /// the `(t, b)` frame).
+    #[inline]
+    fn sample_visible_normal(&self, wo: Vec3A, u: Vec2) -> Vec3A {
+        match *self {
+            Ggx::Isotropic(a) => ggx_sample_visible_normal(a, wo, u),
+            Ggx::Anisotropic { at, ab, dir } => {
+                let m = ggx_sample_visible_normal_xy(at, ab, Self::to_tb(dir, wo), u);
+                Self::from_tb(dir, m)
+            }
+        }
     }
 }
 
@@ -195,6 +305,8 @@ pub struct Local {
     volume: bool,
     /// Whether the specular and transmission lobes are deltas.
     smooth: bool,
+    /// The base's microfacet distribution.
+    ggx: Ggx,
     /// The dielectric's `F0` per channel.
     f0: Vec3A,
     /// Lobe selection probabilities (summing to 1).
@@ -298,6 +410,58 @@ impl PbrBsdf {
             coat: 0.0,
             coat_alpha: 1.0,
             coat_normal: Vec3A::Z,
+            anisotropy: 0.0,
+            anisotropy_direction: Vec2::X,
+        }
+    }
+
+    /// Turns [`PbrBsdf::anisotropy_direction`] from the mesh's tangent space
+    /// into the shading frame `frame`, given the unit tangent `t` and
+    /// bitangent `b` there (world space): `dx t + dy b` projected onto the
+    /// shading plane. Without anisotropy nothing changes; where there is no
+    /// tangent frame (`t` or `b` zero) or the direction is degenerate (along
+    /// the shading normal), the material is isotropic at that hit: the
+    /// extension gives no direction to stretch along.
+    #[inline]
+    pub fn orient_anisotropy(&mut self, frame: &Frame, t: Vec3A, b: Vec3A) {
+        if self.anisotropy.is_nan() || self.anisotropy <= 0.0 {
+            return;
+        }
+        let d = self.anisotropy_direction;
+        let local = frame.to_local(d.x * t + d.y * b);
+        let dir = Vec2::new(local.x, local.y).normalize_or_zero();
+        if dir != Vec2::ZERO && dir.is_finite() {
+            self.anisotropy_direction = dir;
+        } else {
+            self.anisotropy = 0.0;
+        }
+    }
+
+    /// The GGX width along the direction of increased roughness:
+    /// `mix(α, 1, strength²)` (`KHR_materials_anisotropy`), `α` without
+    /// anisotropy; the larger of the two widths.
+    #[inline]
+    fn alpha_t(&self) -> f32 {
+        if self.anisotropy > 0.0 {
+            let k = self.anisotropy.min(1.0);
+            self.alpha + (1.0 - self.alpha) * (k * k)
+        } else {
+            self.alpha
+        }
+    }
+
+    /// The base's microfacet distribution: anisotropic only where the
+    /// strength is positive.
+    #[inline]
+    fn ggx(&self) -> Ggx {
+        if self.anisotropy > 0.0 {
+            Ggx::Anisotropic {
+                at: self.alpha_t(),
+                ab: self.alpha,
+                dir: self.anisotropy_direction,
+            }
+        } else {
+            Ggx::Isotropic(self.alpha)
         }
     }
 
@@ -332,7 +496,7 @@ impl PbrBsdf {
     /// has zero weight, e.g. a smooth metal or smooth full transmission): next
     /// event estimation cannot hit it.
     pub fn is_specular(&self) -> bool {
-        Material::is_smooth(self.alpha)
+        Material::is_smooth(self.alpha_t())
             && !self.has_diffuse()
             && (self.coat <= 0.0 || self.coat_smooth())
     }
@@ -405,7 +569,7 @@ impl PbrBsdf {
     /// [`PbrBsdf::guide_lobes`] of the material under the coat.
     fn base_guide_lobes(&self, wo: Vec3A, l: &Local) -> GuideLobes {
         let l = *l;
-        if self.alpha > GUIDE_ALPHA {
+        if self.alpha_t() > GUIDE_ALPHA {
             return GuideLobes::rough(self.albedo(wo.z));
         }
         let wo_l = l.wo;
@@ -503,7 +667,7 @@ impl PbrBsdf {
         } else {
             wo
         };
-        let smooth = Material::is_smooth(self.alpha);
+        let smooth = Material::is_smooth(self.alpha_t());
         let (m, s, c) = (self.metallic, self.specular, self.base_color);
         let f0 = self.f0();
         let kd_max = 1.0 - s * f0.max_element();
@@ -561,6 +725,7 @@ impl PbrBsdf {
             inside,
             volume,
             smooth,
+            ggx: self.ggx(),
             f0,
             p_spec: w_spec * inv,
             p_diff: w_diff * inv,
@@ -643,7 +808,7 @@ impl PbrBsdf {
 
     /// [`PbrBsdf::eval_local`] of the material under the coat.
     fn eval_base(&self, l: &Local, wi: Vec3A) -> Vec3A {
-        let (wo, a) = (l.wo, self.alpha);
+        let wo = l.wo;
         let (m, s, c) = (self.metallic, self.specular, self.base_color);
         if wi.z > 0.0 {
             let h = (wo + wi).normalize();
@@ -654,7 +819,7 @@ impl PbrBsdf {
             if !l.smooth {
                 // D G2 / (4 cos θo); the numerator first so that a subnormal
                 // cos θo next to G2 = 0 gives 0, not 0 · ∞.
-                let spec = (ggx_d(a, h) * g2(a, wo, wi)) / (4.0 * wo.z);
+                let spec = (l.ggx.d(h) * l.ggx.g2(wo, wi)) / (4.0 * wo.z);
                 f += (m * schlick(c, cos_oh) + (1.0 - m) * s * fd) * spec;
             }
             f
@@ -668,14 +833,14 @@ impl PbrBsdf {
                 let kd = 1.0 - s * schlick(l.f0, air).max_element();
                 let denom = cos_ih + cos_oh / eta;
                 // D G2 |wi·h| |wo·h| / (cos θo (wi·h + wo·h/η)²), without 1/η².
-                let t = (ggx_d(a, h) * g2(a, wo, wi) * (-cos_ih * cos_oh)) / (wo.z * denom * denom);
+                let t = (l.ggx.d(h) * l.ggx.g2(wo, wi) * (-cos_ih * cos_oh)) / (wo.z * denom * denom);
                 c * (self.transmission_scale() * kd * t)
             } else {
                 let wr = Vec3A::new(wi.x, wi.y, -wi.z);
                 let h = (wo + wr).normalize();
                 let cos_oh = wo.dot(h).min(1.0);
                 let kd = 1.0 - s * schlick(l.f0, cos_oh).max_element();
-                let spec = (ggx_d(a, h) * g2(a, wo, wr)) / (4.0 * wo.z);
+                let spec = (l.ggx.d(h) * l.ggx.g2(wo, wr)) / (4.0 * wo.z);
                 c * (self.transmission_scale() * kd * spec)
             }
         } else {
@@ -705,7 +870,7 @@ impl PbrBsdf {
         if wi.z <= 0.0 {
             return (self.eval_base(l, wi), self.pdf_base(l, wi));
         }
-        let (wo, a) = (l.wo, self.alpha);
+        let wo = l.wo;
         let (m, s, c) = (self.metallic, self.specular, self.base_color);
         let h = (wo + wi).normalize();
         let cos_oh = wo.dot(h).min(1.0);
@@ -714,11 +879,11 @@ impl PbrBsdf {
         let mut f = c * (self.diffuse_scale() * kd * FRAC_1_PI * wi.z);
         let mut p = l.p_diff * FRAC_1_PI * wi.z;
         if !l.smooth {
-            let d = ggx_d(a, h);
-            let spec = (d * g2(a, wo, wi)) / (4.0 * wo.z);
+            let d = l.ggx.d(h);
+            let spec = (d * l.ggx.g2(wo, wi)) / (4.0 * wo.z);
             f += (m * schlick(c, cos_oh) + (1.0 - m) * s * fd) * spec;
             if l.p_spec > 0.0 {
-                p += l.p_spec * ((g1(a, wo) * d) / (4.0 * wo.z));
+                p += l.p_spec * ((l.ggx.g1(wo) * d) / (4.0 * wo.z));
             }
         }
         (f, p)
@@ -735,13 +900,13 @@ impl PbrBsdf {
 
     /// [`PbrBsdf::pdf_local`] of the lobes under the coat.
     fn pdf_base(&self, l: &Local, wi: Vec3A) -> f32 {
-        let (wo, a) = (l.wo, self.alpha);
+        let wo = l.wo;
         if wi.z > 0.0 {
             let mut p = l.p_diff * FRAC_1_PI * wi.z;
             if !l.smooth && l.p_spec > 0.0 {
                 let h = (wo + wi).normalize();
                 // D_wo(h) / (4 |wo·h|) = G1(wo) D(h) / (4 cos θo).
-                p += l.p_spec * ((g1(a, wo) * ggx_d(a, h)) / (4.0 * wo.z));
+                p += l.p_spec * ((l.ggx.g1(wo) * l.ggx.d(h)) / (4.0 * wo.z));
             }
             p
         } else if wi.z < 0.0 && !l.smooth && l.p_trans > 0.0 {
@@ -753,11 +918,11 @@ impl PbrBsdf {
                 let denom = cos_ih + cos_oh / eta;
                 // D_wo(h) |dh/dwi| = G1(wo) D(h) (wo·h) / cos θo · |wi·h| / denom².
                 l.p_trans
-                    * ((g1(a, wo) * ggx_d(a, h) * (cos_oh * -cos_ih)) / (wo.z * denom * denom))
+                    * ((l.ggx.g1(wo) * l.ggx.d(h) * (cos_oh * -cos_ih)) / (wo.z * denom * denom))
             } else {
                 let wr = Vec3A::new(wi.x, wi.y, -wi.z);
                 let h = (wo + wr).normalize();
-                l.p_trans * ((g1(a, wo) * ggx_d(a, h)) / (4.0 * wo.z))
+                l.p_trans * ((l.ggx.g1(wo) * l.ggx.d(h)) / (4.0 * wo.z))
             }
         } else {
             0.0
@@ -769,7 +934,8 @@ impl PbrBsdf {
     /// shortcut past [`PbrBsdf::local`], e.g. for lights behind an opaque surface).
     #[inline]
     fn nothing_between(&self, wo: Vec3A, wi: Vec3A) -> bool {
-        wo.z * wi.z <= 0.0 && (self.transmission_scale() == 0.0 || Material::is_smooth(self.alpha))
+        wo.z * wi.z <= 0.0
+            && (self.transmission_scale() == 0.0 || Material::is_smooth(self.alpha_t()))
     }
 
     /// `f(wo, wi) |cos θi|` of the non-delta lobes (zero for the delta lobes of a
@@ -840,7 +1006,7 @@ impl PbrBsdf {
     pub fn sample_at(&self, local: Option<Local>, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
         let l = local?;
         let wo_l = l.wo;
-        let (m, s, c, a) = (self.metallic, self.specular, self.base_color, self.alpha);
+        let (m, s, c) = (self.metallic, self.specular, self.base_color);
         let lobe = l.choose(u_lobe);
         // The base's share under the coat.
         let under = l.coat.map_or(1.0, |coat| 1.0 - coat.weight);
@@ -884,7 +1050,7 @@ impl PbrBsdf {
                 return Self::delta(l.map(wi), value, l.p_trans);
             }
             Lobe::Specular => {
-                let h = ggx_sample_visible_normal(a, wo_l, u);
+                let h = l.ggx.sample_visible_normal(wo_l, u);
                 let cos_oh = wo_l.dot(h);
                 if cos_oh.is_nan() || cos_oh <= 0.0 {
                     return None;
@@ -896,7 +1062,7 @@ impl PbrBsdf {
                 Vec3A::new(d.x, d.y, (1.0 - d.length_squared()).max(0.0).sqrt())
             }
             Lobe::Transmission => {
-                let h = ggx_sample_visible_normal(a, wo_l, u);
+                let h = l.ggx.sample_visible_normal(wo_l, u);
                 let cos_oh = wo_l.dot(h);
                 if cos_oh.is_nan() || cos_oh <= 0.0 {
                     return None;
