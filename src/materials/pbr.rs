@@ -1,6 +1,7 @@
 //! The glTF 2.0 metallic–roughness BSDF (glTF specification, Appendix B), with
 //! `KHR_materials_specular`, `KHR_materials_ior`, `KHR_materials_transmission`,
-//! `KHR_materials_volume` and `KHR_materials_clearcoat`.
+//! `KHR_materials_volume`, `KHR_materials_clearcoat` and
+//! `KHR_materials_anisotropy`.
 //!
 //! The frame, side and estimator conventions are those of the parent module
 //! ([`crate::materials`]): local frame with the shading normal as `+z`, `wo` and
@@ -44,6 +45,20 @@
 //! normal, and is smooth (a mirror about `n_c`) below
 //! [`ALPHA_SMOOTH`](super::ALPHA_SMOOTH). Seen from inside a refracting volume
 //! there is no coat (it lies on the outside).
+//!
+//! # Anisotropy
+//!
+//! `KHR_materials_anisotropy` replaces the base's `D` and `Λ` (metal and
+//! dielectric reflection, rough and thin-walled transmission; not the coat)
+//! by the anisotropic GGX of widths `α_t = mix(α, 1, k²)` along a unit
+//! direction `t` of the tangent plane and `α_b = α` across it (strength `k`);
+//! `t` comes in the mesh's tangent space and
+//! [`PbrBsdf::orient_anisotropy`] puts it in the shading frame at each hit.
+//! The visible normals are sampled in the frame `(t, b, n)` with the view
+//! stretched by `(α_t, α_b)`. The delta (smooth) lobes are used only when
+//! `α_t` too is below [`ALPHA_SMOOTH`](super::ALPHA_SMOOTH). With `k = 0`
+//! the isotropic functions themselves are called: the same values bit for
+//! bit as without the extension.
 //!
 //! # Transmission
 //!
