@@ -169,3 +169,13 @@ def r6(v):
         return [r6(c) for c in v]
     out = round(v, 6)
     return 0.0 if out == 0 else out
+
+
+def generator_main(build, default_out, doc):
+    """A generator's command line: `build(OUT_DIR)`, OUT_DIR the first argument or
+    `default_out`; -h or --help prints `doc`."""
+    out_dir = sys.argv[1] if len(sys.argv) > 1 else default_out
+    if out_dir in ("-h", "--help"):
+        print(doc)
+        return
+    build(out_dir)

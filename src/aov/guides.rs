@@ -111,6 +111,7 @@ fn visit(
     let frame = Frame::from_normal(n);
     let mut bsdf = *bsdf;
     bsdf.orient_coat(&frame, coat_normal(s, n));
+    bsdf.orient_anisotropy(&frame, s.tangent, s.bitangent);
     let lobes = bsdf.guide_lobes(frame.to_local(wo_world));
     let specular = |l: Option<(Vec3A, Vec3A)>| l.map_or(Vec3A::ZERO, |(_, v)| v);
     let (reflect, transmit) = (specular(lobes.reflect), specular(lobes.transmit));

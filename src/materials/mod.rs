@@ -375,8 +375,16 @@ fn ggx_lambda(alpha: f32, w: Vec3A) -> f32 {
 /// Distribution of Visible Normals").
 #[inline]
 fn ggx_sample_visible_normal(alpha: f32, wo: Vec3A, u: Vec2) -> Vec3A {
+    ggx_sample_visible_normal_xy(alpha, alpha, wo, u)
+}
+
+/// [`ggx_sample_visible_normal`] of the anisotropic GGX of widths `alpha_x`
+/// along local `x` and `alpha_y` along `y` (the same arithmetic: with equal
+/// widths, the isotropic sample bit for bit).
+#[inline]
+fn ggx_sample_visible_normal_xy(alpha_x: f32, alpha_y: f32, wo: Vec3A, u: Vec2) -> Vec3A {
     // Stretch the view direction to the hemisphere configuration (α = 1).
-    let vh = Vec3A::new(alpha * wo.x, alpha * wo.y, wo.z).normalize();
+    let vh = Vec3A::new(alpha_x * wo.x, alpha_y * wo.y, wo.z).normalize();
     // An orthonormal basis around it (T1 lies in the tangent plane).
     let len2 = vh.x * vh.x + vh.y * vh.y;
     let t1 = if len2 > 0.0 {
@@ -395,7 +403,7 @@ fn ggx_sample_visible_normal(alpha: f32, wo: Vec3A, u: Vec2) -> Vec3A {
     let p2 = (1.0 - s) * (1.0 - p1 * p1).max(0.0).sqrt() + s * p2;
     let nh = p1 * t1 + p2 * t2 + (1.0 - p1 * p1 - p2 * p2).max(0.0).sqrt() * vh;
     // Unstretch.
-    Vec3A::new(alpha * nh.x, alpha * nh.y, nh.z.max(0.0)).normalize()
+    Vec3A::new(alpha_x * nh.x, alpha_y * nh.y, nh.z.max(0.0)).normalize()
 }
 
 /// Maps `u ∈ [0,1)²` to the unit disk, preserving area and strata (Shirley and
@@ -465,6 +473,17 @@ impl Material {
     pub fn set_wavelength(&mut self, lambda: f32) {
         if let Material::Pbr(p) = self {
             *p = p.at_wavelength(lambda);
+        }
+    }
+
+    /// Turns the glTF BSDF's anisotropy direction (`KHR_materials_anisotropy`)
+    /// into the shading frame `frame`, given the mesh's unit tangent `t` and
+    /// bitangent `b` at the hit (see [`PbrBsdf::orient_anisotropy`]); nothing
+    /// for other materials or without anisotropy.
+    #[inline]
+    pub fn orient_anisotropy(&mut self, frame: &Frame, t: Vec3A, b: Vec3A) {
+        if let Material::Pbr(p) = self {
+            p.orient_anisotropy(frame, t, b);
         }
     }
 

@@ -1,7 +1,7 @@
 //! The glTF 2.0 metallic–roughness BSDF (glTF specification, Appendix B), with
 //! `KHR_materials_specular`, `KHR_materials_ior`, `KHR_materials_transmission`,
-//! `KHR_materials_volume`, `KHR_materials_sheen`, `KHR_materials_clearcoat` and
-//! `KHR_materials_iridescence`.
+//! `KHR_materials_volume`, `KHR_materials_sheen`, `KHR_materials_clearcoat`,
+//! `KHR_materials_iridescence` and `KHR_materials_anisotropy`.
 //!
 //! The frame, side and estimator conventions are those of the parent module
 //! ([`crate::materials`]): local frame with the shading normal as `+z`, `wo` and
@@ -76,6 +76,20 @@
 //! Under a clear coat the film's outside index is the coat's (see
 //! [`PbrBsdf::iridescence`]).
 //!
+//! # Anisotropy
+//!
+//! `KHR_materials_anisotropy` replaces the base's `D` and `Λ` (metal and
+//! dielectric reflection, rough and thin-walled transmission; not the coat)
+//! by the anisotropic GGX of widths `α_t = mix(α, 1, k²)` along a unit
+//! direction `t` of the tangent plane and `α_b = α` across it (strength `k`);
+//! `t` comes in the mesh's tangent space and
+//! [`PbrBsdf::orient_anisotropy`] puts it in the shading frame at each hit.
+//! The visible normals are sampled in the frame `(t, b, n)` with the view
+//! stretched by `(α_t, α_b)`. The delta (smooth) lobes are used only when
+//! `α_t` too is below [`ALPHA_SMOOTH`](super::ALPHA_SMOOTH). With `k = 0`
+//! the isotropic functions themselves are called: the same values bit for
+//! bit as without the extension.
+//!
 //! # Transmission
 //!
 //! * Thin-walled (`thin_walled`, glTF transmission without a volume): light
@@ -128,10 +142,10 @@ use super::sheen;
 use super::thin_film::{COAT_IOR, ThinFilm};
 use super::{
     BsdfSample, Frame, GUIDE_ALPHA, GuideLobes, Material, concentric_disk, finite_or_zero, ggx_d,
-    ggx_lambda, ggx_sample_visible_normal, reflect_z,
+    ggx_lambda, ggx_sample_visible_normal, ggx_sample_visible_normal_xy, reflect_z,
 };
 use glam::{Vec2, Vec3A};
-use std::f32::consts::FRAC_1_PI;
+use std::f32::consts::{FRAC_1_PI, PI};
 
 /// The smallest GGX `α` [`PbrBsdf::alpha_from_roughness`] returns.
 pub const MIN_ALPHA: f32 = 1e-4;
@@ -204,6 +218,15 @@ pub struct PbrBsdf {
     /// `mix(iridescenceThicknessMinimum, iridescenceThicknessMaximum,
     /// iridescenceThicknessTexture.g)`, the maximum without a texture.
     pub film_thickness: f32,
+    /// `KHR_materials_anisotropy`: `anisotropyStrength` ×
+    /// `anisotropyTexture.b` in `[0, 1]` (0: isotropic, the base's GGX as
+    /// without the extension).
+    pub anisotropy: f32,
+    /// The unit direction of increased roughness: as the material gives it,
+    /// in the mesh's tangent space (`x` along the tangent, `y` along the
+    /// bitangent); [`PbrBsdf::orient_anisotropy`] turns it into the shading
+    /// frame's tangent plane (`x`, `y` of the local frame) at each hit.
+    pub anisotropy_direction: Vec2,
 }
 
 /// The clear coat's `F0`: an index of 1.5, `((1.5 − 1)/(1.5 + 1))²`.
@@ -219,6 +242,99 @@ impl Default for PbrBsdf {
     /// glTF's default material: white, fully metallic, roughness 1.
     fn default() -> PbrBsdf {
         PbrBsdf::new(Vec3A::ONE, 1.0, 1.0)
+    }
+}
+
+/// The base's GGX distribution at one hit (the metal's and the dielectric's
+/// specular reflection and the transmission; not the coat's).
+#[derive(Clone, Copy, Debug)]
+enum Ggx {
+    /// Width `α` in every direction: the functions of the parent module, so
+    /// that a material without `KHR_materials_anisotropy` is evaluated and
+    /// sampled exactly as before it existed.
+    Isotropic(f32),
+    /// Width `at` along the unit direction `dir = (cos φ, sin φ)` of the
+    /// local tangent plane and `ab` across it: `D(m) = 1 / (π at ab ((m_t /
+    /// at)² + (m_b / ab)² + m_z²)²)` and `Λ(w) = (√(1 + (at² w_t² + ab²
+    /// w_b²) / w_z²) − 1) / 2`, with `m_t = m·t`, `m_b = m·b`, `t = (cos φ,
+    /// sin φ, 0)` and `b = n × t` (Heitz 2014, "Understanding the
+    /// Masking-Shadowing Function", §5.4), as `KHR_materials_anisotropy`'s
+    /// `D_GGX_anisotropic` and `V_GGX_anisotropic` write them.
+    Anisotropic { at: f32, ab: f32, dir: Vec2 },
+}
+
+impl Ggx {
+    /// `w` with its tangent-plane part turned into `(t, b)` coordinates.
+    #[inline]
+    fn to_tb(dir: Vec2, w: Vec3A) -> Vec3A {
+        Vec3A::new(dir.x * w.x + dir.y * w.y, dir.x * w.y - dir.y * w.x, w.z)
+    }
+
+    /// The inverse of [`Ggx::to_tb`].
+    #[inline]
+    fn from_tb(dir: Vec2, w: Vec3A) -> Vec3A {
+        Vec3A::new(dir.x * w.x - dir.y * w.y, dir.y * w.x + dir.x * w.y, w.z)
+    }
+
+    /// The microfacet density `D(m)` (zero below the horizon).
+    #[inline]
+    fn d(&self, m: Vec3A) -> f32 {
+        match *self {
+            Ggx::Isotropic(a) => ggx_d(a, m),
+            Ggx::Anisotropic { at, ab, dir } => {
+                if m.z <= 0.0 {
+                    return 0.0;
+                }
+                let m = Self::to_tb(dir, m);
+                let (x, y) = (m.x / at, m.y / ab);
+                let s = x * x + y * y + m.z * m.z;
+                1.0 / (PI * at * ab * s * s)
+            }
+        }
+    }
+
+    /// Smith's `Λ(w)`; infinite at the horizon.
+    #[inline]
+    fn lambda(&self, w: Vec3A) -> f32 {
+        match *self {
+            Ggx::Isotropic(a) => ggx_lambda(a, w),
+            Ggx::Anisotropic { at, ab, dir } => {
+                let z2 = w.z * w.z;
+                if z2 == 0.0 {
+                    return f32::INFINITY;
+                }
+                let w = Self::to_tb(dir, w);
+                let (x, y) = (at * w.x, ab * w.y);
+                let a2_tan2 = (x * x + y * y) / z2;
+                a2_tan2 / (2.0 * ((1.0 + a2_tan2).sqrt() + 1.0))
+            }
+        }
+    }
+
+    /// Smith's height-correlated `G2 = 1 / (1 + Λ(wo) + Λ(wi))`.
+    #[inline]
+    fn g2(&self, wo: Vec3A, wi: Vec3A) -> f32 {
+        1.0 / (1.0 + self.lambda(wo) + self.lambda(wi))
+    }
+
+    /// Smith's masking `G1(wo) = 1 / (1 + Λ(wo))`.
+    #[inline]
+    fn g1(&self, wo: Vec3A) -> f32 {
+        1.0 / (1.0 + self.lambda(wo))
+    }
+
+    /// A normal visible from `wo` (`wo.z > 0`), of density `G1(wo) max(0,
+    /// wo·m) D(m) / cos θo` (Heitz 2018: the view stretched by `(at, ab)` in
+    /// the `(t, b)` frame).
+    #[inline]
+    fn sample_visible_normal(&self, wo: Vec3A, u: Vec2) -> Vec3A {
+        match *self {
+            Ggx::Isotropic(a) => ggx_sample_visible_normal(a, wo, u),
+            Ggx::Anisotropic { at, ab, dir } => {
+                let m = ggx_sample_visible_normal_xy(at, ab, Self::to_tb(dir, wo), u);
+                Self::from_tb(dir, m)
+            }
+        }
     }
 }
 
@@ -256,6 +372,8 @@ pub struct Local {
     volume: bool,
     /// Whether the specular and transmission lobes are deltas.
     smooth: bool,
+    /// The base's microfacet distribution.
+    ggx: Ggx,
     /// The dielectric's `F0` per channel.
     f0: Vec3A,
     /// Lobe selection probabilities (summing to 1).
@@ -377,6 +495,58 @@ impl PbrBsdf {
             iridescence: 0.0,
             film_ior: 1.3,
             film_thickness: 400.0,
+            anisotropy: 0.0,
+            anisotropy_direction: Vec2::X,
+        }
+    }
+
+    /// Turns [`PbrBsdf::anisotropy_direction`] from the mesh's tangent space
+    /// into the shading frame `frame`, given the unit tangent `t` and
+    /// bitangent `b` there (world space): `dx t + dy b` projected onto the
+    /// shading plane. Without anisotropy nothing changes; where there is no
+    /// tangent frame (`t` or `b` zero) or the direction is degenerate (along
+    /// the shading normal), the material is isotropic at that hit: the
+    /// extension gives no direction to stretch along.
+    #[inline]
+    pub fn orient_anisotropy(&mut self, frame: &Frame, t: Vec3A, b: Vec3A) {
+        if self.anisotropy.is_nan() || self.anisotropy <= 0.0 {
+            return;
+        }
+        let d = self.anisotropy_direction;
+        let local = frame.to_local(d.x * t + d.y * b);
+        let dir = Vec2::new(local.x, local.y).normalize_or_zero();
+        if dir != Vec2::ZERO && dir.is_finite() {
+            self.anisotropy_direction = dir;
+        } else {
+            self.anisotropy = 0.0;
+        }
+    }
+
+    /// The GGX width along the direction of increased roughness:
+    /// `mix(α, 1, strength²)` (`KHR_materials_anisotropy`), `α` without
+    /// anisotropy; the larger of the two widths.
+    #[inline]
+    fn alpha_t(&self) -> f32 {
+        if self.anisotropy > 0.0 {
+            let k = self.anisotropy.min(1.0);
+            self.alpha + (1.0 - self.alpha) * (k * k)
+        } else {
+            self.alpha
+        }
+    }
+
+    /// The base's microfacet distribution: anisotropic only where the
+    /// strength is positive.
+    #[inline]
+    fn ggx(&self) -> Ggx {
+        if self.anisotropy > 0.0 {
+            Ggx::Anisotropic {
+                at: self.alpha_t(),
+                ab: self.alpha,
+                dir: self.anisotropy_direction,
+            }
+        } else {
+            Ggx::Isotropic(self.alpha)
         }
     }
 
@@ -487,7 +657,7 @@ impl PbrBsdf {
     /// has zero weight, e.g. a smooth metal or smooth full transmission): next
     /// event estimation cannot hit it.
     pub fn is_specular(&self) -> bool {
-        Material::is_smooth(self.alpha)
+        Material::is_smooth(self.alpha_t())
             && !self.has_diffuse()
             && !self.has_sheen()
             && (self.coat <= 0.0 || self.coat_smooth())
@@ -581,7 +751,7 @@ impl PbrBsdf {
     /// [`PbrBsdf::guide_lobes`] of the material under the sheen and the coat.
     fn base_guide_lobes(&self, wo: Vec3A, l: &Local) -> GuideLobes {
         let l = *l;
-        if self.alpha > GUIDE_ALPHA {
+        if self.alpha_t() > GUIDE_ALPHA {
             return GuideLobes::rough(self.albedo(wo.z));
         }
         let wo_l = l.wo;
@@ -692,7 +862,7 @@ impl PbrBsdf {
         } else {
             wo
         };
-        let smooth = Material::is_smooth(self.alpha);
+        let smooth = Material::is_smooth(self.alpha_t());
         let (m, s, c) = (self.metallic, self.specular, self.base_color);
         let f0 = self.f0();
         let kd_max = self.kd_max_of(f0);
@@ -762,6 +932,7 @@ impl PbrBsdf {
             inside,
             volume,
             smooth,
+            ggx: self.ggx(),
             f0,
             p_spec: w_spec * inv,
             p_diff: w_diff * inv,
@@ -852,7 +1023,7 @@ impl PbrBsdf {
 
     /// [`PbrBsdf::eval_local`] of the material under the coat.
     fn eval_base(&self, l: &Local, wi: Vec3A) -> Vec3A {
-        let (wo, a) = (l.wo, self.alpha);
+        let wo = l.wo;
         let (m, s, c) = (self.metallic, self.specular, self.base_color);
         if wi.z > 0.0 {
             let h = (wo + wi).normalize();
@@ -863,7 +1034,7 @@ impl PbrBsdf {
             if !l.smooth {
                 // D G2 / (4 cos θo); the numerator first so that a subnormal
                 // cos θo next to G2 = 0 gives 0, not 0 · ∞.
-                let spec = (ggx_d(a, h) * g2(a, wo, wi)) / (4.0 * wo.z);
+                let spec = (l.ggx.d(h) * l.ggx.g2(wo, wi)) / (4.0 * wo.z);
                 f += (m * self.fresnel_m(cos_oh) + (1.0 - m) * s * fd) * spec;
             }
             f
@@ -877,14 +1048,15 @@ impl PbrBsdf {
                 let kd = 1.0 - s * self.fresnel_air(l.f0, air).max_element();
                 let denom = cos_ih + cos_oh / eta;
                 // D G2 |wi·h| |wo·h| / (cos θo (wi·h + wo·h/η)²), without 1/η².
-                let t = (ggx_d(a, h) * g2(a, wo, wi) * (-cos_ih * cos_oh)) / (wo.z * denom * denom);
+                let t =
+                    (l.ggx.d(h) * l.ggx.g2(wo, wi) * (-cos_ih * cos_oh)) / (wo.z * denom * denom);
                 c * (self.transmission_scale() * kd * t)
             } else {
                 let wr = Vec3A::new(wi.x, wi.y, -wi.z);
                 let h = (wo + wr).normalize();
                 let cos_oh = wo.dot(h).min(1.0);
                 let kd = 1.0 - s * self.fresnel_air(l.f0, cos_oh).max_element();
-                let spec = (ggx_d(a, h) * g2(a, wo, wr)) / (4.0 * wo.z);
+                let spec = (l.ggx.d(h) * l.ggx.g2(wo, wr)) / (4.0 * wo.z);
                 c * (self.transmission_scale() * kd * spec)
             }
         } else {
@@ -919,7 +1091,7 @@ impl PbrBsdf {
         if wi.z <= 0.0 {
             return (self.eval_base(l, wi), self.pdf_base(l, wi));
         }
-        let (wo, a) = (l.wo, self.alpha);
+        let wo = l.wo;
         let (m, s, c) = (self.metallic, self.specular, self.base_color);
         let h = (wo + wi).normalize();
         let cos_oh = wo.dot(h).min(1.0);
@@ -928,11 +1100,11 @@ impl PbrBsdf {
         let mut f = c * (self.diffuse_scale() * kd * FRAC_1_PI * wi.z);
         let mut p = l.p_diff * FRAC_1_PI * wi.z;
         if !l.smooth {
-            let d = ggx_d(a, h);
-            let spec = (d * g2(a, wo, wi)) / (4.0 * wo.z);
+            let d = l.ggx.d(h);
+            let spec = (d * l.ggx.g2(wo, wi)) / (4.0 * wo.z);
             f += (m * self.fresnel_m(cos_oh) + (1.0 - m) * s * fd) * spec;
             if l.p_spec > 0.0 {
-                p += l.p_spec * ((g1(a, wo) * d) / (4.0 * wo.z));
+                p += l.p_spec * ((l.ggx.g1(wo) * d) / (4.0 * wo.z));
             }
         }
         (f, p)
@@ -976,13 +1148,13 @@ impl PbrBsdf {
 
     /// [`PbrBsdf::pdf_local`] of the lobes under the sheen and the coat.
     fn pdf_base(&self, l: &Local, wi: Vec3A) -> f32 {
-        let (wo, a) = (l.wo, self.alpha);
+        let wo = l.wo;
         if wi.z > 0.0 {
             let mut p = l.p_diff * FRAC_1_PI * wi.z;
             if !l.smooth && l.p_spec > 0.0 {
                 let h = (wo + wi).normalize();
                 // D_wo(h) / (4 |wo·h|) = G1(wo) D(h) / (4 cos θo).
-                p += l.p_spec * ((g1(a, wo) * ggx_d(a, h)) / (4.0 * wo.z));
+                p += l.p_spec * ((l.ggx.g1(wo) * l.ggx.d(h)) / (4.0 * wo.z));
             }
             p
         } else if wi.z < 0.0 && !l.smooth && l.p_trans > 0.0 {
@@ -994,11 +1166,11 @@ impl PbrBsdf {
                 let denom = cos_ih + cos_oh / eta;
                 // D_wo(h) |dh/dwi| = G1(wo) D(h) (wo·h) / cos θo · |wi·h| / denom².
                 l.p_trans
-                    * ((g1(a, wo) * ggx_d(a, h) * (cos_oh * -cos_ih)) / (wo.z * denom * denom))
+                    * ((l.ggx.g1(wo) * l.ggx.d(h) * (cos_oh * -cos_ih)) / (wo.z * denom * denom))
             } else {
                 let wr = Vec3A::new(wi.x, wi.y, -wi.z);
                 let h = (wo + wr).normalize();
-                l.p_trans * ((g1(a, wo) * ggx_d(a, h)) / (4.0 * wo.z))
+                l.p_trans * ((l.ggx.g1(wo) * l.ggx.d(h)) / (4.0 * wo.z))
             }
         } else {
             0.0
@@ -1010,7 +1182,8 @@ impl PbrBsdf {
     /// shortcut past [`PbrBsdf::local`], e.g. for lights behind an opaque surface).
     #[inline]
     fn nothing_between(&self, wo: Vec3A, wi: Vec3A) -> bool {
-        wo.z * wi.z <= 0.0 && (self.transmission_scale() == 0.0 || Material::is_smooth(self.alpha))
+        wo.z * wi.z <= 0.0
+            && (self.transmission_scale() == 0.0 || Material::is_smooth(self.alpha_t()))
     }
 
     /// `f(wo, wi) |cos θi|` of the non-delta lobes (zero for the delta lobes of a
@@ -1081,7 +1254,7 @@ impl PbrBsdf {
     pub fn sample_at(&self, local: Option<Local>, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
         let l = local?;
         let wo_l = l.wo;
-        let (m, s, c, a) = (self.metallic, self.specular, self.base_color, self.alpha);
+        let (m, s, c) = (self.metallic, self.specular, self.base_color);
         let lobe = l.choose(u_lobe);
         // The base's share under the coat and the sheen (a delta's `wi` has
         // `wo`'s cosine, so the sheen's scaling is `1 − max(C) E(μo)`).
@@ -1138,7 +1311,7 @@ impl PbrBsdf {
                 return Self::delta(l.map(wi), value, l.p_trans);
             }
             Lobe::Specular => {
-                let h = ggx_sample_visible_normal(a, wo_l, u);
+                let h = l.ggx.sample_visible_normal(wo_l, u);
                 let cos_oh = wo_l.dot(h);
                 if cos_oh.is_nan() || cos_oh <= 0.0 {
                     return None;
@@ -1150,7 +1323,7 @@ impl PbrBsdf {
                 Vec3A::new(d.x, d.y, (1.0 - d.length_squared()).max(0.0).sqrt())
             }
             Lobe::Transmission => {
-                let h = ggx_sample_visible_normal(a, wo_l, u);
+                let h = l.ggx.sample_visible_normal(wo_l, u);
                 let cos_oh = wo_l.dot(h);
                 if cos_oh.is_nan() || cos_oh <= 0.0 {
                     return None;
@@ -1213,7 +1386,7 @@ mod tests {
     use super::*;
 
     /// All χ² tests of this module, for the Šidák correction.
-    const CHI2_TESTS: u32 = 3 * 3 * 2 + 4 + 4 + 4 + 2 + 5;
+    const CHI2_TESTS: u32 = 3 * 3 * 2 + 4 + 4 + 4 + 2 + 5 + 10;
 
     const COLOR: Vec3A = Vec3A::new(0.8, 0.5, 0.2);
 
@@ -1792,6 +1965,17 @@ mod tests {
             PbrBsdf::new(COLOR, 0.3, 0.0),
             thin(COLOR, 0.0, 0.0, 0.5),
             volume(COLOR, 0.0, 0.0, 0.5),
+            // Anisotropic: rough, rough mostly along the direction (α_b small),
+            // transmitting, and under a coat.
+            aniso(PbrBsdf::new(COLOR, 0.4, 0.4), 0.8, 0.6),
+            aniso(PbrBsdf::new(COLOR, 1.0, 0.15), 0.7, -1.2),
+            aniso(volume(COLOR, 0.0, 0.3, 0.9), 0.9, 2.0),
+            aniso(thin(COLOR, 0.0, 0.3, 0.7), 0.5, 0.3),
+            aniso(
+                coated(PbrBsdf::new(COLOR, 1.0, 0.3), 1.0, 0.2, 10.0),
+                1.0,
+                0.9,
+            ),
         ]
     }
 
@@ -1950,6 +2134,16 @@ mod tests {
             coat_normal: Vec3A::NAN,
             ..coated(PbrBsdf::new(COLOR, 0.0, 0.5), 1.0, 0.3, 0.0)
         });
+        all.push(PbrBsdf {
+            anisotropy_direction: Vec2::NAN,
+            ..aniso(PbrBsdf::new(COLOR, 1.0, 0.5), 0.5, 0.0)
+        });
+        all.push(PbrBsdf {
+            anisotropy_direction: Vec2::ZERO,
+            ..aniso(volume(COLOR, 0.0, 0.5, 1.0), 1.0, 0.0)
+        });
+        all.push(aniso(PbrBsdf::new(COLOR, 1.0, 0.5), f32::NAN, 0.0));
+        all.push(aniso(PbrBsdf::new(COLOR, 1.0, 0.5), f32::INFINITY, 0.0));
         all.extend([
             PbrBsdf {
                 alpha: f32::NAN,
@@ -2366,5 +2560,318 @@ mod tests {
                 }
             }
         }
+    }
+
+    // ------------------------------------------------------ anisotropy
+
+    /// `base` with `KHR_materials_anisotropy` of `strength`, its direction at
+    /// `angle` radians from the local `+x` (already in the shading frame).
+    fn aniso(base: PbrBsdf, strength: f32, angle: f32) -> PbrBsdf {
+        let (s, c) = angle.sin_cos();
+        PbrBsdf {
+            anisotropy: strength,
+            anisotropy_direction: Vec2::new(c, s),
+            ..base
+        }
+    }
+
+    #[test]
+    fn chi2_anisotropic_sampling_matches_pdf() {
+        let mut cases = Vec::new();
+        // (metallic, roughness, strength, rotation, θo, φo): widths from
+        // (α_t, α_b) = (0.52, 0.04) to (1, 0.25), directions along, across
+        // and oblique to wo's azimuth.
+        for (m, r, k, rot, theta, phi) in [
+            (1.0f32, 0.2f32, 0.7f32, 0.0f32, 45.0f32, 0.0f32),
+            (1.0, 0.5, 1.0, 0.8, 70.0, 2.0),
+            (1.0, 0.3, 0.5, 1.6, 15.0, 0.3),
+            (0.0, 0.4, 0.9, -0.5, 60.0, 1.0),
+            (0.0, 0.2, 0.6, 2.5, 30.0, 4.0),
+            (0.5, 0.35, 0.8, 0.4, 80.0, 0.4),
+        ] {
+            let p = aniso(PbrBsdf::new(COLOR, m, r), k, rot);
+            let what = format!("aniso m={m} r={r} k={k} rot={rot} θo={theta}");
+            cases.push((p, dir(theta, phi), what));
+        }
+        for (p, wo, what) in [
+            (
+                volume(Vec3A::ONE, 0.0, 0.4, 1.0),
+                dir(40.0, 0.7),
+                "volume outside",
+            ),
+            (
+                volume(COLOR, 0.0, 0.3, 0.8),
+                -dir(30.0, 2.2),
+                "volume inside",
+            ),
+            (thin(COLOR, 0.0, 0.3, 1.0), dir(50.0, 1.1), "thin-walled"),
+            (
+                thin(COLOR, 0.3, 0.5, 0.6),
+                -dir(70.0, 3.0),
+                "thin back side",
+            ),
+        ] {
+            cases.push((aniso(p, 0.8, 0.9), wo, format!("aniso {what}")));
+        }
+        let cases: Vec<_> = cases.iter().map(|(p, w, s)| (*p, *w, s.as_str())).collect();
+        chi2_cases(&cases, 700);
+    }
+
+    #[test]
+    fn chi2_detects_a_wrong_anisotropic_pdf() {
+        // The sampler of one direction against the pdf of another (and of
+        // the isotropic material) is rejected.
+        let p = aniso(PbrBsdf::new(COLOR, 1.0, 0.3), 0.8, 0.0);
+        let wo = dir(45.0, 0.7);
+        for (i, claimed) in [
+            aniso(p, 0.8, 0.4),
+            PbrBsdf {
+                anisotropy: 0.0,
+                ..p
+            },
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let pv = chi2_p_value_of(Material::Pbr(p), Material::Pbr(claimed), wo, 720 + i as u64);
+            eprintln!("chi2 wrong anisotropic pdf {i}: p = {pv:e}");
+            assert!(pv < 1e-6, "wrong pdf not detected: p = {pv}");
+        }
+    }
+
+    /// The anisotropic distribution of every test below.
+    fn ggx_of(roughness: f32, strength: f32, angle: f32) -> Ggx {
+        let p = aniso(PbrBsdf::new(COLOR, 1.0, roughness), strength, angle);
+        let g = p.ggx();
+        assert!(matches!(g, Ggx::Anisotropic { .. }));
+        g
+    }
+
+    /// `∫ f(m) dω_m` over the upper hemisphere by the midpoint rule in
+    /// `(θ, φ)`, in f64.
+    fn hemisphere_integral(f: impl Fn(Vec3A) -> f64) -> f64 {
+        let (nt, np) = (3000, 1000);
+        let (dt, dp) = (
+            std::f64::consts::FRAC_PI_2 / nt as f64,
+            std::f64::consts::TAU / np as f64,
+        );
+        let phis: Vec<(f64, f64)> = (0..np).map(|j| ((j as f64 + 0.5) * dp).sin_cos()).collect();
+        let mut sum = 0.0;
+        for i in 0..nt {
+            let t = (i as f64 + 0.5) * dt;
+            let (st, ct) = t.sin_cos();
+            let mut row = 0.0;
+            for &(sp, cp) in &phis {
+                row += f(Vec3A::new((st * cp) as f32, (st * sp) as f32, ct as f32));
+            }
+            sum += row * st;
+        }
+        sum * dt * dp
+    }
+
+    #[test]
+    fn anisotropic_d_is_normalized_and_lambda_matches_it() {
+        // ∫ D(m) (n·m) dm = 1, and the projected area seen from wo,
+        // ∫ D(m) max(0, wo·m) dm = cos θo (1 + Λ(wo)): Λ is the Smith
+        // function of this D (so the visible normals' density integrates to 1).
+        for (r, k, angle) in [(0.2f32, 0.8f32, 0.3f32), (0.5, 0.5, -1.0), (0.3, 1.0, 2.0)] {
+            let g = ggx_of(r, k, angle);
+            let norm = hemisphere_integral(|m| g.d(m) as f64 * m.z as f64);
+            eprintln!("aniso D r={r} k={k}: ∫ D cos = {norm:.6}");
+            assert!((norm - 1.0).abs() < 2e-3, "r={r} k={k}: {norm}");
+            for (theta, phi) in [(30.0f32, 0.3f32), (70.0, 1.9), (85.0, 0.3 + angle)] {
+                let wo = dir(theta, phi);
+                let area = hemisphere_integral(|m| g.d(m) as f64 * wo.dot(m).max(0.0) as f64);
+                let expected = wo.z as f64 * (1.0 + g.lambda(wo) as f64);
+                eprintln!("aniso r={r} k={k} θo={theta}: projected {area:.6} vs {expected:.6}");
+                assert!(
+                    (area / expected - 1.0).abs() < 3e-3,
+                    "r={r} k={k} θo={theta}: {area} vs {expected}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn anisotropic_formulas_reduce_to_the_isotropic_ones() {
+        // Equal widths: the anisotropic D, Λ and visible-normal samples are
+        // the isotropic ones (to rounding), whatever the direction.
+        let mut r = rng(31);
+        for alpha in [0.01f32, 0.2, 0.7] {
+            for angle in [0.0f32, 0.7, 2.5] {
+                let dir2 = Vec2::new(angle.cos(), angle.sin());
+                let a = Ggx::Anisotropic {
+                    at: alpha,
+                    ab: alpha,
+                    dir: dir2,
+                };
+                let i = Ggx::Isotropic(alpha);
+                for _ in 0..2000 {
+                    let w = sphere(&mut r);
+                    let w = Vec3A::new(w.x, w.y, w.z.abs().max(1e-3)).normalize();
+                    let close = |x: f32, y: f32| (x - y).abs() <= 2e-5 * y.abs().max(1e-3);
+                    assert!(close(a.d(w), i.d(w)), "{alpha} {w}: {} {}", a.d(w), i.d(w));
+                    assert!(close(a.lambda(w), i.lambda(w)));
+                    let u = u2(&mut r);
+                    let (ma, mi) = (a.sample_visible_normal(w, u), i.sample_visible_normal(w, u));
+                    assert!((ma - mi).length() < 1e-4, "{ma} vs {mi}");
+                }
+            }
+        }
+        // Strength 0 is no anisotropy at all: the isotropic path itself.
+        let p = aniso(PbrBsdf::new(COLOR, 0.5, 0.4), 0.0, 1.0);
+        assert!(matches!(p.ggx(), Ggx::Isotropic(a) if a == p.alpha));
+        let plain = PbrBsdf::new(COLOR, 0.5, 0.4);
+        for _ in 0..1000 {
+            let (wo, wi) = (sphere(&mut r), sphere(&mut r));
+            assert_eq!(p.eval_pdf(wo, wi), plain.eval_pdf(wo, wi));
+            let (ul, u) = (r.next_f32(), u2(&mut r));
+            assert_eq!(p.sample(wo, ul, u), plain.sample(wo, ul, u));
+        }
+    }
+
+    #[test]
+    fn anisotropic_metal_matches_the_specifications_formulas() {
+        // BRDF_specularAnisotropicGGX of the extension's text, written out
+        // in f64: F V D with at = mix(α, 1, k²), ab = α, on the pair
+        // below; raylab's f cos θi over cos θi must equal it.
+        let (r, k, angle) = (0.4f64, 0.7f64, 0.6f64);
+        let c = Vec3A::new(0.9, 0.6, 0.3);
+        let p = aniso(PbrBsdf::new(c, 1.0, r as f32), k as f32, angle as f32);
+        let (wo, wi) = (dir(50.0, 0.2), dir(35.0, 2.9));
+        let v = |w: Vec3A| [w.x as f64, w.y as f64, w.z as f64];
+        let (l, vv) = (v(wi), v(wo));
+        let hs = [l[0] + vv[0], l[1] + vv[1], l[2] + vv[2]];
+        let hl = (hs[0] * hs[0] + hs[1] * hs[1] + hs[2] * hs[2]).sqrt();
+        let h = hs.map(|x| x / hl);
+        let t = [angle.cos(), angle.sin(), 0.0];
+        let b = [-angle.sin(), angle.cos(), 0.0];
+        let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+        let alpha = r * r;
+        let at = alpha * (1.0 - k * k) + k * k;
+        let ab = alpha;
+        // D_GGX_anisotropic.
+        let a2 = at * ab;
+        let f = [ab * dot(t, h), at * dot(b, h), a2 * h[2]];
+        let w2 = a2 / dot(f, f);
+        let d = a2 * w2 * w2 / std::f64::consts::PI;
+        // V_GGX_anisotropic.
+        let len = |x: f64, y: f64, z: f64| (x * x + y * y + z * z).sqrt();
+        let ggxv = l[2] * len(at * dot(t, vv), ab * dot(b, vv), vv[2]);
+        let ggxl = vv[2] * len(at * dot(t, l), ab * dot(b, l), l[2]);
+        let vis = 0.5 / (ggxv + ggxl);
+        let x5 = (1.0 - dot(vv, h)).powi(5);
+        let expected = Vec3A::new(
+            ((c.x as f64 + (1.0 - c.x as f64) * x5) * vis * d) as f32,
+            ((c.y as f64 + (1.0 - c.y as f64) * x5) * vis * d) as f32,
+            ((c.z as f64 + (1.0 - c.z as f64) * x5) * vis * d) as f32,
+        );
+        let got = p.eval(wo, wi) / wi.z;
+        eprintln!("anisotropic metal: {got} against the specification's {expected}");
+        assert!(rel_err(got, expected) < 1e-4, "{got} vs {expected}");
+        // And the isotropic value differs (the test sees the anisotropy).
+        let iso = PbrBsdf::new(c, 1.0, r as f32).eval(wo, wi) / wi.z;
+        assert!(rel_err(iso, expected) > 0.05, "{iso} vs {expected}");
+    }
+
+    #[test]
+    fn the_highlight_widens_along_the_anisotropy_direction() {
+        // Seen head-on, a light 15° off the mirror direction towards the
+        // direction t is reflected far more than one 15° off towards b
+        // (the lobe is wider along t), and turning the direction by 90°
+        // swaps the two; on a ring, the widest azimuth is ±t.
+        use std::f32::consts::FRAC_PI_2;
+        let wo = Vec3A::Z;
+        for angle in [0.0f32, 0.5, 1.2] {
+            let p = aniso(PbrBsdf::new(Vec3A::ONE, 1.0, 0.2), 0.8, angle);
+            let along = p.eval(wo, dir(15.0, angle)).x;
+            let across = p.eval(wo, dir(15.0, angle + FRAC_PI_2)).x;
+            eprintln!("aniso highlight at {angle}: along t {along:.4}, along b {across:.4}");
+            assert!(along > 5.0 * across, "{angle}: {along} vs {across}");
+            let turned = aniso(p, 0.8, angle + FRAC_PI_2);
+            let (a2, c2) = (
+                turned.eval(wo, dir(15.0, angle)).x,
+                turned.eval(wo, dir(15.0, angle + FRAC_PI_2)).x,
+            );
+            assert!(
+                (a2 - across).abs() < 1e-4 * across.max(1e-3) && (c2 - along).abs() < 1e-4 * along
+            );
+            // The azimuth of the widest point on a 15° ring is ±t.
+            let best = (0..360)
+                .map(|i| (i as f32).to_radians())
+                .max_by(|&x, &y| {
+                    p.eval(wo, dir(15.0, x))
+                        .x
+                        .total_cmp(&p.eval(wo, dir(15.0, y)).x)
+                })
+                .unwrap();
+            let x = (best - angle).rem_euclid(PI);
+            let off = x.min(PI - x);
+            assert!(off < 0.02, "{angle}: widest at {best}");
+        }
+    }
+
+    /// White furnaces for anisotropic lobes: never more than is received,
+    /// and between the isotropic materials of widths `α_t` and `α_b` (the
+    /// single-scattering loss grows with roughness).
+    #[test]
+    fn furnace_anisotropic_white_metal_and_glass() {
+        let n = 60_000;
+        for (r, k) in [(0.1f32, 0.5f32), (0.3, 0.8), (0.5, 1.0), (0.05, 1.0)] {
+            let p = aniso(PbrBsdf::new(Vec3A::ONE, 1.0, r), k, 0.7);
+            let at = p.alpha_t().sqrt();
+            for theta in [0.0f32, 45.0, 80.0] {
+                let wo = dir(theta, 0.2);
+                let (a, se) = albedo(Material::Pbr(p), wo, n, 900);
+                let wide = albedo(Material::Pbr(PbrBsdf::new(Vec3A::ONE, 1.0, at)), wo, n, 901);
+                let narrow = albedo(Material::Pbr(PbrBsdf::new(Vec3A::ONE, 1.0, r)), wo, n, 902);
+                eprintln!(
+                    "furnace aniso metal r={r} k={k} θo={theta}: {a:.5} ± {se:.5} (iso α_t {:.5}, α_b {:.5})",
+                    wide.0, narrow.0
+                );
+                assert!(
+                    a <= 1.0 + 3.0 * se + 1e-6,
+                    "r={r} k={k} θo={theta}: {a} ± {se}"
+                );
+                assert!(
+                    a >= wide.0 - 4.0 * (se + wide.1) && a <= narrow.0 + 4.0 * (se + narrow.1),
+                    "r={r} k={k} θo={theta}: {a} not between {} and {}",
+                    wide.0,
+                    narrow.0
+                );
+            }
+        }
+        // Clear rough glass (reflection and refraction, Schlick): from
+        // either side, no gain.
+        for (r, k) in [(0.2f32, 0.8f32), (0.5, 1.0)] {
+            let p = aniso(volume(Vec3A::ONE, 0.0, r, 1.0), k, -0.4);
+            for wo in [
+                dir(0.0, 0.0),
+                dir(45.0, 1.0),
+                dir(80.0, 0.3),
+                -dir(30.0, 2.0),
+            ] {
+                let (a, se) = albedo(Material::Pbr(p), wo, n, 903);
+                eprintln!("furnace aniso glass r={r} k={k} wo={wo}: {a:.5} ± {se:.5}");
+                assert!(a <= 1.0 + 3.0 * se + 1e-6, "r={r} k={k} {wo}: {a} ± {se}");
+                assert!(a > 0.5, "r={r} k={k} {wo}: {a}");
+            }
+        }
+    }
+
+    #[test]
+    fn orienting_takes_the_tangent_frame_into_the_shading_frame() {
+        // Direction (cos 30°, sin 30°) in a tangent frame turned 90° about
+        // the normal: 120° in the shading frame; no tangent: isotropic.
+        let frame = Frame::from_normal(Vec3A::Z);
+        let (t, b) = (frame.b, -frame.t);
+        let mut p = aniso(PbrBsdf::new(COLOR, 1.0, 0.3), 0.6, 30f32.to_radians());
+        let mut q = p;
+        p.orient_anisotropy(&frame, t, b);
+        let expected = Vec2::new(120f32.to_radians().cos(), 120f32.to_radians().sin());
+        assert!((p.anisotropy_direction - expected).length() < 1e-6, "{p:?}");
+        q.orient_anisotropy(&frame, Vec3A::ZERO, Vec3A::ZERO);
+        assert_eq!(q.anisotropy, 0.0);
+        assert!(matches!(q.ggx(), Ggx::Isotropic(_)));
     }
 }

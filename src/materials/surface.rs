@@ -128,6 +128,15 @@ pub struct GltfMaterial {
     /// `iridescenceThicknessTexture` (green channel), mixing the minimum and
     /// the maximum.
     pub iridescence_thickness_texture: Option<TextureRef>,
+    /// `KHR_materials_anisotropy`: `anisotropyStrength` (0: isotropic).
+    pub anisotropy_strength: f32,
+    /// `(cos r, sin r)` of its `anisotropyRotation` `r` (radians,
+    /// counter-clockwise from the tangent towards the bitangent).
+    pub anisotropy_rotation: Vec2,
+    /// Its `anisotropyTexture` (linear): direction in red and green (mapped
+    /// to `[−1, 1]`, in tangent space, then turned by the rotation), strength
+    /// in blue.
+    pub anisotropy_texture: Option<TextureRef>,
     /// `KHR_materials_pbrSpecularGlossiness`: when present, it replaces the
     /// metallic–roughness parameters (the diffuse colour is `base_color` and
     /// `base_color_texture`), converted per hit by
@@ -204,6 +213,8 @@ impl SpecularGlossiness {
             iridescence: 0.0,
             film_ior: 1.3,
             film_thickness: 0.0,
+            anisotropy: 0.0,
+            anisotropy_direction: Vec2::X,
         }
     }
 }
@@ -281,6 +292,36 @@ impl GltfMaterial {
     }
 }
 
+impl GltfMaterial {
+    /// `KHR_materials_anisotropy` at a hit: the strength in `[0, 1]`
+    /// (`anisotropyStrength` × the texture's blue) and the unit direction of
+    /// increased roughness in tangent space (the texture's red and green
+    /// mapped to `[−1, 1]` and normalized, or the tangent without a texture,
+    /// turned counter-clockwise by `anisotropyRotation`), as the
+    /// specification's reference code computes them. A texel whose direction
+    /// is zero takes the tangent's. `(0, x)` without anisotropy; the texture
+    /// is read only where the factor is positive.
+    #[inline]
+    pub fn anisotropy_at(&self, attrs: &HitAttributes, textures: &TextureStore) -> (f32, Vec2) {
+        let mut strength = self.anisotropy_strength;
+        if strength.is_nan() || strength <= 0.0 {
+            return (0.0, Vec2::X);
+        }
+        let mut d = Vec2::X;
+        if let Some(t) = &self.anisotropy_texture {
+            let texel = lookup(t, attrs, textures, ColorSpace::Linear);
+            strength *= texel.z;
+            let v = Vec2::new(2.0 * texel.x - 1.0, 2.0 * texel.y - 1.0).normalize_or_zero();
+            if v != Vec2::ZERO {
+                d = v;
+            }
+        }
+        let r = self.anisotropy_rotation;
+        let d = Vec2::new(r.x * d.x - r.y * d.y, r.y * d.x + r.x * d.y);
+        (unit_interval(strength), d)
+    }
+}
+
 /// `x` clamped to `[0, 1]`, NaN as 0.
 #[inline]
 fn unit_interval(x: f32) -> f32 {
@@ -328,6 +369,9 @@ impl Default for GltfMaterial {
             iridescence_thickness_min: 100.0,
             iridescence_thickness_max: 400.0,
             iridescence_thickness_texture: None,
+            anisotropy_strength: 0.0,
+            anisotropy_rotation: Vec2::X,
+            anisotropy_texture: None,
             specular_glossiness: None,
         }
     }
@@ -516,6 +560,7 @@ impl SurfaceMaterial {
         let coat_roughness = unit_interval(coat_roughness);
         let (sheen_color, sheen_roughness) = g.sheen_at(attrs, textures);
         let (iridescence, film_thickness) = g.film_at(attrs, textures);
+        let (anisotropy, anisotropy_direction) = g.anisotropy_at(attrs, textures);
         Material::Pbr(PbrBsdf {
             base_color: base.clamp(Vec3A::ZERO, Vec3A::ONE),
             metallic: unit_interval(metallic),
@@ -534,6 +579,8 @@ impl SurfaceMaterial {
             iridescence,
             film_ior: g.iridescence_ior,
             film_thickness,
+            anisotropy,
+            anisotropy_direction,
         })
     }
 
@@ -585,6 +632,32 @@ impl SurfaceMaterial {
         let cos = dir.dot(n_c).abs().min(1.0);
         let dim = 1.0 - w * crate::materials::pbr::coat_fresnel(cos);
         if dim.is_finite() { dim } else { 1.0 }
+    }
+
+    /// Whether the material is anisotropic anywhere
+    /// (`KHR_materials_anisotropy` with a positive strength): its hits need
+    /// the mesh's tangent frame.
+    #[inline]
+    pub fn has_anisotropy(&self) -> bool {
+        matches!(&self.kind, MaterialKind::Gltf(g) if g.anisotropy_strength > 0.0)
+    }
+
+    /// The texture coordinate set the mesh's tangents follow when the file
+    /// gives none (MikkTSpace on it): the normal map's, else the anisotropy
+    /// texture's, else 0; `None` when the material needs no tangents (no
+    /// normal map and no anisotropy).
+    pub fn tangent_set(&self) -> Option<usize> {
+        if let Some((t, _)) = self.normal_texture() {
+            return Some((t.tex_coord as usize).min(1));
+        }
+        match &self.kind {
+            MaterialKind::Gltf(g) if g.anisotropy_strength > 0.0 => Some(
+                g.anisotropy_texture
+                    .as_ref()
+                    .map_or(0, |t| (t.tex_coord as usize).min(1)),
+            ),
+            _ => None,
+        }
     }
 
     /// Whether the material has a clear coat (`KHR_materials_clearcoat`).
@@ -665,6 +738,7 @@ pub fn texture_refs(m: &SurfaceMaterial) -> impl Iterator<Item = &TextureRef> {
             &g.sheen_roughness_texture,
             &g.iridescence_texture,
             &g.iridescence_thickness_texture,
+            &g.anisotropy_texture,
         ]
         .into_iter()
         .chain(specular_glossiness)
@@ -698,6 +772,7 @@ pub fn texture_refs_mut(m: &mut SurfaceMaterial) -> impl Iterator<Item = &mut Te
             &mut g.sheen_roughness_texture,
             &mut g.iridescence_texture,
             &mut g.iridescence_thickness_texture,
+            &mut g.anisotropy_texture,
         ]
         .into_iter()
         .chain(specular_glossiness)

@@ -224,6 +224,14 @@ pub struct SurfaceHit {
     /// side: interpolated, then the coat's own normal map if it has one (the
     /// base's normal map does not apply); `ns` for a material without a coat.
     pub nc: Vec3A,
+    /// The mesh's unit tangent and bitangent (`TANGENT` or MikkTSpace,
+    /// orthogonalized against the interpolated normal) where the material
+    /// is anisotropic (`KHR_materials_anisotropy`), for
+    /// [`crate::materials::PbrBsdf::orient_anisotropy`]; zero elsewhere and
+    /// without tangents.
+    pub tangent: Vec3A,
+    /// See `tangent`.
+    pub bitangent: Vec3A,
     /// Texture coordinates and colour.
     pub attrs: HitAttributes,
     /// Index of the material.
@@ -858,6 +866,8 @@ impl Scene {
                 ng,
                 ns: ng,
                 nc: ng,
+                tangent: Vec3A::ZERO,
+                bitangent: Vec3A::ZERO,
                 attrs: HitAttributes::default(),
                 material,
             };
@@ -888,11 +898,19 @@ impl Scene {
                 nc = n;
             }
         }
+        let (mut tangent, mut bitangent) = (Vec3A::ZERO, Vec3A::ZERO);
+        if m.has_anisotropy()
+            && let Some((t, b)) = tangent_frame(inst, mesh, idx, hit, b, interpolated)
+        {
+            (tangent, bitangent) = (t, b);
+        }
         SurfaceHit {
             point,
             ng,
             ns,
             nc,
+            tangent,
+            bitangent,
             attrs,
             material,
         }
@@ -972,6 +990,25 @@ fn tangent_to_world(
     n: Vec3A,
     mapped: Vec3A,
 ) -> Option<Vec3A> {
+    let (t, bitangent) = tangent_frame(inst, mesh, idx, hit, b, n)?;
+    let mapped = (mapped.x * t + mapped.y * bitangent + mapped.z * n).normalize_or_zero();
+    (mapped != Vec3A::ZERO && mapped.is_finite()).then_some(mapped)
+}
+
+/// The unit tangent and bitangent in world space at hit `hit` (barycentrics
+/// `b`) of `mesh`'s triangle `idx`, about the interpolated normal `n`: the
+/// tangent orthogonalized against `n`, the bitangent `w (n × t)` (glTF's
+/// `TANGENT.w`, negated by a mirroring instance); `None` without tangents
+/// or where the tangent is degenerate.
+#[inline]
+fn tangent_frame(
+    inst: &Instance,
+    mesh: &MeshData,
+    idx: [u32; 3],
+    hit: &Hit,
+    b: [f32; 3],
+    n: Vec3A,
+) -> Option<(Vec3A, Vec3A)> {
     let local = (hit.prim - inst.first_triangle) as usize;
     let tangent = match &mesh.tangents {
         Tangents::PerVertex(t) => interpolate(b, idx.map(|i| t[i as usize])),
@@ -985,9 +1022,7 @@ fn tangent_to_world(
     if t == Vec3A::ZERO {
         return None;
     }
-    let bitangent = sign.signum() * n.cross(t);
-    let mapped = (mapped.x * t + mapped.y * bitangent + mapped.z * n).normalize_or_zero();
-    (mapped != Vec3A::ZERO && mapped.is_finite()).then_some(mapped)
+    Some((t, sign.signum() * n.cross(t)))
 }
 
 #[cfg(test)]

@@ -409,6 +409,7 @@ pub fn radiance_traced(
         let sp = surface.point;
         let frame = Frame::from_normal(n);
         bsdf.orient_coat(&frame, coat_normal(&surface, n));
+        bsdf.orient_anisotropy(&frame, surface.tangent, surface.bitangent);
         let wo = frame.to_local(wo_world);
         let bsdf_at = bsdf.at(wo);
         // With shading normals, a direction must be on the same side of the

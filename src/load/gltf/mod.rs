@@ -42,6 +42,7 @@ use crate::textures::{TextureError, TextureRef, TextureStore, TextureTransform, 
 /// Extensions raylab reads; a file that requires any other is refused.
 pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_lights_punctual",
+    "KHR_materials_anisotropy",
     "KHR_materials_clearcoat",
     "KHR_materials_dispersion",
     "KHR_materials_emissive_strength",
@@ -136,6 +137,20 @@ impl Iridescence {
     fn default_maximum() -> f32 {
         400.0
     }
+}
+
+/// The anisotropy extension's name.
+const ANISOTROPY: &str = "KHR_materials_anisotropy";
+
+/// `KHR_materials_anisotropy`'s object (`gltf-json` does not know it).
+#[derive(serde::Deserialize)]
+#[serde(rename_all = "camelCase")]
+struct Anisotropy {
+    #[serde(default)]
+    anisotropy_strength: f32,
+    #[serde(default)]
+    anisotropy_rotation: f32,
+    anisotropy_texture: Option<json::texture::Info>,
 }
 
 /// Deepest node hierarchy accepted.
@@ -1164,8 +1179,8 @@ impl Loader<'_> {
     ) -> Result<u32, GltfError> {
         let base = &self.parts.meshes[id as usize];
         let tangent_set = self.parts.materials[base.material as usize]
-            .normal_texture()
-            .map_or(0, |(t, _)| (t.tex_coord as usize).min(1));
+            .tangent_set()
+            .unwrap_or(0);
         let data = skin::deform(self.buffers, m, p, base, deformation, tangent_set)?;
         self.ledger.charge(
             &self.name,
@@ -1287,8 +1302,7 @@ impl Loader<'_> {
         };
         data.material = self.material(self.primitive_material(prim, &what)?)?;
         let material = &self.parts.materials[data.material as usize];
-        if let Some((normal_map, _)) = material.normal_texture() {
-            let set = normal_map.tex_coord as usize;
+        if let Some(set) = material.tangent_set() {
             data.tangents = match read_attr("TANGENT", Semantic::Tangents)? {
                 Some(a) => Tangents::PerVertex(
                     read_floats::<4>(self.buffers, a, &format!("{what} TANGENT"))?
@@ -1299,6 +1313,17 @@ impl Loader<'_> {
                 None if !data.uvs[set.min(1)].is_empty() => tangents::generate(&data, set.min(1)),
                 None => Tangents::None,
             };
+        }
+        if matches!(data.tangents, Tangents::None) && material.has_anisotropy() {
+            // The specification requires tangents (or a normal map's UVs to
+            // make them from); without them there is no direction.
+            self.warn_once(
+                &format!("{ANISOTROPY} {what}"),
+                format!(
+                    "{what}: its material is anisotropic ({ANISOTROPY}) but the \
+                     primitive has neither TANGENT nor texture coordinates: rendered isotropic"
+                ),
+            );
         }
         let id = self.parts.meshes.len() as u32;
         self.parts.meshes.push(data);
@@ -1377,7 +1402,7 @@ impl Loader<'_> {
         let ext = m.extensions.as_ref();
         if let Some(e) = ext {
             for name in e.others.keys() {
-                if ![CLEARCOAT, SHEEN, DISPERSION, IRIDESCENCE].contains(&name.as_str()) {
+                if ![CLEARCOAT, SHEEN, DISPERSION, IRIDESCENCE, ANISOTROPY].contains(&name.as_str()) {
                     self.warn_once(name, format!("ignoring the material extension {name}"));
                 }
             }
@@ -1496,6 +1521,9 @@ impl Loader<'_> {
         }
         if let Some(value) = ext.and_then(|e| e.others.get(IRIDESCENCE)) {
             self.iridescence(value, &mut g, &what)?;
+        }
+        if let Some(value) = ext.and_then(|e| e.others.get(ANISOTROPY)) {
+            self.anisotropy(value, &mut g, &what)?;
         }
         let strength = ext
             .and_then(|e| e.emissive_strength.as_ref())
@@ -1620,6 +1648,34 @@ impl Loader<'_> {
         g.iridescence_texture = self.texture(f.iridescence_texture.as_ref(), what)?;
         g.iridescence_thickness_texture =
             self.texture(f.iridescence_thickness_texture.as_ref(), what)?;
+        Ok(())
+    }
+
+    /// Reads `KHR_materials_anisotropy` (`value`, the extension's object)
+    /// into `g`: the strength clamped to `[0, 1]`, the rotation as its
+    /// cosine and sine; a non-finite number is refused.
+    fn anisotropy(
+        &mut self,
+        value: &serde_json::Value,
+        g: &mut GltfMaterial,
+        what: &str,
+    ) -> Result<(), GltfError> {
+        let a: Anisotropy = serde_json::from_value(value.clone())
+            .map_err(|e| GltfError::invalid(format!("{what}: {ANISOTROPY}: {e}")))?;
+        for (v, name) in [
+            (a.anisotropy_strength, "anisotropyStrength"),
+            (a.anisotropy_rotation, "anisotropyRotation"),
+        ] {
+            if !v.is_finite() {
+                return Err(GltfError::invalid(format!(
+                    "{what}: {ANISOTROPY}: {name} is not finite"
+                )));
+            }
+        }
+        g.anisotropy_strength = a.anisotropy_strength.clamp(0.0, 1.0);
+        let (sin, cos) = a.anisotropy_rotation.sin_cos();
+        g.anisotropy_rotation = Vec2::new(cos, sin);
+        g.anisotropy_texture = self.texture(a.anisotropy_texture.as_ref(), what)?;
         Ok(())
     }
 
