@@ -102,6 +102,15 @@ pub struct GltfMaterial {
     pub clearcoat_normal_texture: Option<TextureRef>,
     /// That normal map's `scale`.
     pub clearcoat_normal_scale: f32,
+    /// `KHR_materials_diffuse_transmission` `diffuseTransmissionFactor`
+    /// (0: none).
+    pub diffuse_transmission: f32,
+    /// Its `diffuseTransmissionTexture` (alpha channel).
+    pub diffuse_transmission_texture: Option<TextureRef>,
+    /// `diffuseTransmissionColorFactor` (1 by default).
+    pub diffuse_transmission_color: Vec3A,
+    /// Its `diffuseTransmissionColorTexture` (sRGB).
+    pub diffuse_transmission_color_texture: Option<TextureRef>,
     /// `KHR_materials_pbrSpecularGlossiness`: when present, it replaces the
     /// metallic–roughness parameters (the diffuse colour is `base_color` and
     /// `base_color_texture`), converted per hit by
@@ -172,6 +181,8 @@ impl SpecularGlossiness {
             coat: 0.0,
             coat_alpha: 1.0,
             coat_normal: Vec3A::Z,
+            diffuse_transmission: 0.0,
+            diffuse_transmission_color: Vec3A::ONE,
         }
     }
 }
@@ -189,6 +200,30 @@ impl GltfMaterial {
             w *= lookup(t, attrs, textures, ColorSpace::Linear).x;
         }
         unit_interval(w)
+    }
+
+    /// The diffuse transmission's share and colour at a hit
+    /// (`KHR_materials_diffuse_transmission`): factor × texture alpha in
+    /// `[0, 1]`, colour factor × texture RGB (sRGB) in `[0, 1]`; the
+    /// textures are read only where the factor is positive.
+    #[inline]
+    pub fn diffuse_transmission_at(
+        &self,
+        attrs: &HitAttributes,
+        textures: &TextureStore,
+    ) -> (f32, Vec3A) {
+        let mut dt = self.diffuse_transmission;
+        if dt.is_nan() || dt <= 0.0 {
+            return (0.0, Vec3A::ONE);
+        }
+        if let Some(t) = &self.diffuse_transmission_texture {
+            dt *= lookup(t, attrs, textures, ColorSpace::Linear).w;
+        }
+        let mut color = self.diffuse_transmission_color;
+        if let Some(t) = &self.diffuse_transmission_color_texture {
+            color *= Vec3A::from(lookup(t, attrs, textures, ColorSpace::Srgb).xyz());
+        }
+        (unit_interval(dt), color.clamp(Vec3A::ZERO, Vec3A::ONE))
     }
 }
 
@@ -228,6 +263,10 @@ impl Default for GltfMaterial {
             clearcoat_roughness_texture: None,
             clearcoat_normal_texture: None,
             clearcoat_normal_scale: 1.0,
+            diffuse_transmission: 0.0,
+            diffuse_transmission_texture: None,
+            diffuse_transmission_color: Vec3A::ONE,
+            diffuse_transmission_color_texture: None,
             specular_glossiness: None,
         }
     }
@@ -414,6 +453,8 @@ impl SurfaceMaterial {
             coat_roughness *= lookup(t, attrs, textures, ColorSpace::Linear).y;
         }
         let coat_roughness = unit_interval(coat_roughness);
+        let (diffuse_transmission, diffuse_transmission_color) =
+            g.diffuse_transmission_at(attrs, textures);
         Material::Pbr(PbrBsdf {
             base_color: base.clamp(Vec3A::ZERO, Vec3A::ONE),
             metallic: unit_interval(metallic),
@@ -426,6 +467,8 @@ impl SurfaceMaterial {
             coat,
             coat_alpha: PbrBsdf::alpha_from_roughness(coat_roughness),
             coat_normal: Vec3A::Z,
+            diffuse_transmission,
+            diffuse_transmission_color,
         })
     }
 
@@ -553,6 +596,8 @@ pub fn texture_refs(m: &SurfaceMaterial) -> impl Iterator<Item = &TextureRef> {
             &g.clearcoat_texture,
             &g.clearcoat_roughness_texture,
             &g.clearcoat_normal_texture,
+            &g.diffuse_transmission_texture,
+            &g.diffuse_transmission_color_texture,
         ]
         .into_iter()
         .chain(specular_glossiness)
@@ -582,6 +627,8 @@ pub fn texture_refs_mut(m: &mut SurfaceMaterial) -> impl Iterator<Item = &mut Te
             &mut g.clearcoat_texture,
             &mut g.clearcoat_roughness_texture,
             &mut g.clearcoat_normal_texture,
+            &mut g.diffuse_transmission_texture,
+            &mut g.diffuse_transmission_color_texture,
         ]
         .into_iter()
         .chain(specular_glossiness)

@@ -36,9 +36,10 @@ use crate::scene::{NO_INSTANCE, PointLight, SceneParts};
 use crate::textures::{TextureError, TextureRef, TextureStore, TextureTransform, Wrap};
 
 /// Extensions raylab reads; a file that requires any other is refused.
-pub const SUPPORTED_EXTENSIONS: [&str; 14] = [
+pub const SUPPORTED_EXTENSIONS: [&str; 15] = [
     "KHR_lights_punctual",
     "KHR_materials_clearcoat",
+    "KHR_materials_diffuse_transmission",
     "KHR_materials_emissive_strength",
     "KHR_materials_ior",
     "KHR_materials_pbrSpecularGlossiness",
@@ -67,6 +68,27 @@ struct Clearcoat {
     clearcoat_roughness_factor: f32,
     clearcoat_roughness_texture: Option<json::texture::Info>,
     clearcoat_normal_texture: Option<json::material::NormalTexture>,
+}
+
+/// The diffuse transmission extension's name.
+const DIFFUSE_TRANSMISSION: &str = "KHR_materials_diffuse_transmission";
+
+/// `KHR_materials_diffuse_transmission`'s object (`gltf-json` does not know
+/// it).
+#[derive(serde::Deserialize)]
+#[serde(rename_all = "camelCase")]
+struct DiffuseTransmission {
+    #[serde(default)]
+    diffuse_transmission_factor: f32,
+    diffuse_transmission_texture: Option<json::texture::Info>,
+    #[serde(default = "white")]
+    diffuse_transmission_color_factor: [f32; 3],
+    diffuse_transmission_color_texture: Option<json::texture::Info>,
+}
+
+/// `[1, 1, 1]`, a colour factor's default.
+fn white() -> [f32; 3] {
+    [1.0; 3]
 }
 
 /// Deepest node hierarchy accepted.
@@ -1288,7 +1310,7 @@ impl Loader<'_> {
         let ext = m.extensions.as_ref();
         if let Some(e) = ext {
             for name in e.others.keys() {
-                if name != CLEARCOAT {
+                if name != CLEARCOAT && name != DIFFUSE_TRANSMISSION {
                     self.warn_once(name, format!("ignoring the material extension {name}"));
                 }
             }
@@ -1395,6 +1417,9 @@ impl Loader<'_> {
         if let Some(value) = ext.and_then(|e| e.others.get(CLEARCOAT)) {
             self.clearcoat(value, &mut g, &what)?;
         }
+        if let Some(value) = ext.and_then(|e| e.others.get(DIFFUSE_TRANSMISSION)) {
+            self.diffuse_transmission(value, &mut g, &what)?;
+        }
         let strength = ext
             .and_then(|e| e.emissive_strength.as_ref())
             .map_or(1.0, |s| s.emissive_strength.0);
@@ -1449,6 +1474,40 @@ impl Loader<'_> {
             }
             g.clearcoat_normal_scale = n.scale;
         }
+        Ok(())
+    }
+
+    /// Reads `KHR_materials_diffuse_transmission` (`value`, the extension's
+    /// object) into `g`: factors that are not finite are refused, the
+    /// factor is clamped to `[0, 1]` and the colour to `[0, 1]` per channel
+    /// (as the base colour is: the diffuse part reflects and transmits at
+    /// most what it receives).
+    fn diffuse_transmission(
+        &mut self,
+        value: &serde_json::Value,
+        g: &mut GltfMaterial,
+        what: &str,
+    ) -> Result<(), GltfError> {
+        let d: DiffuseTransmission = serde_json::from_value(value.clone())
+            .map_err(|e| GltfError::invalid(format!("{what}: {DIFFUSE_TRANSMISSION}: {e}")))?;
+        let not_finite = |name: &str| {
+            GltfError::invalid(format!(
+                "{what}: {DIFFUSE_TRANSMISSION}: {name} is not finite"
+            ))
+        };
+        if !d.diffuse_transmission_factor.is_finite() {
+            return Err(not_finite("diffuseTransmissionFactor"));
+        }
+        let color = Vec3A::from(d.diffuse_transmission_color_factor);
+        if !color.is_finite() {
+            return Err(not_finite("diffuseTransmissionColorFactor"));
+        }
+        g.diffuse_transmission = d.diffuse_transmission_factor.clamp(0.0, 1.0);
+        g.diffuse_transmission_color = color.clamp(Vec3A::ZERO, Vec3A::ONE);
+        g.diffuse_transmission_texture =
+            self.texture(d.diffuse_transmission_texture.as_ref(), what)?;
+        g.diffuse_transmission_color_texture =
+            self.texture(d.diffuse_transmission_color_texture.as_ref(), what)?;
         Ok(())
     }
 
