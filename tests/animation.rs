@@ -24,6 +24,7 @@ fn load_at(path: &Path, animation: Option<&str>, time: Option<f32>) -> Result<Lo
         animation: AnimationOptions {
             animation: animation.map(|a| a.parse::<AnimationChoice>().unwrap()),
             time,
+            if_animated: false,
         },
         ..LoadOptions::default()
     };

@@ -11,11 +11,7 @@ use crate::load::gltf::{AnimationChoice, AnimationOptions};
 /// Frames per second of `--frames` on an animated file without `--fps`.
 pub const DEFAULT_FPS: f64 = 24.0;
 
-/// Longest time `--at` takes, in seconds (a day).
-pub const MAX_AT: f32 = 86_400.0;
-
-/// Most frames per second `--fps` takes.
-pub const MAX_FPS: f64 = 10_000.0;
+pub use crate::load::gltf::{AT_EXPECTED, MAX_AT, MAX_FPS, at_in_range, fps_in_range};
 
 /// The options that pose a glTF file's animation (part of
 /// [`SceneOptions`]).
@@ -39,21 +35,22 @@ impl AnimationArgs {
         AnimationOptions {
             animation: self.animation.clone(),
             time: self.at,
+            if_animated: false,
         }
     }
 }
 
 fn parse_at(s: &str) -> Result<f32, String> {
     match s.trim().parse::<f32>() {
-        Ok(v) if (0.0..=MAX_AT).contains(&v) => Ok(v),
-        _ => Err(format!("expected a time in seconds from 0 to {MAX_AT}")),
+        Ok(v) if at_in_range(f64::from(v)) => Ok(v),
+        _ => Err(AT_EXPECTED.to_string()),
     }
 }
 
 /// `--fps`: a frame rate above 0 and at most [`MAX_FPS`].
 pub(super) fn parse_fps(s: &str) -> Result<f64, String> {
     match s.trim().parse::<f64>() {
-        Ok(v) if v > 0.0 && v <= MAX_FPS => Ok(v),
+        Ok(v) if fps_in_range(v) => Ok(v),
         _ => Err(format!(
             "expected frames per second above 0 and at most {MAX_FPS}"
         )),

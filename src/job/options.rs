@@ -562,6 +562,7 @@ impl JobOptions {
             spp: self.spp.or(s.spp),
             time: self.time.or(s.time),
             seed: self.seed.or(s.seed),
+            fps: self.fps.or(s.fps),
             ..self.clone()
         })
     }

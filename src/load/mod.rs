@@ -29,7 +29,7 @@ use crate::scene::{PointLight, Scene, SceneError};
 use cornell::MaterialChoice;
 use gltf::{AnimationOptions, GltfError, VariantChoice, load_gltf_posed};
 use obj::{ObjError, load_obj, load_obj_scene_with};
-use shot::{ShotCamera, ShotError, ShotSettings, load_shot_variant};
+use shot::{ShotCamera, ShotError, ShotSettings, load_shot_posed};
 use transform::Transform;
 
 /// What a scene was made from; decides defaults (integrator, image size, tone
@@ -363,9 +363,9 @@ pub fn load(name: &str, options: &LoadOptions) -> Result<Loaded, LoadError> {
             crate::guard::one_line(v)
         )));
     }
-    if kind != SceneKind::Gltf && options.animation.is_given() {
+    if !matches!(kind, SceneKind::Gltf | SceneKind::Shot) && options.animation.is_given() {
         return Err(LoadError::Usage(format!(
-            "--at and --animation pose a glTF file's animation; {name} is not a glTF file"
+            "--at and --animation pose a glTF file's animation; {name} is neither a glTF file nor a scene file"
         )));
     }
     if kind != SceneKind::Lab && !options.materials.is_empty() {
@@ -515,8 +515,14 @@ pub fn load(name: &str, options: &LoadOptions) -> Result<Loaded, LoadError> {
             (scene, view)
         }
         SceneKind::Shot => {
-            let shot = load_shot_variant(Path::new(name), &ledger, options.variant.as_deref())?;
+            let shot = load_shot_posed(
+                Path::new(name),
+                &ledger,
+                options.variant.as_deref(),
+                &options.animation,
+            )?;
             warnings.extend(shot.warnings);
+            animations = shot.animations;
             (variants, variant) = (shot.variants, shot.variant);
             settings = shot.settings;
             let mut parts = shot.parts;

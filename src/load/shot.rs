@@ -16,6 +16,7 @@ use serde::Deserialize;
 use thiserror::Error;
 
 use super::cornell::{self, MaterialChoice};
+use super::gltf::AnimationOptions;
 use crate::camera::{
     Aperture, DepthOfField, Focus, Lens, MAX_LENS_LENGTH, SceneCamera, lens_length_is_valid,
 };
@@ -107,6 +108,31 @@ pub struct RenderSection {
     pub max_depth: Option<u32>,
     /// Denoise the image (Open Image Denoise; see `raylab::denoise`).
     pub denoise: Option<bool>,
+    /// The moment, in seconds, at which the glTF models' animations pose
+    /// them (`--at`; `--frames` replaces it by each frame's time).
+    pub at: Option<f64>,
+    /// Frames per second of `--frames` (`--fps`).
+    pub fps: Option<f64>,
+}
+
+/// A `[[model]]`'s `animation`: an index (from 0) or a name.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(untagged)]
+pub enum AnimationKey {
+    /// The animation at this index of the file's `animations`.
+    Index(u32),
+    /// The animation of this name.
+    Name(String),
+}
+
+impl AnimationKey {
+    /// As the loader's choice.
+    pub fn choice(&self) -> super::gltf::AnimationChoice {
+        match self {
+            AnimationKey::Index(i) => super::gltf::AnimationChoice::Index(*i as usize),
+            AnimationKey::Name(n) => super::gltf::AnimationChoice::Name(n.clone()),
+        }
+    }
 }
 
 /// `[camera]`: a look-at camera, or a glTF model's camera.
@@ -188,6 +214,9 @@ pub struct ModelSection {
     /// A glTF model's material variant (`KHR_materials_variants`) to show;
     /// the command line's `--variant` replaces it.
     pub variant: Option<String>,
+    /// A glTF model's animation to pose it by (default: its first); the
+    /// command line's `--animation` replaces it.
+    pub animation: Option<AnimationKey>,
 }
 
 /// `[[material]]`: a glTF-style metallic–roughness material.
@@ -289,6 +318,10 @@ pub struct ShotSettings {
     pub exposure: Option<f32>,
     /// Denoise the image.
     pub denoise: Option<bool>,
+    /// The animations' moment in seconds.
+    pub at: Option<f32>,
+    /// Frames per second of `--frames`.
+    pub fps: Option<f64>,
 }
 
 /// The camera a scene file asks for, resolved.
@@ -325,6 +358,9 @@ pub struct Shot {
     /// The `--variant` shown, when one was asked for (the models' own
     /// `variant` keys are not listed here).
     pub variant: Option<String>,
+    /// The glTF models' animations' names (each once, in the models'
+    /// order): empty when no model is animated.
+    pub animations: Vec<String>,
 }
 
 /// The 1-based line and column of byte `offset` of `text`.
@@ -390,7 +426,23 @@ pub fn load_shot_variant(
         cause,
     })?;
     let file = parse(&text, path)?;
-    compose_variant(file, path, ledger, variant)
+    compose_posed(file, path, ledger, variant, &AnimationOptions::default())
+}
+
+/// [`load_shot_variant`] with the command line's `--at` and `--animation`
+/// (`animation`): see [`compose_posed`].
+pub fn load_shot_posed(
+    path: &Path,
+    ledger: &crate::memory::Ledger,
+    variant: Option<&str>,
+    animation: &AnimationOptions,
+) -> Result<Shot, super::LoadError> {
+    let text = std::fs::read_to_string(path).map_err(|cause| ShotError::Io {
+        path: path.to_owned(),
+        cause,
+    })?;
+    let file = parse(&text, path)?;
+    compose_posed(file, path, ledger, variant, animation)
 }
 
 /// A scene-file error; names quoted from the file (which may hold a newline)
@@ -452,6 +504,20 @@ fn settings(path: &Path, r: &RenderSection) -> Result<ShotSettings, ShotError> {
     if let Some(e) = r.exposure {
         check(path, "[render] exposure", &[e], false)?;
     }
+    use super::gltf::{AT_EXPECTED, MAX_FPS, at_in_range, fps_in_range};
+    if let Some(at) = r.at
+        && !at_in_range(at)
+    {
+        return Err(bad(format!("at = {at:?}: {AT_EXPECTED}")));
+    }
+    if let Some(fps) = r.fps
+        && !fps_in_range(fps)
+    {
+        return Err(bad(format!(
+            "fps = {fps:?}: expected frames per second above 0 and at most {}",
+            MAX_FPS
+        )));
+    }
     let integrator = r
         .integrator
         .as_deref()
@@ -486,6 +552,8 @@ fn settings(path: &Path, r: &RenderSection) -> Result<ShotSettings, ShotError> {
         tonemap,
         exposure: r.exposure,
         denoise: r.denoise,
+        at: r.at.map(|t| t as f32),
+        fps: r.fps,
     })
 }
 
@@ -572,6 +640,8 @@ struct ModelParts {
     /// A glTF model's material variants, and the one shown.
     variants: Vec<String>,
     variant: Option<String>,
+    /// A glTF model's animations' names (empty for other models).
+    animations: Vec<String>,
 }
 
 /// Loads one model in its own frame.
@@ -582,12 +652,23 @@ fn load_model(
     index: usize,
     ledger: &crate::memory::Ledger,
     variant: &super::gltf::VariantChoice,
+    animation: &super::gltf::AnimationOptions,
 ) -> Result<ModelParts, super::LoadError> {
     let is_gltf = m.file.as_ref().is_some_and(|f| {
         f.extension()
             .and_then(|e| e.to_str())
             .is_some_and(|e| e.eq_ignore_ascii_case("gltf") || e.eq_ignore_ascii_case("glb"))
     });
+    if m.animation.is_some() && !is_gltf {
+        return Err(invalid(
+            path,
+            format!(
+                "[[model]] {}: animation picks a glTF model's animation; this model is not glTF",
+                index + 1
+            ),
+        )
+        .into());
+    }
     if m.variant.is_some() && !is_gltf {
         return Err(invalid(
             path,
@@ -651,6 +732,7 @@ fn load_model(
                 warnings: Vec::new(),
                 variants: Vec::new(),
                 variant: None,
+                animations: Vec::new(),
             };
             let turn = Affine3A::from_rotation_z(std::f32::consts::PI);
             model.parts.transform(turn);
@@ -668,7 +750,7 @@ fn load_model(
                 .map(str::to_ascii_lowercase);
             match ext.as_deref() {
                 Some("gltf" | "glb") => {
-                    let g = super::gltf::load_gltf_variant(&file, ledger, variant)?;
+                    let g = super::gltf::load_gltf_posed(&file, ledger, variant, animation)?;
                     Ok(ModelParts {
                         parts: g.parts,
                         named_ranges: Vec::new(),
@@ -676,6 +758,7 @@ fn load_model(
                         warnings: g.warnings,
                         variants: g.variants,
                         variant: g.variant,
+                        animations: g.animations,
                     })
                 }
                 Some("obj") => {
@@ -687,6 +770,7 @@ fn load_model(
                         warnings: obj.warnings,
                         variants: Vec::new(),
                         variant: None,
+                        animations: Vec::new(),
                     })
                 }
                 _ => Err(invalid(
@@ -781,9 +865,28 @@ pub fn compose_variant(
     ledger: &crate::memory::Ledger,
     variant: Option<&str>,
 ) -> Result<Shot, super::LoadError> {
+    compose_posed(file, path, ledger, variant, &AnimationOptions::default())
+}
+
+/// [`compose_variant`] posing the glTF models' animations. The merge, as
+/// for `[render]`: the command line's `--at` (`animation.time`) replaces
+/// the file's `[render] at`, its `--animation` every model's `animation`.
+/// A moment poses each glTF model that has animations by its chosen one
+/// (default: its first) and leaves the others as written; a model's own
+/// `animation` must name one of its file's. A file that asks for a moment
+/// or an animation when no model is animated is refused.
+pub fn compose_posed(
+    file: ShotFile,
+    path: &Path,
+    ledger: &crate::memory::Ledger,
+    variant: Option<&str>,
+    animation: &AnimationOptions,
+) -> Result<Shot, super::LoadError> {
     use super::gltf::VariantChoice;
     let base = path.parent().unwrap_or(Path::new("")).to_path_buf();
     let settings = settings(path, &file.render)?;
+    let time = animation.time.or(settings.at);
+    let mut animations: Vec<String> = Vec::new();
     let mut defined = BTreeMap::new();
     for m in &file.materials {
         if defined
@@ -829,8 +932,21 @@ pub fn compose_variant(
             (None, Some(v)) => VariantChoice::Named(v.clone()),
             (None, None) => VariantChoice::Default,
         };
-        let mut model = load_model(path, &base, m, index, ledger, &choice)?;
+        let own = m.animation.as_ref().map(AnimationKey::choice);
+        let posed = AnimationOptions {
+            animation: animation.animation.clone().or(own),
+            time,
+            // A model's own choice must be there; a moment alone (or the
+            // command line's choice) poses the models that have animations.
+            if_animated: m.animation.is_none(),
+        };
+        let mut model = load_model(path, &base, m, index, ledger, &choice, &posed)?;
         warnings.append(&mut model.warnings);
+        for a in model.animations.drain(..) {
+            if !animations.contains(&a) {
+                animations.push(a);
+            }
+        }
         for v in model.variants.drain(..) {
             if !variants.contains(&v) {
                 variants.push(v);
@@ -1100,6 +1216,23 @@ pub fn compose_variant(
             check(path, "[environment] rotate", &[r], false)?;
         }
     }
+    let asked = time.is_some()
+        || animation.animation.is_some()
+        || file.render.fps.is_some()
+        || file.models.iter().any(|m| m.animation.is_some());
+    if asked && animations.is_empty() {
+        let what = match (animation.time, settings.at) {
+            (Some(t), _) => format!("--at {t}"),
+            (None, Some(t)) => format!("[render] at = {t}"),
+            (None, None) if animation.animation.is_some() => "--animation".to_string(),
+            (None, None) => "[render] fps".to_string(),
+        };
+        return Err(invalid(
+            path,
+            format!("{what} poses glTF models' animations; no model of this scene has one"),
+        )
+        .into());
+    }
     if let Some(v) = variant
         && !shown_variant
     {
@@ -1123,6 +1256,7 @@ pub fn compose_variant(
         warnings,
         variants,
         variant: variant.map(str::to_string),
+        animations,
     })
 }
 

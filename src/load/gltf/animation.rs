@@ -23,6 +23,25 @@ use gltf::json;
 use super::accessor::{Buffers, read_floats, type_components};
 use super::{GltfError, valid};
 
+/// Longest time `--at` (or a scene file's `at`) takes, in seconds (a day).
+pub const MAX_AT: f32 = 86_400.0;
+
+/// Most frames per second `--fps` (or a scene file's `fps`) takes.
+pub const MAX_FPS: f64 = 10_000.0;
+
+/// What `--at` (and a scene file's `at`) takes.
+pub const AT_EXPECTED: &str = "expected a time in seconds from 0 to 86400";
+
+/// Whether `v` seconds is a moment `--at` takes (0 to [`MAX_AT`]).
+pub fn at_in_range(v: f64) -> bool {
+    (0.0..=f64::from(MAX_AT)).contains(&v)
+}
+
+/// Whether `v` is a frame rate `--fps` takes (above 0, at most [`MAX_FPS`]).
+pub fn fps_in_range(v: f64) -> bool {
+    v > 0.0 && v <= MAX_FPS
+}
+
 /// Which of a file's animations to play.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum AnimationChoice {
@@ -65,6 +84,10 @@ pub struct AnimationOptions {
     /// The moment in seconds (default: 0 when `animation` is given; with
     /// neither, the file's own pose).
     pub time: Option<f32>,
+    /// Whether a file without animations is left as written rather than
+    /// refused (a scene file's moment poses the models that have
+    /// animations).
+    pub if_animated: bool,
 }
 
 impl AnimationOptions {
@@ -264,6 +287,9 @@ pub(crate) fn chosen(
         return Ok(None);
     }
     if root.animations.is_empty() {
+        if options.if_animated {
+            return Ok(None);
+        }
         let what = match (&options.animation, options.time) {
             (Some(a), _) => format!("--animation {a}"),
             (None, Some(t)) => format!("--at {t}"),

@@ -22,7 +22,10 @@ use thiserror::Error;
 
 use accessor::{Buffers, read_floats, read_indices};
 use animation::Pose;
-pub use animation::{AnimationChoice, AnimationOptions, AnimationSummary};
+pub use animation::{
+    AT_EXPECTED, AnimationChoice, AnimationOptions, AnimationSummary, MAX_AT, MAX_FPS, at_in_range,
+    fps_in_range,
+};
 
 use crate::camera::{Lens, SceneCamera};
 use crate::geometry::triangle::Triangle;
