@@ -49,6 +49,7 @@ fn posed() -> LoadOptions {
         animation: raylab::load::gltf::AnimationOptions {
             animation: None,
             time: Some(0.7),
+            if_animated: false,
         },
         ..LoadOptions::default()
     }
