@@ -574,13 +574,15 @@ impl Material {
         finite_or_zero(a).clamp(Vec3A::ZERO, Vec3A::ONE)
     }
 
-    /// Whether light may pass through the surface (glass, glTF transmission):
-    /// it is then lit from both sides.
+    /// Whether light may pass through the surface (glass, glTF transmission
+    /// or diffuse transmission): it is then lit from both sides.
     #[inline]
     pub fn transmits(&self) -> bool {
         match *self {
             Material::Dielectric { .. } => true,
-            Material::Pbr(ref p) => p.transmission > 0.0 && p.metallic < 1.0,
+            Material::Pbr(ref p) => {
+                (p.transmission > 0.0 && p.metallic < 1.0) || p.transmits_diffusely()
+            }
             _ => false,
         }
     }

@@ -137,6 +137,15 @@ pub struct GltfMaterial {
     /// to `[−1, 1]`, in tangent space, then turned by the rotation), strength
     /// in blue.
     pub anisotropy_texture: Option<TextureRef>,
+    /// `KHR_materials_diffuse_transmission` `diffuseTransmissionFactor`
+    /// (0: none).
+    pub diffuse_transmission: f32,
+    /// Its `diffuseTransmissionTexture` (alpha channel).
+    pub diffuse_transmission_texture: Option<TextureRef>,
+    /// `diffuseTransmissionColorFactor` (1 by default).
+    pub diffuse_transmission_color: Vec3A,
+    /// Its `diffuseTransmissionColorTexture` (sRGB).
+    pub diffuse_transmission_color_texture: Option<TextureRef>,
     /// `KHR_materials_pbrSpecularGlossiness`: when present, it replaces the
     /// metallic–roughness parameters (the diffuse colour is `base_color` and
     /// `base_color_texture`), converted per hit by
@@ -215,6 +224,8 @@ impl SpecularGlossiness {
             film_thickness: 0.0,
             anisotropy: 0.0,
             anisotropy_direction: Vec2::X,
+            diffuse_transmission: 0.0,
+            diffuse_transmission_color: Vec3A::ONE,
         }
     }
 }
@@ -320,6 +331,30 @@ impl GltfMaterial {
         let d = Vec2::new(r.x * d.x - r.y * d.y, r.y * d.x + r.x * d.y);
         (unit_interval(strength), d)
     }
+
+    /// The diffuse transmission's share and colour at a hit
+    /// (`KHR_materials_diffuse_transmission`): factor × texture alpha in
+    /// `[0, 1]`, colour factor × texture RGB (sRGB) in `[0, 1]`; the
+    /// textures are read only where the factor is positive.
+    #[inline]
+    pub fn diffuse_transmission_at(
+        &self,
+        attrs: &HitAttributes,
+        textures: &TextureStore,
+    ) -> (f32, Vec3A) {
+        let mut dt = self.diffuse_transmission;
+        if dt.is_nan() || dt <= 0.0 {
+            return (0.0, Vec3A::ONE);
+        }
+        if let Some(t) = &self.diffuse_transmission_texture {
+            dt *= lookup(t, attrs, textures, ColorSpace::Linear).w;
+        }
+        let mut color = self.diffuse_transmission_color;
+        if let Some(t) = &self.diffuse_transmission_color_texture {
+            color *= Vec3A::from(lookup(t, attrs, textures, ColorSpace::Srgb).xyz());
+        }
+        (unit_interval(dt), color.clamp(Vec3A::ZERO, Vec3A::ONE))
+    }
 }
 
 /// `x` clamped to `[0, 1]`, NaN as 0.
@@ -372,6 +407,10 @@ impl Default for GltfMaterial {
             anisotropy_strength: 0.0,
             anisotropy_rotation: Vec2::X,
             anisotropy_texture: None,
+            diffuse_transmission: 0.0,
+            diffuse_transmission_texture: None,
+            diffuse_transmission_color: Vec3A::ONE,
+            diffuse_transmission_color_texture: None,
             specular_glossiness: None,
         }
     }
@@ -561,6 +600,8 @@ impl SurfaceMaterial {
         let (sheen_color, sheen_roughness) = g.sheen_at(attrs, textures);
         let (iridescence, film_thickness) = g.film_at(attrs, textures);
         let (anisotropy, anisotropy_direction) = g.anisotropy_at(attrs, textures);
+        let (diffuse_transmission, diffuse_transmission_color) =
+            g.diffuse_transmission_at(attrs, textures);
         Material::Pbr(PbrBsdf {
             base_color: base.clamp(Vec3A::ZERO, Vec3A::ONE),
             metallic: unit_interval(metallic),
@@ -581,6 +622,8 @@ impl SurfaceMaterial {
             film_thickness,
             anisotropy,
             anisotropy_direction,
+            diffuse_transmission,
+            diffuse_transmission_color,
         })
     }
 
@@ -739,6 +782,8 @@ pub fn texture_refs(m: &SurfaceMaterial) -> impl Iterator<Item = &TextureRef> {
             &g.iridescence_texture,
             &g.iridescence_thickness_texture,
             &g.anisotropy_texture,
+            &g.diffuse_transmission_texture,
+            &g.diffuse_transmission_color_texture,
         ]
         .into_iter()
         .chain(specular_glossiness)
@@ -773,6 +818,8 @@ pub fn texture_refs_mut(m: &mut SurfaceMaterial) -> impl Iterator<Item = &mut Te
             &mut g.iridescence_texture,
             &mut g.iridescence_thickness_texture,
             &mut g.anisotropy_texture,
+            &mut g.diffuse_transmission_texture,
+            &mut g.diffuse_transmission_color_texture,
         ]
         .into_iter()
         .chain(specular_glossiness)

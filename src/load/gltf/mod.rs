@@ -44,6 +44,7 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_lights_punctual",
     "KHR_materials_anisotropy",
     "KHR_materials_clearcoat",
+    "KHR_materials_diffuse_transmission",
     "KHR_materials_dispersion",
     "KHR_materials_emissive_strength",
     "KHR_materials_ior",
@@ -151,6 +152,27 @@ struct Anisotropy {
     #[serde(default)]
     anisotropy_rotation: f32,
     anisotropy_texture: Option<json::texture::Info>,
+}
+
+/// The diffuse transmission extension's name.
+const DIFFUSE_TRANSMISSION: &str = "KHR_materials_diffuse_transmission";
+
+/// `KHR_materials_diffuse_transmission`'s object (`gltf-json` does not know
+/// it).
+#[derive(serde::Deserialize)]
+#[serde(rename_all = "camelCase")]
+struct DiffuseTransmission {
+    #[serde(default)]
+    diffuse_transmission_factor: f32,
+    diffuse_transmission_texture: Option<json::texture::Info>,
+    #[serde(default = "white")]
+    diffuse_transmission_color_factor: [f32; 3],
+    diffuse_transmission_color_texture: Option<json::texture::Info>,
+}
+
+/// `[1, 1, 1]`, a colour factor's default.
+fn white() -> [f32; 3] {
+    [1.0; 3]
 }
 
 /// Deepest node hierarchy accepted.
@@ -1402,7 +1424,15 @@ impl Loader<'_> {
         let ext = m.extensions.as_ref();
         if let Some(e) = ext {
             for name in e.others.keys() {
-                if ![CLEARCOAT, SHEEN, DISPERSION, IRIDESCENCE, ANISOTROPY].contains(&name.as_str()) {
+                let read = [
+                    CLEARCOAT,
+                    SHEEN,
+                    DISPERSION,
+                    IRIDESCENCE,
+                    ANISOTROPY,
+                    DIFFUSE_TRANSMISSION,
+                ];
+                if !read.contains(&name.as_str()) {
                     self.warn_once(name, format!("ignoring the material extension {name}"));
                 }
             }
@@ -1524,6 +1554,9 @@ impl Loader<'_> {
         }
         if let Some(value) = ext.and_then(|e| e.others.get(ANISOTROPY)) {
             self.anisotropy(value, &mut g, &what)?;
+        }
+        if let Some(value) = ext.and_then(|e| e.others.get(DIFFUSE_TRANSMISSION)) {
+            self.diffuse_transmission(value, &mut g, &what)?;
         }
         let strength = ext
             .and_then(|e| e.emissive_strength.as_ref())
@@ -1676,6 +1709,40 @@ impl Loader<'_> {
         let (sin, cos) = a.anisotropy_rotation.sin_cos();
         g.anisotropy_rotation = Vec2::new(cos, sin);
         g.anisotropy_texture = self.texture(a.anisotropy_texture.as_ref(), what)?;
+        Ok(())
+    }
+
+    /// Reads `KHR_materials_diffuse_transmission` (`value`, the extension's
+    /// object) into `g`: factors that are not finite are refused, the
+    /// factor is clamped to `[0, 1]` and the colour to `[0, 1]` per channel
+    /// (as the base colour is: the diffuse part reflects and transmits at
+    /// most what it receives).
+    fn diffuse_transmission(
+        &mut self,
+        value: &serde_json::Value,
+        g: &mut GltfMaterial,
+        what: &str,
+    ) -> Result<(), GltfError> {
+        let d: DiffuseTransmission = serde_json::from_value(value.clone())
+            .map_err(|e| GltfError::invalid(format!("{what}: {DIFFUSE_TRANSMISSION}: {e}")))?;
+        let not_finite = |name: &str| {
+            GltfError::invalid(format!(
+                "{what}: {DIFFUSE_TRANSMISSION}: {name} is not finite"
+            ))
+        };
+        if !d.diffuse_transmission_factor.is_finite() {
+            return Err(not_finite("diffuseTransmissionFactor"));
+        }
+        let color = Vec3A::from(d.diffuse_transmission_color_factor);
+        if !color.is_finite() {
+            return Err(not_finite("diffuseTransmissionColorFactor"));
+        }
+        g.diffuse_transmission = d.diffuse_transmission_factor.clamp(0.0, 1.0);
+        g.diffuse_transmission_color = color.clamp(Vec3A::ZERO, Vec3A::ONE);
+        g.diffuse_transmission_texture =
+            self.texture(d.diffuse_transmission_texture.as_ref(), what)?;
+        g.diffuse_transmission_color_texture =
+            self.texture(d.diffuse_transmission_color_texture.as_ref(), what)?;
         Ok(())
     }
 
