@@ -219,7 +219,7 @@ fn compressed_bytes<'d>(
     }
 }
 
-/// Decodes `source` as `c` describes (its shape already [`check`]ed). The
+/// Decodes `source` as `c` describes (its shape already checked by `check`). The
 /// error is meshoptimizer's reason, in words.
 pub fn decode(source: &[u8], c: &Compressed, name: &str) -> Result<Vec<u8>, &'static str> {
     let count = c.count as usize;
