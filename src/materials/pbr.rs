@@ -2293,6 +2293,18 @@ mod tests {
 
     // ---------------------------------------------- weights and densities
 
+    /// [`test_materials`] and every layered or extended set: the materials
+    /// the generic checks (bit-for-bit eval/pdf, weight = eval/pdf, sides,
+    /// degenerate inputs) run over.
+    fn every_test_material() -> Vec<PbrBsdf> {
+        let mut all = test_materials();
+        all.extend(coated_materials());
+        all.extend(sheened_materials());
+        all.extend(iridescent_materials());
+        all.extend(translucent_materials());
+        all
+    }
+
     fn test_materials() -> Vec<PbrBsdf> {
         vec![
             PbrBsdf::new(COLOR, 0.0, 0.5),
@@ -2335,13 +2347,7 @@ mod tests {
         // computation must give exactly what the two separate calls give.
         let mut r = rng(17);
         let mut nonzero = 0;
-        for p in test_materials()
-            .into_iter()
-            .chain(coated_materials())
-            .chain(sheened_materials())
-            .chain(iridescent_materials())
-            .chain(translucent_materials())
-        {
+        for p in every_test_material() {
             for k in 0..5_000 {
                 let wo = sphere(&mut r);
                 let wi = match k % 50 {
@@ -2375,13 +2381,7 @@ mod tests {
     fn sample_weight_is_eval_over_pdf_and_pdf_matches() {
         let mut r = rng(3);
         let mut worst = 0.0f32;
-        for p in test_materials()
-            .into_iter()
-            .chain(coated_materials())
-            .chain(sheened_materials())
-            .chain(iridescent_materials())
-            .chain(translucent_materials())
-        {
+        for p in every_test_material() {
             let m = Material::Pbr(p);
             let (mut hits, mut deltas) = (0, 0);
             for _ in 0..20_000 {
@@ -2430,13 +2430,7 @@ mod tests {
     #[test]
     fn two_sided_and_reciprocal() {
         let mut r = rng(4);
-        for p in test_materials()
-            .into_iter()
-            .chain(coated_materials())
-            .chain(sheened_materials())
-            .chain(iridescent_materials())
-            .chain(translucent_materials())
-        {
+        for p in every_test_material() {
             let m = Material::Pbr(p);
             let volume = p.transmission > 0.0 && !p.thin_walled;
             // Index of the medium a direction is in (1 for two-sided materials).
@@ -2475,10 +2469,7 @@ mod tests {
 
     #[test]
     fn degenerate_inputs_are_safe() {
-        let mut all = test_materials();
-        all.extend(coated_materials());
-        all.extend(sheened_materials());
-        all.extend(iridescent_materials());
+        let mut all = every_test_material();
         all.push(filmed(PbrBsdf::new(COLOR, 0.5, 0.5), 1.0, f32::NAN, 300.0));
         all.push(filmed(
             PbrBsdf::new(COLOR, 0.5, 0.0),
@@ -2487,7 +2478,6 @@ mod tests {
             f32::INFINITY,
         ));
         all.push(filmed(PbrBsdf::new(COLOR, 0.5, 0.3), f32::NAN, 1.3, 300.0));
-        all.extend(translucent_materials());
         all.push(PbrBsdf {
             coat_normal: Vec3A::NAN,
             ..coated(PbrBsdf::new(COLOR, 0.0, 0.5), 1.0, 0.3, 0.0)
