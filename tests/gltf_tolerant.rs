@@ -242,3 +242,54 @@ fn glb_files_are_read_as_tolerantly() {
     std::fs::write(&path, &glb).unwrap();
     assert_eq!(triangles(&path), Ok(2));
 }
+
+#[test]
+fn scenes_without_nodes_and_extras_of_any_type_load() {
+    let dir = tempfile::tempdir().unwrap();
+    // A scene's `nodes` is optional; `extras` may be any JSON value.
+    let no_nodes = r#"{ "asset": { "version": "2.0" }, "scenes": [ { "name": "empty" } ] }"#;
+    assert_eq!(triangles(&write(dir.path(), "scene.gltf", no_nodes)), Ok(0));
+    for extras in ["42", "\"text\"", "true", "[1, 2]", "null", "{ \"a\": 1 }"] {
+        let text = square(&integers, &Extra::default()).replace(
+            "\"nodes\": [ { \"mesh\": 0 } ]",
+            &format!(
+                "\"nodes\": [ {{ \"mesh\": 0, \"extras\": {extras} }} ], \"extras\": {extras}"
+            ),
+        );
+        assert!(text.contains("extras"), "{text}");
+        assert_eq!(
+            triangles(&write(dir.path(), "extras.gltf", &text)),
+            Ok(2),
+            "extras {extras}"
+        );
+    }
+}
+
+#[test]
+fn buffers_that_cannot_be_read_matter_only_when_used() {
+    let dir = tempfile::tempdir().unwrap();
+    // Unused buffers raylab cannot read: without a URI in a .gltf, remote,
+    // a data URI that is not base64, a missing file. The square still loads.
+    let unused = r#"{ "byteLength": 4 }, { "byteLength": 4, "uri": "https://example.com/b.bin" },
+    { "byteLength": 1, "uri": "data:application/gltf-buffer,0" }, { "byteLength": 4, "uri": "missing.bin" }"#;
+    let text = square(&integers, &Extra::default())
+        .replace("\"buffers\": [ {", &format!("\"buffers\": [ {unused}, {{"));
+    // The square's own buffer is now the fifth.
+    let text = text.replace("\"buffer\": 0,", "\"buffer\": 4,");
+    assert_eq!(triangles(&write(dir.path(), "unused.gltf", &text)), Ok(2));
+    // Used, each is refused in one line naming the file, the view and why.
+    for (k, why) in [
+        (0, "buffer 0 has no URI"),
+        (1, "https://example.com/b.bin is not a local file"),
+        (2, "not base64"),
+        (3, "missing.bin"),
+    ] {
+        let used = text.replacen("\"buffer\": 4,", &format!("\"buffer\": {k},"), 1);
+        let err = triangles(&write(dir.path(), "used.gltf", &used)).unwrap_err();
+        assert!(
+            err.contains("used.gltf") && err.contains("buffer view 0") && err.contains(why),
+            "buffer {k}: {err}"
+        );
+        assert!(!err.contains('\n'), "{err}");
+    }
+}

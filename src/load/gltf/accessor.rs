@@ -17,6 +17,22 @@ pub struct Buffers<'a> {
     pub root: &'a json::Root,
     /// Bytes of each buffer (exactly `byteLength` of them).
     pub data: &'a [Vec<u8>],
+    /// Why a buffer could not be read (its `data` is then empty), reported
+    /// when something in it is read.
+    pub unreadable: &'a [Option<String>],
+}
+
+impl<'a> Buffers<'a> {
+    /// Buffer `i`'s bytes; an error if it does not exist or could not be read.
+    pub fn bytes(&self, i: usize, what: &str) -> Result<&'a [u8], GltfError> {
+        if let Some(Some(reason)) = self.unreadable.get(i) {
+            return Err(GltfError::invalid(format!("{what}: {reason}")));
+        }
+        self.data
+            .get(i)
+            .map(Vec::as_slice)
+            .ok_or_else(|| GltfError::invalid(format!("{what}: buffer {i} does not exist")))
+    }
 }
 
 /// Bytes per component.
@@ -96,12 +112,7 @@ fn view_bytes<'b>(
         buffers.root.buffer_views.get(view).ok_or_else(|| {
             GltfError::invalid(format!("{what}: buffer view {view} does not exist"))
         })?;
-    let buffer = buffers.data.get(v.buffer.value()).ok_or_else(|| {
-        GltfError::invalid(format!(
-            "buffer view {view}: buffer {} does not exist",
-            v.buffer.value()
-        ))
-    })?;
+    let buffer = buffers.bytes(v.buffer.value(), &format!("buffer view {view}"))?;
     let offset = v.byte_offset.map_or(0, |o| o.0);
     let end = offset.checked_add(v.byte_length.0);
     match end {

@@ -413,7 +413,7 @@ fn load_gltf_inner(
         }
     };
     let base = path.parent().unwrap_or(Path::new("."));
-    let mut buffer_data = load_buffers(&root, base, glb_bin, ledger, &mut held)?;
+    let (mut buffer_data, unreadable) = load_buffers(&root, base, glb_bin, ledger, &mut held)?;
     // Compressed views are decoded into buffers of their own, the bytes held
     // with the rest until the scene is built.
     meshopt::decode_views(&mut root, &mut buffer_data, |bytes| {
@@ -427,6 +427,7 @@ fn load_gltf_inner(
     let buffers = Buffers {
         root: &root,
         data: &buffer_data,
+        unreadable: &unreadable,
     };
     let pose = animation::pose(&root, &buffers, animation, &mut warnings)?;
     let mut loader = Loader {
@@ -553,7 +554,8 @@ fn json_tree_bytes(text: &[u8]) -> u64 {
 /// [`parse_root`]): every number written with a fraction that is a whole
 /// number from 0 to below 2⁶⁴ becomes that integer (a float field reads it
 /// as the same value), animation channels whose target has no `node` are
-/// dropped, and a texture without `source` takes its `EXT_texture_webp`
+/// dropped, a scene without `nodes` gets an empty list, an `extras` that is
+/// not an object is dropped, and a texture without `source` takes its `EXT_texture_webp`
 /// image's (files that require the extension may leave the core fallback
 /// out). Returns whether anything changed.
 fn tolerate(tree: &mut serde_json::Value) -> bool {
@@ -571,6 +573,15 @@ fn tolerate(tree: &mut serde_json::Value) -> bool {
                 .cloned();
             if let Some(source) = webp {
                 texture.insert("source".into(), source);
+                changed = true;
+            }
+        }
+    }
+    // A scene's `nodes` is optional (a scene may be empty).
+    if let Some(scenes) = tree.get_mut("scenes").and_then(Value::as_array_mut) {
+        for scene in scenes.iter_mut().filter_map(Value::as_object_mut) {
+            if !scene.contains_key("nodes") {
+                scene.insert("nodes".into(), Value::Array(Vec::new()));
                 changed = true;
             }
         }
@@ -598,7 +609,15 @@ fn tolerate(tree: &mut serde_json::Value) -> bool {
                 }
             }
             Value::Array(items) => stack.extend(items.iter_mut()),
-            Value::Object(members) => stack.extend(members.values_mut()),
+            Value::Object(members) => {
+                // `extras` may be any JSON value; raylab reads none, and
+                // `gltf-json` takes only objects there.
+                if members.get("extras").is_some_and(|e| !e.is_object()) {
+                    members.remove("extras");
+                    changed = true;
+                }
+                stack.extend(members.values_mut())
+            }
             _ => {}
         }
     }
@@ -614,14 +633,22 @@ fn whole_number(x: f64) -> Option<u64> {
 
 /// Reads every buffer: the GLB's binary chunk, a data URI or a file beside the
 /// glTF. Each must hold at least `byteLength` bytes.
+///
+/// A buffer that cannot be had (no URI and no GLB chunk, a remote or non-base64
+/// URI, a missing file) is left empty with the reason beside it, reported
+/// only when something raylab reads lies in it: the glTF-Validator accepts
+/// files with such buffers when nothing uses them (placeholders, unused
+/// objects).
+#[allow(clippy::type_complexity)]
 fn load_buffers(
     root: &json::Root,
     base: &Path,
     glb_bin: Option<&[u8]>,
     ledger: &Ledger,
     held: &mut u64,
-) -> Result<Vec<Vec<u8>>, GltfError> {
+) -> Result<(Vec<Vec<u8>>, Vec<Option<String>>), GltfError> {
     let mut out = Vec::with_capacity(root.buffers.len().min(1024));
+    let mut unreadable = Vec::with_capacity(out.capacity());
     let meshopt_used = meshopt::used(root);
     for (i, b) in root.buffers.iter().enumerate() {
         let want = b.byte_length.0;
@@ -632,16 +659,24 @@ fn load_buffers(
             && (meshopt::is_fallback(b) || (b.uri.is_none() && (i > 0 || glb_bin.is_none())))
         {
             out.push(Vec::new());
+            unreadable.push(None);
             continue;
         }
         let data = match &b.uri {
-            None if i == 0 => glb_bin
-                .ok_or_else(|| {
-                    GltfError::invalid("buffer 0 has no URI and the file has no GLB binary chunk")
-                })?
-                .to_vec(),
-            None => return Err(GltfError::invalid(format!("buffer {i} has no URI"))),
-            Some(uri) => read_uri(uri, base, &format!("buffer {i}"), ledger, held)?,
+            None if i == 0 => glb_bin.map(<[u8]>::to_vec).ok_or_else(|| {
+                GltfError::invalid("buffer 0 has no URI and the file has no GLB binary chunk")
+            }),
+            None => Err(GltfError::invalid(format!("buffer {i} has no URI"))),
+            Some(uri) => read_uri(uri, base, &format!("buffer {i}"), ledger, held),
+        };
+        let data = match data {
+            Ok(data) => data,
+            Err(GltfError::Invalid(reason)) => {
+                out.push(Vec::new());
+                unreadable.push(Some(reason));
+                continue;
+            }
+            Err(other) => return Err(other),
         };
         if (data.len() as u64) < want {
             return Err(GltfError::invalid(format!(
@@ -652,8 +687,9 @@ fn load_buffers(
         let mut data = data;
         data.truncate(want as usize);
         out.push(data);
+        unreadable.push(None);
     }
-    Ok(out)
+    Ok((out, unreadable))
 }
 
 /// The bytes behind a URI: a base64 data URI or a relative file path.
@@ -1880,12 +1916,9 @@ impl Loader<'_> {
                     let view = self.root.buffer_views.get(v).ok_or_else(|| {
                         GltfError::invalid(format!("image {image}: buffer view {v} does not exist"))
                     })?;
-                    let buffer = self.buffers.data.get(view.buffer.value()).ok_or_else(|| {
-                        GltfError::invalid(format!(
-                            "image {image}: buffer {} does not exist",
-                            view.buffer.value()
-                        ))
-                    })?;
+                    let buffer = self
+                        .buffers
+                        .bytes(view.buffer.value(), &format!("image {image}"))?;
                     let start = view.byte_offset.map_or(0, |o| o.0);
                     let end = start
                         .checked_add(view.byte_length.0)
