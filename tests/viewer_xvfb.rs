@@ -13,7 +13,22 @@ use image::RgbImage;
 struct Killed(Child);
 
 impl Drop for Killed {
+    /// SIGTERM first, so that Xvfb removes its `/tmp/.X<n>-lock` and socket
+    /// (killed outright it leaves them, and the display numbers run out over
+    /// many runs), then SIGKILL if it has not ended within two seconds.
     fn drop(&mut self) {
+        if let Ok(pid) = libc::pid_t::try_from(self.0.id()) {
+            // SAFETY: a plain signal to our own child, which we have not waited
+            // for yet, so its pid is still ours.
+            unsafe { libc::kill(pid, libc::SIGTERM) };
+            let start = Instant::now();
+            while start.elapsed() < Duration::from_secs(2) {
+                if matches!(self.0.try_wait(), Ok(Some(_))) {
+                    return;
+                }
+                std::thread::sleep(Duration::from_millis(20));
+            }
+        }
         let _ = self.0.kill();
         let _ = self.0.wait();
     }
