@@ -4,7 +4,8 @@
 //! `KHR_materials_pbrSpecularGlossiness` (the extension's BRDF inputs, and the
 //! BRDF they make), `KHR_materials_variants` (`--variant`, in scene files too)
 //! `EXT_mesh_gpu_instancing` (instances at their transforms, counts
-//! checked) and `KHR_materials_sheen` (factors, textures, layering). Every file is written by the test itself (see
+//! checked), `KHR_materials_sheen` (factors, textures, layering) and
+//! `KHR_node_visibility` (hidden subtrees). Every file is written by the test itself (see
 //! `common/gltf_builder.rs`).
 
 // Shared with tests/gltf.rs, which uses all of it; this file only a part.
@@ -822,6 +823,62 @@ fn a_sheen_takes_its_factors_and_textures() {
     };
     assert!(
         err.contains("material 0") && err.contains("sheenRoughnessFactor"),
+        "{err}"
+    );
+}
+
+/// `KHR_node_visibility`: a hidden node hides its mesh, its light and every
+/// descendant's, even one marked visible; its camera still sees; a node
+/// without the extension, or `visible: true`, shows; a `visible` that is not
+/// a boolean is refused naming the node.
+#[test]
+fn hidden_nodes_hide_their_meshes_and_lights_and_all_below() {
+    let dir = tempfile::tempdir().unwrap();
+    let visibility = |v: Value| json!({ "KHR_node_visibility": { "visible": v } });
+    let mut g = Gltf::new();
+    // Four squares at x = 0, 3, 6, 9 (two triangles each).
+    let meshes: Vec<usize> = (0..4)
+        .map(|k| {
+            let p = quad(&mut g, square([3.0 * k as f32, 0.0, 0.0], 1.0), &[]);
+            g.mesh(vec![p])
+        })
+        .collect();
+    // Directional: a file's first point light would be the key light, not
+    // one of `lights()`.
+    let light = g.light(json!({ "type": "directional", "intensity": 5.0 }));
+    let camera =
+        g.camera(json!({ "type": "perspective", "perspective": { "yfov": 0.5, "znear": 0.1 } }));
+    // Hidden parent 0 (mesh 0, a light, a camera) above a child marked
+    // visible (mesh 1) and its grandchild (mesh 2); node 3 visible: true.
+    let grandchild = g.node(json!({ "mesh": meshes[2] }));
+    let child = g.node(json!({ "mesh": meshes[1], "children": [grandchild], "extensions": visibility(json!(true)) }));
+    g.root(json!({
+        "mesh": meshes[0], "children": [child], "camera": camera, "translation": [0.0, 0.0, 10.0],
+        "extensions": { "KHR_node_visibility": { "visible": false }, "KHR_lights_punctual": { "light": light } }
+    }));
+    g.root(json!({ "mesh": meshes[3], "extensions": visibility(json!(true)) }));
+    g.extensions_used = vec!["KHR_node_visibility".into(), "KHR_lights_punctual".into()];
+    g.extensions_required = vec!["KHR_node_visibility".into()];
+    let hidden = load(&g.write(dir.path(), "hidden.gltf"));
+    let tris = hidden.scene.triangles();
+    assert_eq!(tris.len(), 2, "only the fourth square shows");
+    assert!(tris.iter().all(|t| t.v[0].x > 7.0), "{tris:?}");
+    assert_eq!(hidden.scene.lights().len(), 0, "the hidden node's light");
+    assert_eq!(hidden.scene.cameras.len(), 1, "the hidden node's camera");
+    // Shown: every square and the light.
+    let shown_file = write_edited(&g, dir.path(), "shown.gltf", |root| {
+        root["nodes"][2]["extensions"]["KHR_node_visibility"]["visible"] = json!(true);
+    });
+    let shown = load(&shown_file);
+    assert_eq!(shown.scene.triangles().len(), 8);
+    assert_eq!(shown.scene.lights().len(), 1);
+    // Not a boolean: refused in one line naming the file and the node.
+    let bad = write_edited(&g, dir.path(), "bad.gltf", |root| {
+        root["nodes"][2]["extensions"]["KHR_node_visibility"]["visible"] = json!(0);
+    });
+    let err = load_with(&bad, &LoadOptions::default()).unwrap_err();
+    assert!(
+        err.contains("bad.gltf") && err.contains("node 2") && err.contains("KHR_node_visibility"),
         "{err}"
     );
 }

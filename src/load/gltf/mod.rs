@@ -58,6 +58,7 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_materials_volume",
     "KHR_texture_transform",
     "KHR_mesh_quantization",
+    "KHR_node_visibility",
     "EXT_mesh_gpu_instancing",
     "EXT_texture_webp",
     meshopt::EXT,
@@ -459,6 +460,26 @@ fn load_gltf_inner(
     Ok(scene)
 }
 
+/// Node `index`'s own `KHR_node_visibility` `visible` (true without the
+/// extension); anything but a boolean there is refused.
+fn node_visible(node: &json::Node, index: usize) -> Result<bool, GltfError> {
+    let Some(ext) = node
+        .extensions
+        .as_ref()
+        .and_then(|e| e.others.get("KHR_node_visibility"))
+    else {
+        return Ok(true);
+    };
+    match ext.get("visible") {
+        None => Ok(true),
+        Some(serde_json::Value::Bool(b)) => Ok(*b),
+        Some(other) => Err(GltfError::invalid(format!(
+            "node {index}: KHR_node_visibility's visible is {}, not true or false",
+            crate::guard::one_line(&other.to_string())
+        ))),
+    }
+}
+
 /// The variants a file has, for a message: "variants: a, b, c" or "the file
 /// has no material variants".
 pub fn variant_list(variants: &[String]) -> String {
@@ -846,13 +867,14 @@ impl Loader<'_> {
             }
         };
         let mut visited = vec![false; root.nodes.len()];
-        // (node, parent transform, depth), popped in depth-first pre-order.
-        let mut stack: Vec<(usize, Mat4, usize)> = roots
+        // (node, parent transform, depth, parent visible), popped in
+        // depth-first pre-order.
+        let mut stack: Vec<(usize, Mat4, usize, bool)> = roots
             .iter()
             .rev()
-            .map(|&n| (n, Mat4::IDENTITY, 0))
+            .map(|&n| (n, Mat4::IDENTITY, 0, true))
             .collect();
-        while let Some((index, parent, depth)) = stack.pop() {
+        while let Some((index, parent, depth, parent_visible)) = stack.pop() {
             let node = root
                 .nodes
                 .get(index)
@@ -868,6 +890,9 @@ impl Loader<'_> {
                 )));
             }
             let world = parent * local_transform(node, index, self.pose.as_ref())?;
+            // `KHR_node_visibility`: a hidden node hides its meshes and
+            // lights and all its descendants'; its cameras still see.
+            let visible = parent_visible && node_visible(node, index)?;
             if let Some(cam) = node.camera {
                 self.camera(cam.value(), &world)?;
             }
@@ -875,10 +900,11 @@ impl Loader<'_> {
                 .extensions
                 .as_ref()
                 .and_then(|e| e.khr_lights_punctual.as_ref())
+                .filter(|_| visible)
             {
                 self.light(light.light.value(), &world)?;
             }
-            if let Some(mesh) = node.mesh {
+            if let Some(mesh) = node.mesh.filter(|_| visible) {
                 match node
                     .extensions
                     .as_ref()
@@ -889,7 +915,7 @@ impl Loader<'_> {
                 }
             }
             for child in node.children.iter().flatten().rev() {
-                stack.push((child.value(), world, depth + 1));
+                stack.push((child.value(), world, depth + 1, visible));
             }
         }
         Ok(())
