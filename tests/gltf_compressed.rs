@@ -498,3 +498,42 @@ fn patch(bytes: &[u8], at: usize, with: &[u8]) -> Vec<u8> {
     out[at..at + with.len()].copy_from_slice(with);
     out
 }
+
+/// basisu-uastc.ktx2 with its one key/value entry (`KTXwriter`, 31 bytes)
+/// rewritten in place as `key` = `value` (NUL-padded to the same length).
+fn with_metadata(key: &str, value: &str) -> Vec<u8> {
+    let mut bytes = std::fs::read(data("basisu-uastc.ktx2")).unwrap();
+    let kvd = u32::from_le_bytes(bytes[56..60].try_into().unwrap()) as usize;
+    assert_eq!(&bytes[kvd + 4..kvd + 14], b"KTXwriter\0");
+    let mut entry = format!("{key}\0{value}\0").into_bytes();
+    entry.resize(31, 0);
+    bytes[kvd + 4..kvd + 35].copy_from_slice(&entry);
+    bytes
+}
+
+#[test]
+fn ktx2_orientation_is_honoured_and_other_swizzles_refused() {
+    // "rd" (glTF's top-left origin) is the only orientation the extension
+    // allows; the others mean the rows or columns are stored the other way.
+    let upright = bytes_of(&image("basisu-uastc.ktx2"));
+    let decode = |bytes: Vec<u8>| Image::decode(&bytes, "t.ktx2");
+    let rd = decode(with_metadata("KTXorientation", "rd")).unwrap();
+    assert!(bytes_of(&rd) == upright);
+    let ru = decode(with_metadata("KTXorientation", "ru")).unwrap();
+    let rows_reversed: Vec<u8> = upright.chunks(64 * 4).rev().flatten().copied().collect();
+    assert!(bytes_of(&ru) == rows_reversed);
+    let ld = decode(with_metadata("KTXorientation", "ld")).unwrap();
+    let columns_reversed: Vec<u8> = upright
+        .chunks(64 * 4)
+        .flat_map(|row| row.chunks(4).rev().flatten().copied().collect::<Vec<_>>())
+        .collect();
+    assert!(bytes_of(&ld) == columns_reversed);
+    assert!(decode(with_metadata("KTXswizzle", "rgba")).is_ok());
+    let err = decode(with_metadata("KTXswizzle", "bgra"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.starts_with("t.ktx2: ") && err.contains("swizzle \"bgra\""),
+        "{err}"
+    );
+}

@@ -223,7 +223,7 @@ fn check(bytes: &[u8], name: &str) -> Result<Header, TextureError> {
     let (mut flip_x, mut flip_y) = (false, false);
     for (key, value) in key_values(kvd) {
         // Values are NUL-terminated strings (KTX 2.0 §5.3, §5.4).
-        let value = value.strip_suffix(&[0]).unwrap_or(value);
+        let value = value.split(|&b| b == 0).next().unwrap_or_default();
         match key {
             b"KTXorientation" => {
                 // "rd" (glTF's own: row 0 at the top) is the only value the

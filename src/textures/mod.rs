@@ -1,7 +1,7 @@
 //! Textures: decoded images shared by materials, and their lookups.
 //!
-//! A [`TextureStore`] holds every [`Image`] of a scene, decoded from PNG or
-//! JPEG in parallel ([`TextureStore::decode_all`]) and named by `u32` ids; a
+//! A [`TextureStore`] holds every [`Image`] of a scene, decoded from PNG,
+//! JPEG, WebP or KTX2 (Basis Universal) in parallel ([`TextureStore::decode_all`]) and named by `u32` ids; a
 //! material slot refers to one with a [`TextureRef`] (image, glTF sampler wrap
 //! modes, texture-coordinate set and `KHR_texture_transform`).
 //!
