@@ -324,15 +324,32 @@ pub(super) fn decode(bytes: &[u8], name: &str) -> Result<Image, TextureError> {
     if rgba.len() != w * h * 4 {
         return Err(refuse("the transcoder returned another size".into()));
     }
-    let channels = if has_alpha { 4 } else { 3 };
-    let mut texels = Vec::with_capacity(w * h * channels);
-    for y in 0..h {
-        let row = if header.flip_y { h - 1 - y } else { y };
-        for x in 0..w {
-            let col = if header.flip_x { w - 1 - x } else { x };
-            let at = (row * w + col) * 4;
-            texels.extend_from_slice(&rgba[at..at + channels]);
+    // In place, so that the transcoder's output (the 4 bytes a texel charged
+    // to the memory budget) is the only image held: flips, then RGB from
+    // RGBA without alpha (which keeps the RGBA buffer's capacity: what was
+    // charged).
+    let mut texels = rgba;
+    if header.flip_y {
+        for y in 0..h / 2 {
+            let (top, bottom) = texels.split_at_mut((h - 1 - y) * w * 4);
+            top[y * w * 4..(y + 1) * w * 4].swap_with_slice(&mut bottom[..w * 4]);
         }
+    }
+    if header.flip_x {
+        for row in texels.chunks_exact_mut(w * 4) {
+            for x in 0..w / 2 {
+                for c in 0..4 {
+                    row.swap(x * 4 + c, (w - 1 - x) * 4 + c);
+                }
+            }
+        }
+    }
+    let channels = if has_alpha { 4 } else { 3 };
+    if channels == 3 {
+        for i in 0..w * h {
+            texels.copy_within(i * 4..i * 4 + 3, i * 3);
+        }
+        texels.truncate(w * h * 3);
     }
     Ok(Image::from_u8(
         header.width,
