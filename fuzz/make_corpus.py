@@ -700,6 +700,18 @@ def meshopt_seeds():
                     bytes([picks[0]]) + struct.pack("<H", count) + stream)
 
 
+# ------------------------------------------------------------------ ktx2
+
+
+def ktx2_seeds():
+    """The KTX2 files of tests/data/compressed/ (made by Binomial's encoder:
+    UASTC, UASTC + Zstandard, ETC1S + BasisLZ)."""
+    data = os.path.join(HERE, "..", "tests", "data", "compressed")
+    for name in sorted(os.listdir(data)):
+        if name.endswith(".ktx2"):
+            put("ktx2", name, open(os.path.join(data, name), "rb").read())
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--shared", default=os.path.join(HERE, "..", "..", "shared"))
@@ -714,6 +726,7 @@ def main():
     checkpoint_seeds()
     cli_seeds()
     meshopt_seeds()
+    ktx2_seeds()
     for t in sorted(os.listdir(os.path.join(HERE, "corpus"))):
         files = os.listdir(os.path.join(HERE, "corpus", t))
         size = sum(os.path.getsize(os.path.join(HERE, "corpus", t, f)) for f in files)

@@ -3,15 +3,17 @@
 //! and uncompressed versions of one model give identical triangles (world
 //! positions, normals and texture coordinates, bit for bit where the
 //! compression is lossless, within the filter's quantization step where it is
-//! not); what raylab cannot decode (Draco, Basis Universal) is refused in one
-//! line naming the extension and the file when required, and read from the
-//! core data otherwise.
+//! not); what raylab cannot decode (Draco) is refused in one line naming the
+//! extension and the file when required, and read from the core data
+//! otherwise. `KHR_texture_basisu`'s KTX2 images decode exactly as Binomial's
+//! C++ transcoder decodes them, within the codec's error of their source PNG.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use glam::{Vec2, Vec3};
 use raylab::load::gltf::{GltfScene, load_gltf};
+use raylab::textures::{ColorSpace, Image};
 
 fn data(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -232,44 +234,306 @@ fn render(file: &Path) -> (Option<i32>, String) {
 }
 
 #[test]
-fn required_draco_and_basisu_are_refused_in_one_line_naming_the_extension_and_file() {
-    for (file, ext) in [
-        ("draco-required.gltf", "KHR_draco_mesh_compression"),
-        ("basisu-required.gltf", "KHR_texture_basisu"),
+fn required_draco_is_refused_in_one_line_naming_the_extension_and_file() {
+    let (file, ext) = ("draco-required.gltf", "KHR_draco_mesh_compression");
+    let err = load_gltf(&data(file)).unwrap_err().to_string();
+    assert!(err.contains(ext), "{err}");
+    let (code, err) = render(&data(file));
+    assert_eq!(code, Some(1), "{err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    assert!(err.contains(file) && err.contains(ext), "{err}");
+}
+
+#[test]
+fn used_but_not_required_draco_falls_back_to_the_core_data() {
+    // The file carries the source torus's core accessors beside the Draco
+    // data; it gives the same triangles as the Basis Universal file (whose
+    // accessors are the source's).
+    let draco = load("draco-fallback.gltf");
+    assert!(
+        draco
+            .warnings
+            .iter()
+            .any(|w| w.contains("KHR_draco_mesh_compression")),
+        "{:?}",
+        draco.warnings
+    );
+    assert_eq!(draco.parts.textures.len(), 1);
+    let (a, b) = (triangles(&draco), triangles(&load("basisu-fallback.gltf")));
+    assert_eq!(a.len(), TRIANGLES);
+    assert!(a == b);
+    let (code, err) = render(&data("draco-fallback.gltf"));
+    assert_eq!(code, Some(0), "{err}");
+}
+
+// ---- KHR_texture_basisu: KTX2 images (Basis Universal), made by Binomial's
+// encoder (v1.15) from basisu-tex.png, a 64×64 RGBA texture.
+
+fn image(name: &str) -> Image {
+    Image::decode(&std::fs::read(data(name)).unwrap(), name)
+        .unwrap_or_else(|e| panic!("{name}: {e}"))
+}
+
+/// Every channel of every texel as its stored 8-bit value.
+fn bytes_of(image: &Image) -> Vec<u8> {
+    let mut out = Vec::new();
+    for y in 0..image.height() {
+        for x in 0..image.width() {
+            let t = image.texel(x, y, ColorSpace::Linear);
+            out.extend(t.to_array().map(|v| (v * 255.0).round() as u8));
+        }
+    }
+    out
+}
+
+/// PSNR (dB) and largest difference (in 8-bit steps) over every channel.
+fn psnr_and_max(a: &Image, b: &Image) -> (f64, u8) {
+    let (a, b) = (bytes_of(a), bytes_of(b));
+    assert_eq!(a.len(), b.len());
+    let mut sq = 0.0f64;
+    let mut max = 0u8;
+    for (&x, &y) in a.iter().zip(&b) {
+        let d = x.abs_diff(y);
+        sq += f64::from(d) * f64::from(d);
+        max = max.max(d);
+    }
+    let mse = sq / a.len() as f64;
+    (10.0 * (255.0f64 * 255.0 / mse).log10(), max)
+}
+
+#[test]
+fn ktx2_images_decode_exactly_as_binomials_transcoder_does() {
+    // The reference PNGs are the C++ tool's own decoding (`basisu -unpack`):
+    // UASTC through its lossless transcode to ASTC 4×4, ETC1S through ETC2
+    // (its ETC1 colour blocks and EAC alpha from the alpha slice). raylab's
+    // pure-Rust transcoder must give the same bytes, alpha included.
+    for (ktx2, reference) in [
+        ("basisu-uastc.ktx2", "basisu-uastc.ref.png"),
+        ("basisu-uastc-zstd.ktx2", "basisu-uastc.ref.png"),
+        ("basisu-etc1s.ktx2", "basisu-etc1s.ref.png"),
     ] {
-        let err = load_gltf(&data(file)).unwrap_err().to_string();
-        assert!(err.contains(ext), "{err}");
-        let (code, err) = render(&data(file));
-        assert_eq!(code, Some(1), "{err}");
-        assert_eq!(err.trim_end().lines().count(), 1, "{err}");
-        assert!(err.contains(file) && err.contains(ext), "{err}");
+        let (ours, theirs) = (image(ktx2), image(reference));
+        assert_eq!((ours.width(), ours.height(), ours.channels()), (64, 64, 4));
+        assert_eq!(ours.channels(), theirs.channels());
+        assert!(
+            bytes_of(&ours) == bytes_of(&theirs),
+            "{ktx2} differs from {reference}"
+        );
     }
 }
 
 #[test]
-fn used_but_not_required_draco_and_basisu_fall_back_to_the_core_data() {
-    // Both files carry the source torus's core accessors and its PNG; they
-    // give the same triangles as each other, and the PNG's 8×8 texture.
-    let draco = load("draco-fallback.gltf");
-    let basisu = load("basisu-fallback.gltf");
-    for (scene, ext) in [
-        (&draco, "KHR_draco_mesh_compression"),
-        (&basisu, "KHR_texture_basisu"),
+fn ktx2_images_stay_within_their_codecs_error_of_the_source_png() {
+    // UASTC (8 bits a texel) is near-lossless: the encoder's measured error
+    // on this texture is 44.0 dB PSNR, 7 steps at most; ETC1S (here 2.7
+    // bits a texel: 5-bit endpoint colours, one per 4×4 block with four
+    // intensity offsets) is coarser: 31.8 dB, 31 steps. The bounds leave a
+    // margin below those, and far above what a wrong decoding (a flipped,
+    // swizzled or shifted image) gives: under 15 dB.
+    let source = image("basisu-tex.png");
+    for (ktx2, min_psnr, max_error) in [
+        ("basisu-uastc.ktx2", 40.0, 8),
+        ("basisu-uastc-zstd.ktx2", 40.0, 8),
+        ("basisu-etc1s.ktx2", 30.0, 40),
     ] {
+        let (psnr, max) = psnr_and_max(&image(ktx2), &source);
+        eprintln!("{ktx2}: {psnr:.2} dB, at most {max} steps from the PNG");
         assert!(
-            scene.warnings.iter().any(|w| w.contains(ext)),
-            "{:?}",
-            scene.warnings
+            psnr >= min_psnr && max <= max_error,
+            "{ktx2}: {psnr} dB, {max}"
         );
-        assert_eq!(scene.parts.textures.len(), 1);
     }
-    let (a, b) = (triangles(&draco), triangles(&basisu));
-    assert_eq!(a.len(), TRIANGLES);
-    assert!(a == b);
-    for (code, err) in [
-        render(&data("draco-fallback.gltf")),
-        render(&data("basisu-fallback.gltf")),
-    ] {
-        assert_eq!(code, Some(0), "{err}");
+    // The same picture flipped upside down is far from it (the bound above
+    // tells orientations apart).
+    let flipped = Image::from_u8(64, 64, 4, {
+        let b = bytes_of(&source);
+        b.chunks(64 * 4).rev().flatten().copied().collect()
+    });
+    assert!(psnr_and_max(&flipped, &source).0 < 20.0);
+}
+
+#[test]
+fn zstd_supercompression_is_lossless() {
+    assert!(bytes_of(&image("basisu-uastc-zstd.ktx2")) == bytes_of(&image("basisu-uastc.ktx2")));
+}
+
+#[test]
+fn the_gltf_loader_uses_the_ktx2_image_over_the_core_one() {
+    // basisu-fallback.gltf's texture names the ETC1S image in the extension
+    // and the PNG as its core source: the extension's image wins.
+    let scene = load("basisu-fallback.gltf");
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    assert_eq!(scene.parts.textures.len(), 1);
+    let loaded = scene.parts.textures.get(0);
+    assert!(bytes_of(loaded) == bytes_of(&image("basisu-etc1s.ktx2")));
+    // The same torus as the PNG file.
+    assert!(triangles(&scene) == triangles(&load("basisu-png.gltf")));
+}
+
+/// `raylab render FILE` with the flat integrator (each pixel the mean base
+/// colour its samples see): the image.
+fn render_flat(file: &Path) -> raylab::film::Film {
+    let dir = tempfile::tempdir().unwrap();
+    let exr = dir.path().join("out.exr");
+    let out = Command::new(env!("CARGO_BIN_EXE_raylab"))
+        .arg("render")
+        .arg(file)
+        .args(["--width", "48", "--height", "32", "--spp", "4"])
+        .args(["--integrator", "flat", "-o"])
+        .arg(&exr)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    raylab::film::read_exr(&exr).unwrap()
+}
+
+#[test]
+fn a_basisu_required_file_renders_as_the_png_file_within_the_codecs_error() {
+    // Both renders take the same samples on the same torus; only the texels
+    // differ. A flat pixel is a weighted mean (bilinear weights, samples) of
+    // linear texel values, so it differs by at most the largest linear
+    // difference of a texel (UASTC + Zstandard vs the PNG), measured here.
+    let (ktx2, png) = (image("basisu-uastc-zstd.ktx2"), image("basisu-tex.png"));
+    let mut bound = 0.0f32;
+    for y in 0..64 {
+        for x in 0..64 {
+            let d = ktx2.texel(x, y, ColorSpace::Srgb) - png.texel(x, y, ColorSpace::Srgb);
+            bound = bound.max(d.truncate().abs().max_element());
+        }
     }
+    let a = render_flat(&data("basisu-required.gltf"));
+    let b = render_flat(&data("basisu-png.gltf"));
+    let mut largest = 0.0f32;
+    let mut covered = 0;
+    for y in 0..32 {
+        for x in 0..48 {
+            let (pa, pb) = (a.get(x, y), b.get(x, y));
+            largest = largest.max((pa - pb).abs().max_element());
+            covered += usize::from(pb.max_element() > 0.0);
+        }
+    }
+    eprintln!("renders differ by at most {largest} (texels by {bound})");
+    assert!(covered > 100, "the torus covers only {covered} pixels");
+    assert!(largest > 0.0, "the KTX2 image was not used");
+    assert!(largest <= bound * 1.0001 + 1e-6, "{largest} > {bound}");
+}
+
+#[test]
+fn a_corrupt_ktx2_image_is_refused_in_one_line() {
+    let good = std::fs::read(data("basisu-uastc-zstd.ktx2")).unwrap();
+    let doc = std::fs::read(data("basisu-required.gltf")).unwrap();
+    let level_offset = u64::from_le_bytes(good[80..88].try_into().unwrap()) as usize;
+    let corruptions: Vec<(&str, Vec<u8>, &str)> = vec![
+        (
+            "cut short",
+            good[..good.len() - 100].to_vec(),
+            "outside the file",
+        ),
+        ("header only", good[..60].to_vec(), "too few"),
+        (
+            "a huge width",
+            patch(&good, 20, &u32::MAX.to_le_bytes()),
+            "too large",
+        ),
+        (
+            "a level count of 40",
+            patch(&good, 40, &40u32.to_le_bytes()),
+            "mip levels",
+        ),
+        (
+            "three faces",
+            patch(&good, 36, &3u32.to_le_bytes()),
+            "2D image",
+        ),
+        (
+            "an unknown supercompression",
+            patch(&good, 44, &7u32.to_le_bytes()),
+            "supercompression scheme 7",
+        ),
+        (
+            "a lying uncompressed length",
+            patch(&good, 96, &(1u64 << 40).to_le_bytes()),
+            "not the 4096",
+        ),
+        (
+            "a zstd frame header damaged",
+            patch(&good, level_offset, &[0; 4]),
+            "not a Zstandard frame",
+        ),
+        (
+            "zstd data damaged",
+            patch(&good, level_offset + 40, &[0xff; 16]),
+            "does not transcode",
+        ),
+    ];
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("basisu-required.gltf");
+    std::fs::write(&file, &doc).unwrap();
+    for (what, bytes, says) in corruptions {
+        std::fs::write(dir.path().join("basisu-uastc-zstd.ktx2"), &bytes).unwrap();
+        let err = load_gltf(&file).unwrap_err().to_string();
+        assert_eq!(err.lines().count(), 1, "{what}: {err}");
+        for part in [
+            "basisu-required.gltf",
+            "image 0",
+            "KHR_texture_basisu",
+            says,
+        ] {
+            assert!(err.contains(part), "{what}: no {part:?} in {err}");
+        }
+    }
+    // Through the command line: exit code 1 and one line.
+    let (code, err) = render(&file);
+    assert_eq!(code, Some(1), "{err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+}
+
+/// `bytes` with `with` written at `at`.
+fn patch(bytes: &[u8], at: usize, with: &[u8]) -> Vec<u8> {
+    let mut out = bytes.to_vec();
+    out[at..at + with.len()].copy_from_slice(with);
+    out
+}
+
+/// basisu-uastc.ktx2 with its one key/value entry (`KTXwriter`, 31 bytes)
+/// rewritten in place as `key` = `value` (NUL-padded to the same length).
+fn with_metadata(key: &str, value: &str) -> Vec<u8> {
+    let mut bytes = std::fs::read(data("basisu-uastc.ktx2")).unwrap();
+    let kvd = u32::from_le_bytes(bytes[56..60].try_into().unwrap()) as usize;
+    assert_eq!(&bytes[kvd + 4..kvd + 14], b"KTXwriter\0");
+    let mut entry = format!("{key}\0{value}\0").into_bytes();
+    entry.resize(31, 0);
+    bytes[kvd + 4..kvd + 35].copy_from_slice(&entry);
+    bytes
+}
+
+#[test]
+fn ktx2_orientation_is_honoured_and_other_swizzles_refused() {
+    // "rd" (glTF's top-left origin) is the only orientation the extension
+    // allows; the others mean the rows or columns are stored the other way.
+    let upright = bytes_of(&image("basisu-uastc.ktx2"));
+    let decode = |bytes: Vec<u8>| Image::decode(&bytes, "t.ktx2");
+    let rd = decode(with_metadata("KTXorientation", "rd")).unwrap();
+    assert!(bytes_of(&rd) == upright);
+    let ru = decode(with_metadata("KTXorientation", "ru")).unwrap();
+    let rows_reversed: Vec<u8> = upright.chunks(64 * 4).rev().flatten().copied().collect();
+    assert!(bytes_of(&ru) == rows_reversed);
+    let ld = decode(with_metadata("KTXorientation", "ld")).unwrap();
+    let columns_reversed: Vec<u8> = upright
+        .chunks(64 * 4)
+        .flat_map(|row| row.chunks(4).rev().flatten().copied().collect::<Vec<_>>())
+        .collect();
+    assert!(bytes_of(&ld) == columns_reversed);
+    assert!(decode(with_metadata("KTXswizzle", "rgba")).is_ok());
+    let err = decode(with_metadata("KTXswizzle", "bgra"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.starts_with("t.ktx2: ") && err.contains("swizzle \"bgra\""),
+        "{err}"
+    );
 }

