@@ -521,3 +521,23 @@ fn a_bad_draco_primitive_is_refused_in_one_line_naming_it() {
     );
     refuse(&f, "cannot come from");
 }
+
+#[test]
+fn an_edgebreaker_primitive_with_morph_targets_is_refused_in_one_line() {
+    // draco-fallback.gltf's primitive is edgebreaker-coded; a morph target
+    // (core data, indexed like the decoded vertices) needs Google's vertex
+    // order, which the decoder does not promise.
+    let dir = tempfile::tempdir().unwrap();
+    let mut doc: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(data("draco-fallback.gltf")).unwrap()).unwrap();
+    doc["meshes"][0]["primitives"][0]["targets"] = serde_json::json!([{"POSITION": 1}]);
+    let file = dir.path().join("targets.gltf");
+    std::fs::write(&file, serde_json::to_vec(&doc).unwrap()).unwrap();
+    let err = load_gltf(&file).unwrap_err().to_string();
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(
+        err.contains("mesh 0 primitive 0 (KHR_draco_mesh_compression)")
+            && err.contains("morph targets"),
+        "{err}"
+    );
+}
