@@ -872,7 +872,7 @@ fn parse_payload<'a>(
             t
         }
         (PredictionSchemeType::MeshPredictionForTextureCoordinates, Some(id)) => {
-            orientations = prediction::decode_orientation_metadata(reader)?;
+            orientations = prediction::decode_orientation_metadata(reader, num_values)?;
             InverseTransform::read_from(reader, id)?
         }
         (PredictionSchemeType::MeshConstrainedMultiParallelogramPrediction, Some(id)) => {

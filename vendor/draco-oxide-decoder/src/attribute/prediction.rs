@@ -61,8 +61,18 @@ pub(crate) fn decode_flip_metadata(
 /// delta-coded bit per recorded orientation (a zero bit toggles the running
 /// value, anchored at `true`). The decoded vector is in reverse traversal order;
 /// consume it by popping from the back.
-pub(crate) fn decode_orientation_metadata(reader: &mut Reader<'_>) -> Result<Vec<bool>, Err> {
+pub(crate) fn decode_orientation_metadata(
+    reader: &mut Reader<'_>,
+    num_values: usize,
+) -> Result<Vec<bool>, Err> {
     let count = reader.read_u32()? as usize;
+    // raylab: one orientation per predicted value at most; a larger count
+    // sized an allocation of up to 4 GiB and a loop of up to 2^32 bits.
+    if count > num_values {
+        return Err(Err::MalformedAttribute(
+            "orientation count exceeds the attribute's value count",
+        ));
+    }
     let zero_prob = reader.read_u8()?;
     let mut rabs = rabs_over_substream(reader, zero_prob)?;
     let mut last = true;
