@@ -712,6 +712,31 @@ def ktx2_seeds():
             put("ktx2", name, open(os.path.join(data, name), "rb").read())
 
 
+# ------------------------------------------------------------------ draco
+
+def draco_seeds():
+    """The Draco stream of every Draco test file (tests/data/compressed/),
+    prefixed with the target's pick of the attribute ids its producer uses
+    (fuzz/src/targets.rs, DRACO_LAYOUTS: 0 gltf-transform's, 1 DracoPy's)."""
+    data = os.path.join(HERE, "..", "tests", "data", "compressed")
+    for name in sorted(os.listdir(data)):
+        if not name.startswith("draco"):
+            continue
+        raw = open(os.path.join(data, name), "rb").read()
+        if name.endswith(".glb"):
+            n = struct.unpack("<I", raw[12:16])[0]
+            doc = json.loads(raw[20:20 + n])
+            buf = raw[28 + n:]
+        else:
+            doc = json.loads(raw)
+            buf = base64.b64decode(doc["buffers"][0]["uri"].split(",", 1)[1])
+        ext = doc["meshes"][0]["primitives"][0]["extensions"]["KHR_draco_mesh_compression"]
+        v = doc["bufferViews"][ext["bufferView"]]
+        start = v.get("byteOffset", 0)
+        pick = 0 if ext["attributes"]["POSITION"] == 0 else 1
+        put("draco", name.rsplit(".", 1)[0], bytes([pick]) + buf[start:start + v["byteLength"]])
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--shared", default=os.path.join(HERE, "..", "..", "shared"))
@@ -727,6 +752,7 @@ def main():
     cli_seeds()
     meshopt_seeds()
     ktx2_seeds()
+    draco_seeds()
     for t in sorted(os.listdir(os.path.join(HERE, "corpus"))):
         files = os.listdir(os.path.join(HERE, "corpus", t))
         size = sum(os.path.getsize(os.path.join(HERE, "corpus", t, f)) for f in files)

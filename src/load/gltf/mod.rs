@@ -10,6 +10,7 @@
 
 pub mod accessor;
 pub mod animation;
+pub mod draco;
 pub mod meshopt;
 pub(crate) mod skin;
 pub(crate) mod tangents;
@@ -64,6 +65,7 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     BASISU,
     meshopt::EXT,
     meshopt::KHR,
+    draco::EXT,
 ];
 
 /// The Basis Universal texture extension's name (KTX2 images, decoded by
@@ -422,14 +424,17 @@ fn load_gltf_inner(
     let (mut buffer_data, unreadable) = load_buffers(&root, base, glb_bin, ledger, &mut held)?;
     // Compressed views are decoded into buffers of their own, the bytes held
     // with the rest until the scene is built.
-    meshopt::decode_views(&mut root, &mut buffer_data, |bytes| {
+    let mut charge = |bytes: u64| {
         held = held.saturating_add(bytes);
         let needs = Needs {
             geometry: held,
             ..Needs::default()
         };
         Ok(ledger.fits(&path.display().to_string(), needs)?)
-    })?;
+    };
+    meshopt::decode_views(&mut root, &mut buffer_data, &mut charge)?;
+    // Draco primitives (whose streams a meshopt view could hold) likewise.
+    draco::decode_primitives(&mut root, &mut buffer_data, &mut charge)?;
     let buffers = Buffers {
         root: &root,
         data: &buffer_data,
