@@ -775,7 +775,12 @@ fn bad_gltf_files_and_cameras_exit_with_one_line() {
     );
     write(
         "nobuffer.gltf",
-        r#"{"asset":{"version":"2.0"},"buffers":[{"uri":"missing.bin","byteLength":12}]}"#,
+        // (A buffer that nothing uses may be missing: this one holds a
+        // mesh's positions.)
+        r#"{"asset":{"version":"2.0"},"buffers":[{"uri":"missing.bin","byteLength":36}],
+            "bufferViews":[{"buffer":0,"byteLength":36}],
+            "accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}],
+            "meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}],"nodes":[{"mesh":0}]}"#,
     );
     let cases: &[(&str, &str)] = &[
         ("absent.gltf", "absent.gltf"),

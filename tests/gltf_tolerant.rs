@@ -277,9 +277,39 @@ fn buffers_that_cannot_be_read_matter_only_when_used() {
     // The square's own buffer is now the fifth.
     let text = text.replace("\"buffer\": 0,", "\"buffer\": 4,");
     assert_eq!(triangles(&write(dir.path(), "unused.gltf", &text)), Ok(2));
-    // Used, each is refused in one line naming the file, the view and why.
+    // Vertices in the buffer without a URI, which has no data at all (a
+    // placeholder, which the glTF-Validator accepts): nothing to render, the
+    // primitive skipped with a warning.
+    let placeholder = text.replacen("\"buffer\": 4,", "\"buffer\": 0,", 1);
+    let loaded =
+        raylab::load::gltf::load_gltf(&write(dir.path(), "placeholder.gltf", &placeholder))
+            .unwrap();
+    assert_eq!(loaded.parts.triangles.len(), 0);
+    assert!(
+        loaded
+            .warnings
+            .iter()
+            .any(|w| w.contains("buffer 0, which has no data")),
+        "{:?}",
+        loaded.warnings
+    );
+    // Indices there (the vertices readable): refused, as are the other
+    // buffers used at all, each in one line naming the file, the view and
+    // why.
+    let second = text.match_indices("\"buffer\": 4,").nth(1).unwrap().0;
+    let indices = format!(
+        "{}\"buffer\": 0,{}",
+        &text[..second],
+        &text[second + "\"buffer\": 4,".len()..]
+    );
+    let err = triangles(&write(dir.path(), "indices.gltf", &indices)).unwrap_err();
+    assert!(
+        err.contains("indices.gltf")
+            && err.contains("buffer view 1")
+            && err.contains("buffer 0 has no URI"),
+        "{err}"
+    );
     for (k, why) in [
-        (0, "buffer 0 has no URI"),
         (1, "https://example.com/b.bin is not a local file"),
         (2, "not base64"),
         (3, "missing.bin"),

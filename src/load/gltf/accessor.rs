@@ -19,19 +19,40 @@ pub struct Buffers<'a> {
     pub data: &'a [Vec<u8>],
     /// Why a buffer could not be read (its `data` is then empty), reported
     /// when something in it is read.
-    pub unreadable: &'a [Option<String>],
+    pub unreadable: &'a [Option<Unreadable>],
+}
+
+/// Why a buffer could not be read.
+pub struct Unreadable {
+    /// The message (`buffer 2 has no URI`, `… is not a local file`).
+    pub reason: String,
+    /// The buffer has no URI (and no GLB chunk for it): no data at all, as
+    /// opposed to data that could not be had.
+    pub placeholder: bool,
 }
 
 impl<'a> Buffers<'a> {
     /// Buffer `i`'s bytes; an error if it does not exist or could not be read.
     pub fn bytes(&self, i: usize, what: &str) -> Result<&'a [u8], GltfError> {
-        if let Some(Some(reason)) = self.unreadable.get(i) {
-            return Err(GltfError::invalid(format!("{what}: {reason}")));
+        if let Some(Some(u)) = self.unreadable.get(i) {
+            return Err(GltfError::invalid(format!("{what}: {}", u.reason)));
         }
         self.data
             .get(i)
             .map(Vec::as_slice)
             .ok_or_else(|| GltfError::invalid(format!("{what}: buffer {i} does not exist")))
+    }
+
+    /// The buffer of accessor `accessor`'s view if it is a placeholder (see
+    /// [`Unreadable::placeholder`]).
+    pub fn placeholder_of(&self, accessor: usize) -> Option<usize> {
+        let view = self.root.accessors.get(accessor)?.buffer_view?.value();
+        let buffer = self.root.buffer_views.get(view)?.buffer.value();
+        self.unreadable
+            .get(buffer)?
+            .as_ref()
+            .filter(|u| u.placeholder)
+            .map(|_| buffer)
     }
 }
 

@@ -22,7 +22,7 @@ use glam::{Affine3A, Mat3A, Mat4, Quat, Vec2, Vec3, Vec3A, Vec4};
 use gltf::json::{self, validation::Checked};
 use thiserror::Error;
 
-use accessor::{Buffers, read_floats, read_indices};
+use accessor::{Buffers, Unreadable, read_floats, read_indices};
 use animation::Pose;
 pub use animation::{
     AT_EXPECTED, AnimationChoice, AnimationOptions, AnimationSummary, MAX_AT, MAX_FPS, at_in_range,
@@ -421,7 +421,9 @@ fn load_gltf_inner(
         }
     };
     let base = path.parent().unwrap_or(Path::new("."));
-    let (mut buffer_data, unreadable) = load_buffers(&root, base, glb_bin, ledger, &mut held)?;
+    let is_glb = bytes.starts_with(b"glTF");
+    let (mut buffer_data, unreadable) =
+        load_buffers(&root, base, (is_glb, glb_bin), ledger, &mut held)?;
     // Compressed views are decoded into buffers of their own, the bytes held
     // with the rest until the scene is built.
     let mut charge = |bytes: u64| {
@@ -667,6 +669,9 @@ fn whole_number(x: f64) -> Option<u64> {
     (x.is_sign_positive() && x.fract() == 0.0 && x < TWO_TO_64).then_some(x as u64)
 }
 
+/// The bytes of every buffer, and why those left empty could not be read.
+type LoadedBuffers = (Vec<Vec<u8>>, Vec<Option<Unreadable>>);
+
 /// Reads every buffer: the GLB's binary chunk, a data URI or a file beside the
 /// glTF. Each must hold at least `byteLength` bytes.
 ///
@@ -674,15 +679,16 @@ fn whole_number(x: f64) -> Option<u64> {
 /// URI, a missing file) is left empty with the reason beside it, reported
 /// only when something raylab reads lies in it: the glTF-Validator accepts
 /// files with such buffers when nothing uses them (placeholders, unused
-/// objects).
-#[allow(clippy::type_complexity)]
+/// objects). `glb` says whether the file is a GLB, and gives its binary
+/// chunk if it has one.
 fn load_buffers(
     root: &json::Root,
     base: &Path,
-    glb_bin: Option<&[u8]>,
+    glb: (bool, Option<&[u8]>),
     ledger: &Ledger,
     held: &mut u64,
-) -> Result<(Vec<Vec<u8>>, Vec<Option<String>>), GltfError> {
+) -> Result<LoadedBuffers, GltfError> {
+    let (is_glb, glb_bin) = glb;
     let mut out = Vec::with_capacity(root.buffers.len().min(1024));
     let mut unreadable = Vec::with_capacity(out.capacity());
     let meshopt_used = meshopt::used(root);
@@ -709,7 +715,12 @@ fn load_buffers(
             Ok(data) => data,
             Err(GltfError::Invalid(reason)) => {
                 out.push(Vec::new());
-                unreadable.push(Some(reason));
+                // A GLB's buffer 0 without a URI is its binary chunk: a GLB
+                // without one is broken, not a placeholder.
+                unreadable.push(Some(Unreadable {
+                    reason,
+                    placeholder: b.uri.is_none() && !(i == 0 && is_glb),
+                }));
                 continue;
             }
             Err(other) => return Err(other),
@@ -1316,6 +1327,18 @@ impl Loader<'_> {
         let attr = |s: Semantic| prim.attributes.get(&Checked::Valid(s)).map(|a| a.value());
         let positions_acc = attr(Semantic::Positions)
             .ok_or_else(|| GltfError::invalid(format!("{what} has no POSITION")))?;
+        // Vertices in a buffer with no data at all (no URI, and no GLB chunk
+        // for it): a placeholder the glTF-Validator accepts, with nothing to
+        // render. (A buffer whose file is missing is an error when read.)
+        if let Some(b) = self.buffers.placeholder_of(positions_acc) {
+            self.warn_once(
+                &format!("placeholder buffer {b}"),
+                format!(
+                    "skipping the primitives whose vertices lie in buffer {b}, which has no data (no URI and no GLB binary chunk)"
+                ),
+            );
+            return Ok(None);
+        }
         let positions: Vec<Vec3> =
             read_floats::<3>(self.buffers, positions_acc, &format!("{what} POSITION"))?
                 .into_iter()
