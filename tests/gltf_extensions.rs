@@ -48,6 +48,17 @@ fn square(c: [f32; 3], s: f32) -> [[f32; 3]; 4] {
     ]
 }
 
+/// One root node per material of `materials`, the k-th a square of side 2
+/// centred on x = 3k in the z = 0 plane, front +z, with `attributes`.
+fn squares_in_a_row(g: &mut Gltf, materials: &[usize], attributes: &[(&str, usize)]) {
+    for (k, &m) in materials.iter().enumerate() {
+        let mut p = quad(g, square([3.0 * k as f32, 0.0, 0.0], 1.0), attributes);
+        p["material"] = json!(m);
+        let mesh = g.mesh(vec![p]);
+        g.root(json!({ "mesh": mesh }));
+    }
+}
+
 /// Writes the file with `edit` applied to its JSON (the buffer as a data URI).
 fn write_edited(g: &Gltf, dir: &Path, name: &str, edit: impl FnOnce(&mut Value)) -> PathBuf {
     let uri = format!("data:application/octet-stream;base64,{}", base64(&g.buffer));
@@ -289,16 +300,7 @@ fn specular_glossiness_converts_to_the_extensions_brdf_inputs() {
         } }
     }));
     let uv = g.floats(&[[0.5, 0.5]; 4]);
-    for (k, m) in [factors, textured].into_iter().enumerate() {
-        let mut p = quad(
-            &mut g,
-            square([3.0 * k as f32, 0.0, 0.0], 1.0),
-            &[("TEXCOORD_0", uv)],
-        );
-        p["material"] = json!(m);
-        let mesh = g.mesh(vec![p]);
-        g.root(json!({ "mesh": mesh }));
-    }
+    squares_in_a_row(&mut g, &[factors, textured], &[("TEXCOORD_0", uv)]);
     g.extensions_used = vec!["KHR_materials_pbrSpecularGlossiness".into()];
     let loaded = load(&g.write(dir.path(), "spec-gloss.gltf"));
     let scene = &loaded.scene;
@@ -376,13 +378,8 @@ fn specular_glossiness_equals_its_metallic_roughness_twin() {
             "diffuseFactor": [plastic[0] / 0.96, plastic[1] / 0.96, plastic[2] / 0.96, 1.0],
             "specularFactor": [0.04, 0.04, 0.04], "glossinessFactor": 0.5 } } }),
     ];
-    for (k, m) in materials.into_iter().enumerate() {
-        let m = g.material(m);
-        let mut p = quad(&mut g, square([3.0 * k as f32, 0.0, 0.0], 1.0), &[]);
-        p["material"] = json!(m);
-        let mesh = g.mesh(vec![p]);
-        g.root(json!({ "mesh": mesh }));
-    }
+    let materials: Vec<usize> = materials.into_iter().map(|m| g.material(m)).collect();
+    squares_in_a_row(&mut g, &materials, &[]);
     let loaded = load(&g.write(dir.path(), "twins.gltf"));
     let scene = &loaded.scene;
     let bsdf = |k: u32| {
@@ -762,16 +759,7 @@ fn a_sheen_takes_its_factors_and_textures() {
     }));
     let plain = g.material(json!({ "pbrMetallicRoughness": black }));
     let uv = g.floats(&[[0.5, 0.5]; 4]);
-    for (k, m) in [factors, textured, plain].into_iter().enumerate() {
-        let mut p = quad(
-            &mut g,
-            square([3.0 * k as f32, 0.0, 0.0], 1.0),
-            &[("TEXCOORD_0", uv)],
-        );
-        p["material"] = json!(m);
-        let mesh = g.mesh(vec![p]);
-        g.root(json!({ "mesh": mesh }));
-    }
+    squares_in_a_row(&mut g, &[factors, textured, plain], &[("TEXCOORD_0", uv)]);
     g.extensions_used = vec!["KHR_materials_sheen".into()];
     let loaded = load(&g.write(dir.path(), "sheen.gltf"));
     let scene = &loaded.scene;

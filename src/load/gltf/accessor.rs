@@ -43,6 +43,31 @@ impl<'a> Buffers<'a> {
             .ok_or_else(|| GltfError::invalid(format!("{what}: buffer {i} does not exist")))
     }
 
+    /// Buffer view `view`'s bytes and stride, after checking that the view
+    /// exists and lies inside its buffer, which could be read.
+    pub fn view(&self, view: usize) -> Result<(&'a [u8], Option<usize>), GltfError> {
+        let v = self
+            .root
+            .buffer_views
+            .get(view)
+            .ok_or_else(|| GltfError::invalid(format!("buffer view {view} does not exist")))?;
+        let buffer = self.bytes(v.buffer.value(), &format!("buffer view {view}"))?;
+        let offset = v.byte_offset.map_or(0, |o| o.0);
+        let end = offset.checked_add(v.byte_length.0);
+        match end {
+            Some(end) if end <= buffer.len() as u64 => Ok((
+                &buffer[offset as usize..end as usize],
+                v.byte_stride.map(|s| s.0),
+            )),
+            _ => Err(GltfError::invalid(format!(
+                "buffer view {view} (bytes {offset}..+{}) lies outside buffer {} of {} bytes",
+                v.byte_length.0,
+                v.buffer.value(),
+                buffer.len()
+            ))),
+        }
+    }
+
     /// The buffer of accessor `accessor`'s view if it is a placeholder (see
     /// [`Unreadable::placeholder`]).
     pub fn placeholder_of(&self, accessor: usize) -> Option<usize> {
@@ -123,31 +148,19 @@ fn index_component(bytes: &[u8], c: ComponentType) -> Option<u32> {
     }
 }
 
-/// The bytes of a buffer view after checking it lies inside its buffer.
+/// The bytes of a buffer view after checking it lies inside its buffer
+/// ([`Buffers::view`]), a missing view named as `what`'s.
 fn view_bytes<'b>(
     buffers: &Buffers<'b>,
     view: usize,
     what: &str,
 ) -> Result<(&'b [u8], Option<usize>), GltfError> {
-    let v =
-        buffers.root.buffer_views.get(view).ok_or_else(|| {
-            GltfError::invalid(format!("{what}: buffer view {view} does not exist"))
-        })?;
-    let buffer = buffers.bytes(v.buffer.value(), &format!("buffer view {view}"))?;
-    let offset = v.byte_offset.map_or(0, |o| o.0);
-    let end = offset.checked_add(v.byte_length.0);
-    match end {
-        Some(end) if end <= buffer.len() as u64 => Ok((
-            &buffer[offset as usize..end as usize],
-            v.byte_stride.map(|s| s.0),
-        )),
-        _ => Err(GltfError::invalid(format!(
-            "buffer view {view} (bytes {offset}..+{}) lies outside buffer {} of {} bytes",
-            v.byte_length.0,
-            v.buffer.value(),
-            buffer.len()
-        ))),
+    if view >= buffers.root.buffer_views.len() {
+        return Err(GltfError::invalid(format!(
+            "{what}: buffer view {view} does not exist"
+        )));
     }
+    buffers.view(view)
 }
 
 /// Element `i`'s bytes of `count` elements of `elem` bytes each, `stride` apart

@@ -31,7 +31,7 @@ use gltf::json::{self, accessor::ComponentType, accessor::Type, mesh::Semantic};
 use serde::Deserialize;
 
 use super::GltfError;
-use super::accessor::type_components;
+use super::accessor::{Buffers, Unreadable, type_components};
 
 /// The extension's name.
 pub const EXT: &str = "KHR_draco_mesh_compression";
@@ -88,10 +88,11 @@ struct Target {
 /// are appended to `data` as a new buffer, with views and accessors over
 /// them, and the primitive's `attributes`/`indices` are pointed at those.
 /// `budget` is called with the bytes each primitive adds before they are
-/// allocated.
+/// allocated; `unreadable` says why buffers left empty could not be read.
 pub fn decode_primitives(
     root: &mut json::Root,
     data: &mut Vec<Vec<u8>>,
+    unreadable: &[Option<Unreadable>],
     mut budget: impl FnMut(u64) -> Result<(), GltfError>,
 ) -> Result<(), GltfError> {
     for m in 0..root.meshes.len() {
@@ -109,7 +110,7 @@ pub fn decode_primitives(
             };
             let ext = Extension::deserialize(value)
                 .map_err(|e| GltfError::invalid(format!("{what}: {e}")))?;
-            decode_primitive(root, data, &mut budget, (m, p), &ext)
+            decode_primitive(root, (data, unreadable), &mut budget, (m, p), &ext)
                 .map_err(|e| GltfError::invalid(format!("{what}: {e}")))?;
         }
     }
@@ -120,7 +121,7 @@ pub fn decode_primitives(
 /// reason, without the primitive's name.
 fn decode_primitive(
     root: &mut json::Root,
-    data: &mut Vec<Vec<u8>>,
+    (data, unreadable): (&mut Vec<Vec<u8>>, &[Option<Unreadable>]),
     budget: &mut impl FnMut(u64) -> Result<(), GltfError>,
     (m, p): (usize, usize),
     ext: &Extension,
@@ -180,7 +181,14 @@ fn decode_primitive(
     let others_index_vertices = prim.targets.as_ref().is_some_and(|t| !t.is_empty())
         || prim.attributes.len() > ext.attributes.len();
 
-    let source = stream(root, data, ext.buffer_view)?;
+    let buffers = Buffers {
+        root,
+        data,
+        unreadable,
+    };
+    let (source, _) = buffers
+        .view(ext.buffer_view as usize)
+        .map_err(|e| e.to_string())?;
     let head = Head::read(source)?;
     if head.faces != faces {
         return Err(format!(
@@ -379,30 +387,6 @@ fn component_size(c: ComponentType) -> u64 {
 /// Bytes per element of a target's accessor.
 fn element_size(t: &Target) -> u64 {
     component_size(t.component) * t.components as u64
-}
-
-/// The Draco stream of buffer view `view`, checked to lie in its buffer.
-fn stream<'d>(root: &json::Root, data: &'d [Vec<u8>], view: u32) -> Result<&'d [u8], String> {
-    let v = root
-        .buffer_views
-        .get(view as usize)
-        .ok_or_else(|| format!("buffer view {view} does not exist"))?;
-    let buffer = data.get(v.buffer.value()).ok_or_else(|| {
-        format!(
-            "buffer view {view}: buffer {} does not exist",
-            v.buffer.value()
-        )
-    })?;
-    let offset = v.byte_offset.map_or(0, |o| o.0);
-    match offset.checked_add(v.byte_length.0) {
-        Some(end) if end <= buffer.len() as u64 => Ok(&buffer[offset as usize..end as usize]),
-        _ => Err(format!(
-            "buffer view {view} (bytes {offset}..+{}) lies outside buffer {} of {} bytes",
-            v.byte_length.0,
-            v.buffer.value(),
-            buffer.len()
-        )),
-    }
 }
 
 /// What the head of a Draco mesh stream says of the vertices.

@@ -436,7 +436,7 @@ fn load_gltf_inner(
     };
     meshopt::decode_views(&mut root, &mut buffer_data, &mut charge)?;
     // Draco primitives (whose streams a meshopt view could hold) likewise.
-    draco::decode_primitives(&mut root, &mut buffer_data, &mut charge)?;
+    draco::decode_primitives(&mut root, &mut buffer_data, &unreadable, &mut charge)?;
     let buffers = Buffers {
         root: &root,
         data: &buffer_data,
@@ -1987,23 +1987,11 @@ impl Loader<'_> {
                     &mut 0,
                 )?,
                 (None, Some(view)) => {
-                    let v = view.value();
-                    let view = self.root.buffer_views.get(v).ok_or_else(|| {
-                        GltfError::invalid(format!("image {image}: buffer view {v} does not exist"))
-                    })?;
-                    let buffer = self
+                    let (bytes, _) = self
                         .buffers
-                        .bytes(view.buffer.value(), &format!("image {image}"))?;
-                    let start = view.byte_offset.map_or(0, |o| o.0);
-                    let end = start
-                        .checked_add(view.byte_length.0)
-                        .filter(|&e| e <= buffer.len() as u64);
-                    let Some(end) = end else {
-                        return Err(GltfError::invalid(format!(
-                            "image {image}: buffer view {v} lies outside its buffer"
-                        )));
-                    };
-                    buffer[start as usize..end as usize].to_vec()
+                        .view(view.value())
+                        .map_err(|e| GltfError::invalid(format!("image {image}: {e}")))?;
+                    bytes.to_vec()
                 }
                 (None, None) => {
                     return Err(GltfError::invalid(format!(
