@@ -5,7 +5,7 @@
 //! determinism across thread counts, the image unchanged, and `--time`. The
 //! command line's EXR channels are tested in `tests/cli.rs`.
 
-// Shared with tests/gltf.rs, which uses all of it; this file only a part.
+// Shared with the glTF tests (tests/gltf_*.rs); this file uses a part.
 #[allow(dead_code)]
 #[path = "common/gltf_builder.rs"]
 mod builder;

@@ -5,7 +5,7 @@
 //! isotropic fallback with a warning where there is no tangent frame, and
 //! non-finite numbers refused with the material named.
 
-// Shared with tests/gltf.rs, which uses all of it; this file only a part.
+// Shared by the glTF tests (tests/gltf_*.rs); each uses a part.
 #[allow(dead_code)]
 #[path = "common/gltf_builder.rs"]
 mod builder;

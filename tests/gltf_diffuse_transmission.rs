@@ -6,7 +6,7 @@
 //! are not finite are refused in one line naming the material. Every file is
 //! written by the test itself (see `common/gltf_builder.rs`).
 
-// Shared with tests/gltf.rs, which uses all of it; this file only a part.
+// Shared by the glTF tests (tests/gltf_*.rs); each uses a part.
 #[allow(dead_code)]
 #[path = "common/gltf_builder.rs"]
 mod builder;

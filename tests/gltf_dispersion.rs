@@ -8,7 +8,7 @@
 //! checked on the BSDF: `materials::pbr`'s
 //! `a_prism_splits_white_light_by_snells_law_with_the_abbe_ior`.)
 
-// Shared with tests/gltf.rs, which uses all of it; this file only a part.
+// Shared by the glTF tests (tests/gltf_*.rs); each uses a part.
 #[allow(dead_code)]
 #[path = "common/gltf_builder.rs"]
 mod builder;

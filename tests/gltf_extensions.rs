@@ -8,7 +8,7 @@
 //! `KHR_node_visibility` (hidden subtrees). Every file is written by the test itself (see
 //! `common/gltf_builder.rs`).
 
-// Shared with tests/gltf.rs, which uses all of it; this file only a part.
+// Shared by the glTF tests (tests/gltf_*.rs); each uses a part.
 #[allow(dead_code)]
 #[path = "common/gltf_builder.rs"]
 mod builder;

@@ -1,6 +1,7 @@
 //! A small glTF 2.0 writer for tests: accessors over one binary buffer, meshes,
 //! nodes and whatever else as raw JSON, written as `.gltf` (buffer in a data URI
-//! or a `.bin` beside it) or `.glb`.
+//! or a `.bin` beside it) or `.glb`; and what the glTF tests share besides
+//! (loading, a square and a floor, assertions).
 
 use std::path::{Path, PathBuf};
 
@@ -244,6 +245,32 @@ pub fn quad(g: &mut Gltf, corners: [[f32; 3]; 4], extra: &[(&str, usize)]) -> Va
     json!({ "attributes": attributes, "indices": idx })
 }
 
+/// The square of side 2 centred on the origin in the z = 0 plane, front +z.
+pub const XY_SQUARE: [[f32; 3]; 4] = [
+    [-1.0, -1.0, 0.0],
+    [1.0, -1.0, 0.0],
+    [1.0, 1.0, 0.0],
+    [-1.0, 1.0, 0.0],
+];
+
+/// A 20 × 20 floor in the y = 0 plane, front +y.
+pub const FLOOR: [[f32; 3]; 4] = [
+    [-10.0, 0.0, 10.0],
+    [10.0, 0.0, 10.0],
+    [10.0, 0.0, -10.0],
+    [-10.0, 0.0, -10.0],
+];
+
+/// A floor for scenes that only need something to look at.
+pub fn add_floor(g: &mut Gltf, material: Option<usize>) -> usize {
+    let mut p = quad(g, FLOOR, &[]);
+    if let Some(m) = material {
+        p["material"] = json!(m);
+    }
+    let mesh = g.mesh(vec![p]);
+    g.root(json!({ "mesh": mesh }))
+}
+
 /// Loads a file as `raylab render` would, the error as its message.
 pub fn load_with(path: &Path, options: &LoadOptions) -> Result<Loaded, String> {
     raylab::load::load(path.to_str().unwrap(), options).map_err(|e| e.to_string())
@@ -252,6 +279,14 @@ pub fn load_with(path: &Path, options: &LoadOptions) -> Result<Loaded, String> {
 /// Loads a file that must load.
 pub fn load(path: &Path) -> Loaded {
     load_with(path, &LoadOptions::default()).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// The error message of a file that must not load.
+pub fn load_err(path: &Path) -> String {
+    match load_with(path, &LoadOptions::default()) {
+        Ok(_) => panic!("{} loaded but should not have", path.display()),
+        Err(e) => e,
+    }
 }
 
 #[track_caller]
@@ -267,6 +302,11 @@ pub fn write_json(dir: &Path, name: &str, value: &Value) -> PathBuf {
     let path = dir.join(name);
     std::fs::write(&path, serde_json::to_vec_pretty(value).unwrap()).unwrap();
     path
+}
+
+/// Little-endian bytes of `v`.
+pub fn bytes_f32(v: &[f32]) -> Vec<u8> {
+    v.iter().flat_map(|x| x.to_le_bytes()).collect()
 }
 
 /// Standard base64 with padding.

@@ -5,81 +5,14 @@
 
 use gltf::json::{self, accessor::ComponentType, accessor::Type};
 
-use super::GltfError;
+// Defined in `buffers.rs`, beside the code that reads the buffers; still
+// reachable here, where they were first.
+pub use super::buffers::{Buffers, Unreadable};
+use super::error::{GltfError, valid};
 
 /// Most elements an accessor may have (2^28: far above any real asset, well
 /// below what would exhaust memory).
 pub const MAX_ELEMENTS: u64 = 1 << 28;
-
-/// The loaded buffers, indexed like the file's `buffers`.
-pub struct Buffers<'a> {
-    /// The file's JSON.
-    pub root: &'a json::Root,
-    /// Bytes of each buffer (exactly `byteLength` of them).
-    pub data: &'a [Vec<u8>],
-    /// Why a buffer could not be read (its `data` is then empty), reported
-    /// when something in it is read.
-    pub unreadable: &'a [Option<Unreadable>],
-}
-
-/// Why a buffer could not be read.
-pub struct Unreadable {
-    /// The message (`buffer 2 has no URI`, `… is not a local file`).
-    pub reason: String,
-    /// The buffer has no URI (and no GLB chunk for it): no data at all, as
-    /// opposed to data that could not be had.
-    pub placeholder: bool,
-}
-
-impl<'a> Buffers<'a> {
-    /// Buffer `i`'s bytes; an error if it does not exist or could not be read.
-    pub fn bytes(&self, i: usize, what: &str) -> Result<&'a [u8], GltfError> {
-        if let Some(Some(u)) = self.unreadable.get(i) {
-            return Err(GltfError::invalid(format!("{what}: {}", u.reason)));
-        }
-        self.data
-            .get(i)
-            .map(Vec::as_slice)
-            .ok_or_else(|| GltfError::invalid(format!("{what}: buffer {i} does not exist")))
-    }
-
-    /// Buffer view `view`'s bytes and stride, after checking that the view
-    /// exists and lies inside its buffer, which could be read.
-    pub fn view(&self, view: usize) -> Result<(&'a [u8], Option<usize>), GltfError> {
-        let v = self
-            .root
-            .buffer_views
-            .get(view)
-            .ok_or_else(|| GltfError::invalid(format!("buffer view {view} does not exist")))?;
-        let buffer = self.bytes(v.buffer.value(), &format!("buffer view {view}"))?;
-        let offset = v.byte_offset.map_or(0, |o| o.0);
-        let end = offset.checked_add(v.byte_length.0);
-        match end {
-            Some(end) if end <= buffer.len() as u64 => Ok((
-                &buffer[offset as usize..end as usize],
-                v.byte_stride.map(|s| s.0),
-            )),
-            _ => Err(GltfError::invalid(format!(
-                "buffer view {view} (bytes {offset}..+{}) lies outside buffer {} of {} bytes",
-                v.byte_length.0,
-                v.buffer.value(),
-                buffer.len()
-            ))),
-        }
-    }
-
-    /// The buffer of accessor `accessor`'s view if it is a placeholder (see
-    /// [`Unreadable::placeholder`]).
-    pub fn placeholder_of(&self, accessor: usize) -> Option<usize> {
-        let view = self.root.accessors.get(accessor)?.buffer_view?.value();
-        let buffer = self.root.buffer_views.get(view)?.buffer.value();
-        self.unreadable
-            .get(buffer)?
-            .as_ref()
-            .filter(|u| u.placeholder)
-            .map(|_| buffer)
-    }
-}
 
 /// Bytes per component.
 fn component_size(c: ComponentType) -> usize {
@@ -339,7 +272,7 @@ fn sparse_part<'b>(
             "{what}: a sparse accessor replaces {k} of {count} elements"
         )));
     }
-    let index_type = super::valid(&sparse.indices.component_type)
+    let index_type = valid(&sparse.indices.component_type)
         .map(|c| c.0)
         .filter(|c| {
             matches!(
@@ -398,10 +331,10 @@ fn accessor<'r>(
 
 /// The component type and element type of an accessor.
 fn kinds(acc: &json::Accessor, index: usize) -> Result<(ComponentType, Type), GltfError> {
-    let c = super::valid(&acc.component_type)
+    let c = valid(&acc.component_type)
         .ok_or_else(|| GltfError::invalid(format!("accessor {index}: unknown component type")))?
         .0;
-    let t = *super::valid(&acc.type_)
+    let t = *valid(&acc.type_)
         .ok_or_else(|| GltfError::invalid(format!("accessor {index}: unknown element type")))?;
     Ok((c, t))
 }

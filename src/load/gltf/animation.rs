@@ -20,8 +20,9 @@ use std::collections::HashMap;
 use glam::{Quat, Vec3};
 use gltf::json;
 
-use super::accessor::{Buffers, read_floats, type_components};
-use super::{GltfError, valid};
+use super::accessor::{read_floats, type_components};
+use super::buffers::Buffers;
+use super::error::{GltfError, valid};
 
 /// Longest time `--at` (or a scene file's `at`) takes, in seconds (a day).
 pub const MAX_AT: f32 = 86_400.0;

@@ -30,8 +30,9 @@ use gltf::json::validation::{Checked, USize64};
 use gltf::json::{self, accessor::ComponentType, accessor::Type, mesh::Semantic};
 use serde::Deserialize;
 
-use super::GltfError;
-use super::accessor::{Buffers, Unreadable, type_components};
+use super::accessor::type_components;
+use super::buffers::{Buffers, Unreadable};
+use super::error::GltfError;
 
 /// The extension's name.
 pub const EXT: &str = "KHR_draco_mesh_compression";

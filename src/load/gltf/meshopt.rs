@@ -17,7 +17,7 @@
 use gltf::json;
 use serde::Deserialize;
 
-use super::GltfError;
+use super::error::GltfError;
 
 /// The vendor extension's name.
 pub const EXT: &str = "EXT_meshopt_compression";

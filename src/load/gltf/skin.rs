@@ -20,8 +20,9 @@
 use glam::{Mat3, Mat4, Vec3};
 use gltf::json::{self, validation::Checked};
 
-use super::accessor::{Buffers, read_floats, type_components};
-use super::{GltfError, MAX_NODE_DEPTH, valid};
+use super::accessor::{read_floats, type_components};
+use super::buffers::Buffers;
+use super::error::{GltfError, MAX_NODE_DEPTH, valid};
 use crate::scene::mesh::{MeshData, Tangents};
 
 /// Every node's global transform (parent × child down from the roots, the
