@@ -149,6 +149,12 @@ def run_view(command, env, timeout):
             xvfb.wait()
 
 
+def slurm_up(env):
+    """Whether a Slurm cluster answers (`sinfo`)."""
+    return shutil.which("sinfo") is not None and subprocess.run(
+        ["sinfo"], env=env, capture_output=True).returncode == 0
+
+
 def run_command(command, env, timeout):
     try:
         r = subprocess.run(command, shell=True, cwd=ROOT, env=env, timeout=timeout,
@@ -209,8 +215,7 @@ def main():
                 label = command
                 if command.split()[:2] == ["raylab", "view"]:
                     ok, out = run_view(command, env, min(args.timeout, 60))
-                elif command.startswith("tools/farm/slurm.sh") and subprocess.run(
-                        ["sinfo"], env=env, capture_output=True).returncode != 0:
+                elif command.startswith("tools/farm/slurm.sh") and not slurm_up(env):
                     ok, out = False, ("needs a Slurm cluster: run this tool under "
                                       "`bash .ci/slurm-test.sh --then ...`, which starts one")
                 else:
