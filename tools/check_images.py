@@ -267,7 +267,7 @@ def render_all(opts):
         m.write(f"# sources: {' '.join(files)}{' + EXTRA' if opts.extra else ''}\n")
         for j in jobs:
             env = dict(os.environ)
-            if j.get("denoise") and "RAYLAB_OIDN" not in env:
+            if j.get("denoise") and "RAYLAB_OIDN" not in env and opts.oidn:
                 env["RAYLAB_OIDN"] = opts.oidn
             digest, shown, secs, err = run_job(binary, repo, j["name"], j["steps"], out_dir, opts.threads, env)
             total += secs
