@@ -36,8 +36,8 @@ if [ ! -x "$RAYLAB" ]; then
 fi
 RAYLAB=$(cd "$(dirname "$RAYLAB")" && pwd)/$(basename "$RAYLAB")
 export RAYLAB # for --then
-bunny=$(cd ../shared/models && pwd)/stanford-bunny.obj
-[ -f "$bunny" ] || fail "$bunny is missing (../shared must sit beside the project)"
+bunny=$PWD/assets/models/stanford-bunny.obj
+[ -f "$bunny" ] || fail "$bunny is missing"
 
 step "k8s: the Kubernetes Indexed Job manifest, run locally (tools/farm/k8s_local.py)"
 python3 tools/farm/k8s_local.py --raylab "$RAYLAB" deploy/k8s/raylab-tiles-job.yaml ||

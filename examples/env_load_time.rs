@@ -1,6 +1,6 @@
 //! Load time of a 4k environment map and of its sampling tables.
 //!
-//! `cargo run --release --example env_load_time -- ../shared/envmaps/venice_sunset_1k.hdr`
+//! `cargo run --release --example env_load_time -- assets/envmaps/venice_sunset_1k.hdr`
 //! upsamples the map 4× (to 4096 × 2048, nearest texel), writes it as a Radiance
 //! file in the temporary folder, then times reading + decoding it and building
 //! its sampling tables, five times each, and prints the medians.
@@ -18,7 +18,7 @@ fn median(mut v: Vec<f64>) -> f64 {
 fn main() -> anyhow::Result<()> {
     let source = std::env::args()
         .nth(1)
-        .unwrap_or_else(|| "../shared/envmaps/venice_sunset_1k.hdr".into());
+        .unwrap_or_else(|| "assets/envmaps/venice_sunset_1k.hdr".into());
     let small = rgbe::decode(&std::fs::read(&source)?, MAX_SIDE, MAX_TEXELS)
         .map_err(|e| anyhow::anyhow!("{source}: {e}"))?;
     let (w, h) = (small.width * 4, small.height * 4);

@@ -1,6 +1,6 @@
 //! `cargo run --release --example path_convergence [-- THREADS [SAMPLER]]`: how
 //! fast `path` converges to the Mitsuba 3 reference of the lab box
-//! (`../shared/refs/cornell-path-mitsuba-256.exr`): relMSE at 16, 64, 256 and 1024
+//! (`assets/refs/cornell-path-mitsuba-256.exr`): relMSE at 16, 64, 256 and 1024
 //! spp, and the time a progressive render needs to reach relMSE 1e-2 and 1e-3
 //! (the numbers in docs/path-tracing.md).
 
@@ -24,7 +24,7 @@ fn main() {
             .expect("sampler name"),
     };
     let reference = read_exr(
-        &Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/refs/cornell-path-mitsuba-256.exr"),
+        &Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/refs/cornell-path-mitsuba-256.exr"),
     )
     .expect("reference image");
     let scene = cornell::scene();

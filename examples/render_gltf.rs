@@ -3,7 +3,7 @@
 //!
 //! `cargo run --release --example render_gltf -- [SCENE] [OUTPUT]`
 //!
-//! (by default the DamagedHelmet of `../shared` to `helmet.png`). Every
+//! (by default the DamagedHelmet of `assets/models` to `helmet.png`). Every
 //! option of `raylab render` is a field of `JobOptions` with the same name
 //! (`--max-depth` is `max_depth`) and the same default, and a scene file's
 //! `[render]` settings apply as on the command line.
@@ -17,7 +17,7 @@ fn main() -> anyhow::Result<()> {
     render(
         scene
             .as_deref()
-            .unwrap_or("../shared/models/DamagedHelmet/DamagedHelmet.gltf"),
+            .unwrap_or("assets/models/DamagedHelmet/DamagedHelmet.gltf"),
         output.as_deref().unwrap_or("helmet.png"),
     )
 }

@@ -49,7 +49,7 @@
 //! ```
 //! use raylab::job::{Job, JobOptions};
 //!
-//! let mut options = JobOptions::new("../shared/models/DamagedHelmet/DamagedHelmet.gltf");
+//! let mut options = JobOptions::new("assets/models/DamagedHelmet/DamagedHelmet.gltf");
 //! options.output = Some(std::env::temp_dir().join("raylab-doc-helmet.png"));
 //! options.scene.width = Some(160); // the height follows the camera's aspect ratio
 //! Job::new(options)?.run()?;

@@ -702,10 +702,10 @@ fn strange_but_valid_files_render_finite_images() {
     }
 }
 
-/// A model of `../shared/models`.
-fn shared(name: &str) -> String {
+/// A model of `assets/models`.
+fn model(name: &str) -> String {
     std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../shared/models")
+        .join("assets/models")
         .join(name)
         .display()
         .to_string()
@@ -791,12 +791,12 @@ fn the_memory_budget_refuses_what_does_not_fit() {
         // The file's bytes, before they are read and parsed: an OBJ's text,
         // a glTF's buffer.
         (
-            args(&[&shared("stanford-bunny.obj"), "--max-memory", "1M"]),
+            args(&[&model("stanford-bunny.obj"), "--max-memory", "1M"]),
             "stanford-bunny.obj: needs about 2.3 MiB (geometry 2.3 MiB), more than --max-memory 1 MiB",
         ),
         (
             args(&[
-                &shared("DamagedHelmet/DamagedHelmet.gltf"),
+                &model("DamagedHelmet/DamagedHelmet.gltf"),
                 "--max-memory",
                 "300K",
             ]),

@@ -367,7 +367,7 @@ fn the_denoised_lab_box_at_4_spp_is_ten_times_closer_to_mitsuba() {
     let Some(mut denoiser) = denoiser(0) else {
         return;
     };
-    let reference = common::shared_ref("cornell-path-mitsuba-256.exr");
+    let reference = common::reference_image("cornell-path-mitsuba-256.exr");
     let scene = cornell::scene();
     let camera = Camera::lab(cornell::CAMERA_POSITION, 0.0, 0.0, 256, 256);
     let rendered = render(&scene, &camera, 4, GUIDES, 2);

@@ -207,8 +207,8 @@ fn importance_sampling_follows_its_density() {
 #[test]
 fn hdr_and_exr_files_load_to_the_same_radiance() {
     let hdr = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../shared/envmaps/venice_sunset_1k.hdr");
-    let from_hdr = EnvMap::load(&hdr).expect("the shared folder must sit beside the project");
+        .join("assets/envmaps/venice_sunset_1k.hdr");
+    let from_hdr = EnvMap::load(&hdr).expect("assets/envmaps holds the map");
     assert_eq!((from_hdr.width(), from_hdr.height()), (1024, 512));
     let dir = tempfile::tempdir().unwrap();
     // The same texels as OpenEXR (f32, exact) and again as Radiance HDR.
@@ -444,7 +444,7 @@ fn command_line_environments() {
     let film = raylab::film::read_exr(&dir.path().join("sky.exr")).unwrap();
     assert_eq!(film.get(0, 0), Vec3A::new(0.5, 1.0, 1.5));
     // A map given by file, turned: loads and says so.
-    let hdr = project_file("../shared/envmaps/venice_sunset_1k.hdr");
+    let hdr = project_file("assets/envmaps/venice_sunset_1k.hdr");
     let out = run(&[
         "render",
         "--integrator",

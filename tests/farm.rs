@@ -232,7 +232,7 @@ fn parts_need_an_exr_and_a_valid_split() {
 fn frames_rendered_apart_equal_one_run_of_all_of_them() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let bunny = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/models/stanford-bunny.obj");
+    let bunny = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/models/stanford-bunny.obj");
     let bunny = bunny.to_str().unwrap();
     let base = [
         "render",
@@ -364,7 +364,7 @@ fn the_cache_gives_the_same_image_and_survives_damage() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let model = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../shared/models/TextureCoordinateTest/TextureCoordinateTest.gltf");
+        .join("assets/models/TextureCoordinateTest/TextureCoordinateTest.gltf");
     let model = model.to_str().unwrap();
     let run = |out: &str, cache: bool| {
         let mut args = vec![

@@ -13,7 +13,7 @@ mod example;
 
 fn helmet() -> String {
     Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../shared/models/DamagedHelmet/DamagedHelmet.gltf")
+        .join("assets/models/DamagedHelmet/DamagedHelmet.gltf")
         .to_string_lossy()
         .into_owned()
 }

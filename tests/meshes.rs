@@ -1,4 +1,4 @@
-//! The BVH on real meshes (../shared/models) against brute force: the same
+//! The BVH on real meshes (assets/models) against brute force: the same
 //! hit or miss, `t` within 1e-5 relative, the same triangle except on exact ties,
 //! and any-hit agreeing with closest-hit.
 
@@ -12,10 +12,9 @@ use raylab::workload;
 
 fn check_mesh(name: &str, stride: usize) {
     let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../shared/models")
+        .join("assets/models")
         .join(name);
-    let mesh = raylab::load::obj::load_obj(&path)
-        .unwrap_or_else(|e| panic!("{e}: the shared folder must sit beside the project"));
+    let mesh = raylab::load::obj::load_obj(&path).unwrap_or_else(|e| panic!("{e}"));
     let tris = &mesh.triangles;
     let bvh = Bvh::build(tris);
     assert_eq!(
@@ -72,7 +71,7 @@ fn teapot_agrees_with_brute_force() {
 
 #[test]
 fn rays_starting_inside_the_box_and_nan_rays() {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/models/teapot.obj");
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/models/teapot.obj");
     let tris = raylab::load::obj::load_obj(&path).unwrap().triangles;
     let bvh = Bvh::build(&tris);
     let (lo, hi) = bounds(&tris);

@@ -43,13 +43,13 @@ const C_RELMSE: f64 = 0.23;
 const REFERENCE_NOISE: f64 = 3e-5;
 
 /// The lab box under the lab light, 256×256, against Mitsuba 3's converged
-/// `path` render (../shared/refs/cornell-path-mitsuba-256.exr, 16,384 spp). An
+/// `path` render (assets/refs/cornell-path-mitsuba-256.exr, 16,384 spp). An
 /// unbiased render's relMSE is about c/spp; a bias adds to it whatever the spp. The
 /// mean colour over the image is a much finer test of bias: its noise is about
 /// 0.1 % here, while a missing bounce or a wrong factor moves it by several %.
 #[test]
 fn path_converges_to_mitsuba() {
-    let reference = common::shared_ref("cornell-path-mitsuba-256.exr");
+    let reference = common::reference_image("cornell-path-mitsuba-256.exr");
     let spp = 64;
     let ours = path_render(&cornell::scene(), &lab_camera(256, 256), spp, 7, 2);
     let e = rel_mse(&ours.film, &reference);

@@ -60,13 +60,13 @@ fn analytic_direct(scene: &Scene, prim: u32, p: Vec3A) -> Vec3A {
     scene.reflectance(prim) * (d + scene.ambient)
 }
 
-/// The lab's `direct` image against ../shared/refs/cornell-direct-lab-500.exr, made
+/// The lab's `direct` image against assets/refs/cornell-direct-lab-500.exr, made
 /// by Embree ray casting and the lab formula. They may differ only where a pixel
 /// centre's ray is an exact tie: through the box's edges (the image diagonals),
 /// along silhouettes and exactly on shadow boundaries.
 #[test]
 fn direct_matches_the_independent_reference() {
-    let reference = common::shared_ref("cornell-direct-lab-500.exr");
+    let reference = common::reference_image("cornell-direct-lab-500.exr");
     let scene = cornell::scene();
     let ours = render(
         &scene,

@@ -9,7 +9,7 @@
 # With one binary it prints each workload's total instruction count (callgrind's
 # "Collected", the same as "I refs"); with two it prints both and the ratio B/A.
 # The renders run in DIR (default: the current folder), the repository root,
-# since the helmet is loaded from ../shared; their images go to a temporary
+# since the helmet is loaded from assets/; their images go to a temporary
 # folder that is removed afterwards. Run it under `nice -n 10` on a shared
 # machine; all three take about 10 s under Valgrind.
 #
@@ -23,9 +23,9 @@
 # The workloads (arguments after `raylab`):
 #   box-path    render --integrator path --spp 4 --width 120 --height 120 --threads 1 -o x.png
 #   box-direct  render --spp 4 --width 200 --height 200 --threads 1 -o y.png
-#   helmet      render ../shared/models/DamagedHelmet/DamagedHelmet.gltf --spp 1 --width 160 --threads 1 -o z.png
+#   helmet      render assets/models/DamagedHelmet/DamagedHelmet.gltf --spp 1 --width 160 --threads 1 -o z.png
 #               (mostly loading: decoding the textures, building the BVH)
-#   helmet-8spp render ../shared/models/DamagedHelmet/DamagedHelmet.gltf --spp 8 --width 320 --threads 1 -o w.png
+#   helmet-8spp render assets/models/DamagedHelmet/DamagedHelmet.gltf --spp 8 --width 320 --threads 1 -o w.png
 #               (the same load, and about twice its instructions in path tracing)
 #
 # Exit status: 0, or 1 when a render fails (its error is printed) or the
@@ -63,8 +63,8 @@ workload() {
   case "$1" in
     box-path)   echo "render --integrator path --spp 4 --width 120 --height 120 --threads 1 -o $tmp/x.png" ;;
     box-direct) echo "render --spp 4 --width 200 --height 200 --threads 1 -o $tmp/y.png" ;;
-    helmet)     echo "render ../shared/models/DamagedHelmet/DamagedHelmet.gltf --spp 1 --width 160 --threads 1 -o $tmp/z.png" ;;
-    helmet-8spp) echo "render ../shared/models/DamagedHelmet/DamagedHelmet.gltf --spp 8 --width 320 --threads 1 -o $tmp/w.png" ;;
+    helmet)     echo "render assets/models/DamagedHelmet/DamagedHelmet.gltf --spp 1 --width 160 --threads 1 -o $tmp/z.png" ;;
+    helmet-8spp) echo "render assets/models/DamagedHelmet/DamagedHelmet.gltf --spp 8 --width 320 --threads 1 -o $tmp/w.png" ;;
   esac
 }
 

@@ -18,7 +18,7 @@ from inline code spans (`...`, which may wrap across lines) and from fenced
 code blocks (```sh, ```bash, ```console or unlabelled; lines continued with a
 trailing backslash are joined, `$ ` prompts and `# comments` dropped). Each is
 run with BINARY in place of `raylab`, in the --repo folder (default: `.`, the
-commands refer to scenes/ and ../shared/), with its output rewritten to
+commands refer to scenes/ and assets/), with its output rewritten to
 DIR/NAME.png and `--threads N` (default 2) added when the command has none.
 Renders are deterministic: the same command, seed and inputs give the same
 bytes on any number of threads, so the images' hashes are comparable across
@@ -71,8 +71,8 @@ EXTRA = [
     {"name": "extra-box-direct-spp4.png",
      "steps": [["render", "--spp", "4", "-o", "{out}"]]},
     {"name": "extra-helmet-venice-rotate200.png",
-     "steps": [["render", "../shared/models/DamagedHelmet/DamagedHelmet.gltf",
-                "--env", "../shared/envmaps/venice_sunset_1k.hdr", "--env-rotate", "200",
+     "steps": [["render", "assets/models/DamagedHelmet/DamagedHelmet.gltf",
+                "--env", "assets/envmaps/venice_sunset_1k.hdr", "--env-rotate", "200",
                 "--spp", "8", "--width", "320", "-o", "{out}"]]},
     {"name": "extra-showcase-denoise.png", "denoise": True,
      "steps": [["render", "scenes/showcase/showcase.gltf", "--spp", "8", "--width", "320",
@@ -87,7 +87,7 @@ EXTRA = [
                ["merge", "{tmp}/part-0.exr", "{tmp}/part-1.exr", "-o", "{out}"]]},
     # README "Meshes": the bunny picture's command, which has no `-o`.
     {"name": "extra-cornell-bunny.png",
-     "steps": [["render", "--add", "../shared/models/stanford-bunny.obj", "--transform",
+     "steps": [["render", "--add", "assets/models/stanford-bunny.obj", "--transform",
                 "fit 0.7; rotate x 180; rotate y 30; translate -0.45 1 -0.55", "--spp", "16",
                 "-o", "{out}"]]},
 ]
@@ -267,7 +267,7 @@ def render_all(opts):
         m.write(f"# sources: {' '.join(files)}{' + EXTRA' if opts.extra else ''}\n")
         for j in jobs:
             env = dict(os.environ)
-            if j.get("denoise") and "RAYLAB_OIDN" not in env:
+            if j.get("denoise") and "RAYLAB_OIDN" not in env and opts.oidn:
                 env["RAYLAB_OIDN"] = opts.oidn
             digest, shown, secs, err = run_job(binary, repo, j["name"], j["steps"], out_dir, opts.threads, env)
             total += secs

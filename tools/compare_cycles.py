@@ -2,7 +2,8 @@
 """raylab against Blender Cycles (CPU) on glTF scenes: error, time and error × time, noisy and
 denoised, each renderer judged against its own converged image.
 
-Usage (from the project folder; the raylab binary must be built, ../shared beside the project):
+Usage (from the project folder; the raylab binary must be built, ../shared beside the project for
+the Cycles peer):
 
     python3 tools/compare_cycles.py [--scenes helmet-venice,showcase,cornell-glass,street]
                                     [--spp 16,64] [--rounds 1] [--threads 2] [--ref-spp 1024]
@@ -13,9 +14,9 @@ Usage (from the project folder; the raylab binary must be built, ../shared besid
     python3 tools/compare_cycles.py --curve [--curve-spp 1,2,4,...,1024] [--curve-ref-spp 4096]
                                     [--csv PATH] [--plot docs/denoise-curve.png] [--scenes ...]
 
-Scenes (glTF 2.0, read by both renderers under ../shared/specs/scene-conventions.md):
+Scenes (glTF 2.0, read by both renderers under docs/scene-conventions.md):
   helmet-venice  scenes/helmet-venice/helmet-venice.gltf (the DamagedHelmet, helmet-hdri.toml's
-                 camera) under ../shared/envmaps/venice_sunset_1k.hdr turned 200° (both renderers
+                 camera) under assets/envmaps/venice_sunset_1k.hdr turned 200° (both renderers
                  get `--env FILE --env-rotate 200`), --size (default 320×240);
   showcase       scenes/showcase/showcase.gltf (spot, sun, point and emissive lights, metals, glass,
                  textures), --size;
@@ -116,7 +117,7 @@ EXTRA_PIP = ("flip-evaluator", "matplotlib")
 REEXEC = "COMPARE_CYCLES_REEXEC"
 PROG = "compare_cycles"
 
-# name: (glTF file in the project, environment map under shared/ or None, rotation, box?)
+# name: (glTF file in the project, environment map under assets/ or None, rotation, box?)
 SCENES = {
     "helmet-venice": ("scenes/helmet-venice/helmet-venice.gltf",
                       "envmaps/venice_sunset_1k.hdr", 200.0, False),
@@ -163,7 +164,7 @@ def ensure_venv(args):
     script = os.path.join(shared, "cycles", "render_gltf.py")
     setup = os.path.join(shared, "cycles", "setup.sh")
     if not os.path.isfile(script):
-        raise Fail(f"{script} not found: ../shared (the shared assets) must sit beside the project "
+        raise Fail(f"{script} not found: ../shared (the Cycles peer) must sit beside the project "
                    "folder, or pass --shared DIR")
     venv = os.path.abspath(args.venv)
     py = os.path.join(venv, "bin", "python")
@@ -394,7 +395,7 @@ class Scene:
                     "showcase": " (python3 tools/make_showcase.py makes it)",
                     "street": " (python3 tools/make_street.py makes it)"}[name]
             raise Fail(f"scene file {rel} not found{hint}")
-        self.env = os.path.join(os.path.abspath(args.shared), env) if env else None
+        self.env = os.path.join(ROOT, "assets", env) if env else None
         if self.env and not os.path.isfile(self.env):
             raise Fail(f"environment map {self.env} not found")
         self.rotate = rotate
@@ -1039,7 +1040,7 @@ def main():
                     help="CPython 3.13 venv with bpy (../shared/cycles/setup.sh), created if "
                          "missing (default ~/.cache/raylab-cycles-venv)")
     ap.add_argument("--no-setup", action="store_true", help="fail instead of creating the venv")
-    ap.add_argument("--shared", default=DEFAULT_SHARED, help="the shared assets (default ../shared)")
+    ap.add_argument("--shared", default=DEFAULT_SHARED, help="the shared folder holding the Cycles peer, cycles/ (default ../shared)")
     ap.add_argument("--cache", default=DEFAULT_CACHE,
                     help="converged references and outputs (default ../bench-data/cycles)")
     ap.add_argument("--fresh-refs", action="store_true", help="re-render the references")

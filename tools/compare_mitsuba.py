@@ -7,18 +7,18 @@ Usage (from the project folder; the raylab binary must be built):
                                      [--targets 1e-2,1e-3] [--threads N]
                                      [--raylab PATH] [--venv DIR] [--cache DIR]
                                      [--max-seconds S] [--ref-spp N]
-    python3 tools/compare_mitsuba.py --check 4096   # the Mitsuba scene against the shared ref
+    python3 tools/compare_mitsuba.py --check 4096   # the Mitsuba scene against assets/refs
 
 Scenes, 256×256, both renderers' `path` integrator with unbounded depth:
   cornell       the lab box lit by its point light (P = 14 at (0, −0.5, −0.7)), judged
-                against ../shared/refs/cornell-path-mitsuba-256.exr (Mitsuba, 16,384 spp);
+                against assets/refs/cornell-path-mitsuba-256.exr (Mitsuba, 16,384 spp);
   cornell-area  the box lit by the one-sided ceiling patch (radiance 17, 12, 4, facing
                 down), tall block a perfect mirror, short block glass of IOR 1.5 (raylab:
                 `cornell-area --material tall=mirror,short=glass`), judged against a
                 Mitsuba reference rendered once by this tool (--ref-spp, default 16384,
                 in two independent halves whose relMSE gives its own noise) and cached
                 in --cache.
-relMSE as in ../shared/refs/README.md: mean over pixels and channels of
+relMSE as in assets/refs/README.md: mean over pixels and channels of
 (c − r)² / (r² + ε), ε = 0.01·mean(r)².
 
 For each scene, renderer and target relMSE it first finds the samples per pixel
@@ -64,7 +64,7 @@ import tempfile
 import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-SHARED_REF = os.path.join(ROOT, "..", "shared", "refs", "cornell-path-mitsuba-256.exr")
+SHARED_REF = os.path.join(ROOT, "assets", "refs", "cornell-path-mitsuba-256.exr")
 # Debian's LLVM libraries, newest first: the first that exists is Dr.Jit's (unless
 # DRJIT_LIBLLVM_PATH is set).
 LIBLLVM = ["/usr/lib/x86_64-linux-gnu/libLLVM-19.so", "/usr/lib/x86_64-linux-gnu/libLLVM-15.so.1",
@@ -283,7 +283,7 @@ def write_exr(path, img):
 
 
 def rel_mse(img, ref):
-    """As ../shared/refs/README.md (and raylab::film::rel_mse) define it."""
+    """As assets/refs/README.md (and raylab::film::rel_mse) define it."""
     eps = 0.01 * ref.mean() ** 2
     return float((((img - ref) ** 2) / (ref * ref + eps)).mean())
 
@@ -358,7 +358,7 @@ def reference(name, args, mitsuba):
     """The reference image of `name`, its own noise (relMSE against the exact image)
     and a note on where it comes from."""
     if name == "cornell":
-        # ../shared/refs/README.md: its two 8,192-spp halves differ by 1.2e-4.
+        # assets/refs/README.md: its two 8,192-spp halves differ by 1.2e-4.
         return (read_exr(args.ref), 3e-5,
                 f"{os.path.relpath(args.ref)} (Mitsuba 3.9.1, 16,384 spp, own noise ≈ 3e-5)")
     import numpy as np

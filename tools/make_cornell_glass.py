@@ -11,7 +11,7 @@ bytes on every run.
 
 The scene is raylab's `cornell-area --material tall=mirror,short=glass` (the box that
 tools/compare_mitsuba.py also builds for Mitsuba), in glTF terms as
-../shared/specs/scene-conventions.md reads them:
+docs/scene-conventions.md reads them:
 
 - geometry: the 30 triangles of src/load/cornell.rs (tools/compare_mitsuba.py's
   `box_triangles`: the box [-1, 1]^3 without its front wall, the short and the tall block) and

@@ -1,18 +1,18 @@
 #!/usr/bin/env python3
 """Writes helmet-grid.gltf, a load-time and memory benchmark scene built on the DamagedHelmet.
 
-Usage (from the project folder, with ../shared beside it):
+Usage (from the project folder):
 
-    python3 tools/make_helmet_grid.py OUT_DIR [--shared DIR] [--cols 5] [--rows 4]
+    python3 tools/make_helmet_grid.py OUT_DIR [--assets DIR] [--cols 5] [--rows 4]
 
 e.g. OUT_DIR = bench-data/helmet-grid (bench-data/ is ignored by git; the scene is about 1.2 MB of
-PNGs plus the JSON, and needs the shared/ folder where it was made, as its URIs are relative).
+PNGs plus the JSON, and needs the assets/ folder where it was made, as its URIs are relative).
 
---shared defaults to the shared/ folder beside the project (../shared from the project folder);
-a relative --shared is taken from the current folder.
+--assets defaults to the repository's assets/ folder; a relative --assets is taken from the
+current folder.
 
 OUT_DIR/helmet-grid.gltf references the helmet's own buffer
-<shared>/models/DamagedHelmet/DamagedHelmet.bin and its five JPEG textures by relative URIs
+<assets>/models/DamagedHelmet/DamagedHelmet.bin and its five JPEG textures by relative URIs
 (forward slashes, percent-encoded), re-uses its accessors and buffer views unchanged, and places
 its mesh cols x rows times in a wall-like grid (default 5 x 4 = 20 nodes, 20 x 15,452 = 309,040
 triangles). The helmets use six material variants, one glTF mesh per variant (the six meshes
@@ -25,7 +25,7 @@ share the helmet's accessors and differ only in material):
 
 So the scene has 5 + 25 = 30 distinct images, 24 of them used by the renderer (occlusion maps
 are read and ignored). It also has a perspective camera that frames the
-grid and one directional light (3 W/m^2, radiometric as in ../shared/specs/scene-conventions.md).
+grid and one directional light (3 W/m^2, radiometric as in docs/scene-conventions.md).
 Standard library only; the output is the same bytes on every run.
 """
 
@@ -41,7 +41,7 @@ import urllib.parse
 from gltfgen import look_along, normalize, png_bytes, quat_mul, r6, read_helmet
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-DEFAULT_SHARED = os.path.join(os.path.dirname(ROOT), "shared")
+DEFAULT_ASSETS = os.path.join(ROOT, "assets")
 HELMET_DIR = os.path.join("models", "DamagedHelmet")
 HELMET_GLTF = "DamagedHelmet.gltf"
 
@@ -272,8 +272,8 @@ def uri_from(out_dir, target):
 
 # ---------------------------------------------------------------------------------------------
 
-def build(out_dir, shared, cols, rows):
-    helmet_dir = os.path.join(shared, HELMET_DIR)
+def build(out_dir, assets, cols, rows):
+    helmet_dir = os.path.join(assets, HELMET_DIR)
     helmet_path = os.path.join(helmet_dir, HELMET_GLTF)
     helmet, bin_path, hprim, helmet_tris = read_helmet(helmet_path)
     hbuf = helmet["buffers"][0]
@@ -357,7 +357,7 @@ def build(out_dir, shared, cols, rows):
 
     gltf = {
         "asset": {"version": "2.0", "generator": "raylab tools/make_helmet_grid.py",
-                  "copyright": "DamagedHelmet: theblueturtle_, CC BY 4.0 (see shared/models)"},
+                  "copyright": "DamagedHelmet: theblueturtle_, CC BY 4.0 (see assets/README.md)"},
         "extensionsUsed": ["KHR_lights_punctual"],
         "extensions": {"KHR_lights_punctual": {"lights": [
             {"name": "sun", "type": "directional", "color": [1.0, 0.97, 0.92], "intensity": 3.0}]}},
@@ -395,14 +395,14 @@ def build(out_dir, shared, cols, rows):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("out_dir", metavar="OUT_DIR")
-    ap.add_argument("--shared", default=DEFAULT_SHARED,
-                    help="the shared/ folder (default: beside the project, %(default)s)")
+    ap.add_argument("--assets", default=DEFAULT_ASSETS,
+                    help="the folder holding models/DamagedHelmet (default: the repository's assets/, %(default)s)")
     ap.add_argument("--cols", type=int, default=5)
     ap.add_argument("--rows", type=int, default=4)
     a = ap.parse_args()
     if a.cols < 1 or a.rows < 1:
         ap.error("--cols and --rows must be at least 1")
-    build(a.out_dir, a.shared, a.cols, a.rows)
+    build(a.out_dir, a.assets, a.cols, a.rows)
 
 
 if __name__ == "__main__":

@@ -8,10 +8,10 @@ Usage (from the project folder):
 
 OUT_DIR defaults to scenes/helmet-venice beside this tools/ folder. Standard library only; the
 output is the same bytes on every run. Only the .gltf is written: its buffer and its five JPEG
-textures stay in ../shared/models/DamagedHelmet and are referenced by relative URIs
-(../../../shared/models/DamagedHelmet/..., since shared/ sits beside the project folder).
+textures stay in assets/models/DamagedHelmet and are referenced by relative URIs
+(../../assets/models/DamagedHelmet/...).
 
-The file is ../shared/models/DamagedHelmet/DamagedHelmet.gltf unchanged (the same accessors,
+The file is assets/models/DamagedHelmet/DamagedHelmet.gltf unchanged (the same accessors,
 materials, node and its rotation) plus one perspective camera node appended as a second root:
 helmet-hdri.toml's [camera] (position (1.8, 0.45, 3.4), looking at the origin, +y up, vertical
 fov 35 degrees), aspectRatio 4/3 (default render size 800 x 600).
@@ -19,9 +19,9 @@ fov 35 degrees), aspectRatio 4/3 (default render size 800 x 600).
 The environment is not part of glTF: give both renderers the same map on the command line,
 
     raylab render scenes/helmet-venice/helmet-venice.gltf \\
-        --env ../shared/envmaps/venice_sunset_1k.hdr --env-rotate 200
+        --env assets/envmaps/venice_sunset_1k.hdr --env-rotate 200
     VENV/bin/python ../shared/cycles/render_gltf.py scenes/helmet-venice/helmet-venice.gltf -o x.exr \\
-        --env ../shared/envmaps/venice_sunset_1k.hdr --env-rotate 200 --spp N --threads T
+        --env assets/envmaps/venice_sunset_1k.hdr --env-rotate 200 --spp N --threads T
 
 which is what helmet-hdri.toml's [environment] does (strength 1, rotate 200).
 """
@@ -36,8 +36,8 @@ from gltfgen import look_along  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 DEFAULT_OUT = os.path.join(ROOT, "scenes", "helmet-venice")
-SOURCE = os.path.join(ROOT, "..", "shared", "models", "DamagedHelmet", "DamagedHelmet.gltf")
-URI_PREFIX = "../../../shared/models/DamagedHelmet/"
+SOURCE = os.path.join(ROOT, "assets", "models", "DamagedHelmet", "DamagedHelmet.gltf")
+URI_PREFIX = "../../assets/models/DamagedHelmet/"
 
 # scenes/helmet-hdri.toml's [camera]
 EYE = (1.8, 0.45, 3.4)
@@ -48,7 +48,7 @@ ASPECT = 4.0 / 3.0
 
 def build(out_dir):
     if not os.path.exists(SOURCE):
-        sys.exit(f"error: {os.path.relpath(SOURCE)} not found (../shared must sit beside the project)")
+        sys.exit(f"error: {os.path.relpath(SOURCE)} not found")
     with open(SOURCE) as f:
         doc = json.load(f)
     for coll in ("buffers", "images"):

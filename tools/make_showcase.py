@@ -9,7 +9,7 @@ OUT_DIR defaults to scenes/showcase beside this tools/ folder. It writes showcas
 showcase.bin and five PNG textures there. Standard library only; the output is the same bytes
 on every run.
 
-The scene, in glTF units (metres, +y up), follows ../shared/specs/scene-conventions.md:
+The scene, in glTF units (metres, +y up), follows docs/scene-conventions.md:
 
 - a tiled floor (two triangles, UVs repeated, REPEAT sampler; procedural base-colour PNG and a
   metallic-roughness PNG whose roughness changes from tile to tile) ending in a curved

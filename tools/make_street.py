@@ -2,19 +2,19 @@
 """Writes scenes/street/street.gltf: a night street ending in a plaza, a many-light benchmark
 scene (about 2,000 small emissive lamps and 50 spot lights) for issue 30's light selection.
 
-Usage (from the project folder, with ../shared beside it):
+Usage (from the project folder):
 
-    python3 tools/make_street.py [OUT_DIR] [--shared DIR]
+    python3 tools/make_street.py [OUT_DIR] [--assets DIR]
 
 OUT_DIR defaults to scenes/street beside this tools/ folder. It writes street.gltf and
 street.bin there (about 0.5 MB together). The DamagedHelmets' buffer and five JPEG textures
-stay in <shared>/models/DamagedHelmet and are referenced by relative URIs (forward slashes,
-percent-encoded; ../../../shared/models/DamagedHelmet/... from scenes/street), as in
-make_helmet_grid.py and make_helmet_venice.py. --shared defaults to the shared/ folder beside
-the project. Standard library only; the output is the same bytes on every run.
+stay in <assets>/models/DamagedHelmet and are referenced by relative URIs (forward slashes,
+percent-encoded; ../../assets/models/DamagedHelmet/... from scenes/street), as in
+make_helmet_grid.py and make_helmet_venice.py. --assets defaults to the repository's assets/
+folder. Standard library only; the output is the same bytes on every run.
 
 The scene, in glTF units (metres, +y up; the street runs along -z), follows
-../shared/specs/scene-conventions.md (radiometric light units, one-sided emission):
+docs/scene-conventions.md (radiometric light units, one-sided emission):
 
 - a wet asphalt ground plane (dielectric, roughness 0.3), raised concrete sidewalks, two rows of
   box buildings (six plaster/brick colours, 7-22 m tall) with dark glossy windows, about a
@@ -53,7 +53,7 @@ from gltfgen import (BufferBuilder, cross, look_along, normalize, quat_axis_angl
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 DEFAULT_OUT = os.path.join(ROOT, "scenes", "street")
-DEFAULT_SHARED = os.path.join(os.path.dirname(ROOT), "shared")
+DEFAULT_ASSETS = os.path.join(ROOT, "assets")
 HELMET_DIR = os.path.join("models", "DamagedHelmet")
 HELMET_GLTF = "DamagedHelmet.gltf"
 
@@ -200,7 +200,7 @@ def string_points(a, b, sag, spacing):
 
 # ---------------------------------------------------------------------------------------------
 
-def build(out_dir, shared):
+def build(out_dir, assets):
     rng = random.Random(30)
     g = Batches()
     spots = []      # (name, position, direction, intensity, colour, inner, outer)
@@ -378,7 +378,7 @@ def build(out_dir, shared):
         points.append((name, (x, 4.5, z), 40.0, (1.0, 0.78, 0.5)))
 
     # --- helmets ---------------------------------------------------------------------------
-    helmet_dir = os.path.join(shared, HELMET_DIR)
+    helmet_dir = os.path.join(assets, HELMET_DIR)
     helmet, hbin, hprim, helmet_tris = read_helmet(os.path.join(helmet_dir, HELMET_GLTF))
     hbuf = helmet["buffers"][0]
     helmet_rot = tuple(helmet["nodes"][0].get("rotation", (0.0, 0.0, 0.0, 1.0)))
@@ -470,7 +470,7 @@ def build(out_dir, shared):
     gltf = {
         "asset": {"version": "2.0", "generator": "raylab tools/make_street.py",
                   "copyright": "street: raylab contributors, CC0; DamagedHelmet: theblueturtle_, "
-                               "CC BY 4.0 (see shared/models)"},
+                               "CC BY 4.0 (see assets/README.md)"},
         "extensionsUsed": ["KHR_lights_punctual", "KHR_materials_emissive_strength"],
         "extensions": {"KHR_lights_punctual": {"lights": lights}},
         "scene": 0,
@@ -508,10 +508,10 @@ def build(out_dir, shared):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("out_dir", metavar="OUT_DIR", nargs="?", default=DEFAULT_OUT)
-    ap.add_argument("--shared", default=DEFAULT_SHARED,
-                    help="the shared/ folder (default: beside the project, %(default)s)")
+    ap.add_argument("--assets", default=DEFAULT_ASSETS,
+                    help="the folder holding models/DamagedHelmet (default: the repository's assets/, %(default)s)")
     a = ap.parse_args()
-    build(a.out_dir, a.shared)
+    build(a.out_dir, a.assets)
 
 
 if __name__ == "__main__":

@@ -2,7 +2,7 @@
 
 Needs the package installed (``pip install ./python``), the ``raylab``
 binary of the same source (``RAYLAB_BIN``, else target/debug/raylab or
-target/release/raylab, the newer), and ../shared beside the project.
+target/release/raylab, the newer); its files are the repository's own (assets/, scenes/).
 """
 
 import ast
@@ -23,9 +23,9 @@ import pytest
 import raylab
 
 ROOT = Path(__file__).resolve().parents[2]
-SHARED = ROOT.parent / "shared"
-HELMET = SHARED / "models/DamagedHelmet/DamagedHelmet.gltf"
-VENICE = SHARED / "envmaps/venice_sunset_1k.hdr"
+ASSETS = ROOT / "assets"
+HELMET = ASSETS / "models/DamagedHelmet/DamagedHelmet.gltf"
+VENICE = ASSETS / "envmaps/venice_sunset_1k.hdr"
 
 
 def cli_binary():
@@ -147,7 +147,7 @@ def valid_values(tmp_path):
         "integrator": ("path", {}),
         "camera": (0, {"scene": ROOT / "scenes/helmet-venice/helmet-venice.gltf"}),
         "default_light": ("on", {"scene": HELMET}),
-        "variant": ("Peacock Velvet", {"scene": SHARED / "models/SheenChair/SheenChair.gltf"}),
+        "variant": ("Peacock Velvet", {"scene": ASSETS / "models/SheenChair/SheenChair.gltf"}),
         "light_selection": ("power", {"scene": ROOT / "scenes/showcase/showcase.gltf"}),
         "tonemap": ("aces", {}),
         "max_depth": (3, {}),
@@ -168,8 +168,8 @@ def valid_values(tmp_path):
         "env_color": ("0.2,0.3,0.4", {}),
         "env_strength": (0.5, {"env_color": (1, 1, 1)}),
         "env_rotate": (90, {"env": VENICE}),
-        "add": ([SHARED / "models/teapot.obj"], {}),
-        "transform": ("fit 0.5; translate 0 1 0", {"add": SHARED / "models/teapot.obj"}),
+        "add": ([ASSETS / "models/teapot.obj"], {}),
+        "transform": ("fit 0.5; translate 0 1 0", {"add": ASSETS / "models/teapot.obj"}),
         "ambient": (0.2, {}),
         "max_memory": ("2G", {}),
         "cache": (tmp_path / "cache", {}),

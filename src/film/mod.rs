@@ -119,7 +119,7 @@ impl Display {
 }
 
 /// Relative mean squared error of `image` against `reference`, as
-/// `../shared/refs/README.md` defines it: the mean over pixels and channels of
+/// `assets/refs/README.md` defines it: the mean over pixels and channels of
 /// `(c − r)² / (r² + ε)` with `ε = 0.01 · mean(r)²`.
 pub fn rel_mse(image: &Film, reference: &Film) -> f64 {
     assert_eq!(

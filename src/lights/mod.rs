@@ -1,5 +1,5 @@
 //! Lights: the closed set of punctual light kinds a scene holds, in radiometric
-//! units (`../shared/specs/scene-conventions.md`). Area lights are emitting
+//! units (`docs/scene-conventions.md`). Area lights are emitting
 //! triangles; the scene samples them (see [`crate::scene::Scene::sample_light`]).
 
 pub mod environment;

@@ -6,14 +6,19 @@ use std::path::Path;
 
 use raylab::film::{Film, read_exr};
 
-/// A reference image from `../shared/refs`, which must sit beside the project.
-pub fn shared_ref(name: &str) -> Film {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../shared/refs")
-        .join(name);
-    read_exr(&path).unwrap_or_else(|e| {
-        panic!("{e}: the shared folder must sit beside the project (see README)")
-    })
+/// A file of the repository's `assets/` (models, environment maps, reference
+/// images; `assets/README.md` says where each comes from), by its path below
+/// that folder.
+pub fn asset(rel: &str) -> std::path::PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("assets")
+        .join(rel)
+}
+
+/// A reference image of `assets/refs` (made by programs other than raylab).
+pub fn reference_image(name: &str) -> Film {
+    let path = asset("refs").join(name);
+    read_exr(&path).unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// Whether two images are equal bit for bit (NaN included, -0.0 ≠ 0.0).
