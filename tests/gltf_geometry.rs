@@ -1,5 +1,5 @@
 //! The glTF 2.0 loader's geometry, against numbers worked out by hand from the
-//! glTF specification and `../shared/specs/scene-conventions.md`: node
+//! glTF specification and `docs/scene-conventions.md`: node
 //! transforms and winding, primitive modes and index types, and sparse,
 //! normalized and interleaved accessors. Every file is written by the test
 //! itself (see `common/gltf_builder.rs`).

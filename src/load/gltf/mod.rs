@@ -1,6 +1,6 @@
 //! glTF 2.0 scenes (`.gltf` with external or data-URI buffers and images, and
 //! `.glb`), read into [`SceneParts`](crate::scene::SceneParts) following
-//! `../shared/specs/scene-conventions.md`.
+//! `docs/scene-conventions.md`.
 //!
 //! The JSON is parsed by `gltf-json` (plain serde structures, no validation
 //! pass that could index out of range); every reference, count, offset and

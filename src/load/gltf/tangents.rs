@@ -1,7 +1,7 @@
 //! Tangents for normal mapping when a mesh has none: MikkTSpace, as the glTF
 //! specification requires, run on `(u, 1 − v)` so that the bitangent points
 //! toward decreasing v (up in the image), the convention of
-//! `../shared/specs/scene-conventions.md` (three.js and Filament correct the
+//! `docs/scene-conventions.md` (three.js and Filament correct the
 //! raw-UV sign the same way).
 
 use glam::{Vec3, Vec4};
