@@ -28,18 +28,33 @@
 //! guides do not show. A chain that escapes adds no normal.
 //!
 //! The guides use no random numbers: a camera ray always gets the same
-//! guides, so a pixel's guides, the mean over its first
-//! [`GUIDE_SAMPLES`](super::GUIDE_SAMPLES) samples, are antialiased over
-//! those sample positions and are otherwise free of noise (OIDN's
-//! `cleanAux`).
+//! guides, so a pixel's guides, the mean over its first [`GUIDE_SAMPLES`]
+//! samples, are antialiased over those sample positions and are otherwise
+//! free of noise (OIDN's `cleanAux`).
 
 use glam::Vec3A;
 
-use super::luminance;
+use super::set::luminance;
 use crate::geometry::ray::Ray;
 use crate::integrators::path::{coat_normal, shading_normal};
 use crate::materials::{Frame, Material};
 use crate::scene::{Scene, SurfaceHit};
+
+/// The samples of a pixel (its first ones, by index) that the `albedo` and
+/// `normal` guides are the mean of. A camera ray's guides have no noise, only
+/// its position in the pixel varies, and the first eight of a pixel's
+/// Owen-scrambled Sobol' points already cover it evenly: more would refine
+/// the antialiasing of edges that the denoiser does not see, at the full
+/// price of the guides' chains through mirrors and glass (on the helmet under
+/// the HDRI, guides for every sample of 16 made `--denoise`'s path tracing
+/// about 30 % slower; see docs/denoising.md).
+pub const GUIDE_SAMPLES: u32 = 8;
+
+/// Whether sample `sample` (its index in the pixel) adds to the guides.
+#[inline]
+pub(crate) fn adds_guides(sample: u32) -> bool {
+    sample < GUIDE_SAMPLES
+}
 
 /// Most specular surfaces a chain follows before it takes the last one's
 /// albedo as it is (a ray caught between two mirrors, or inside glass).

@@ -1,101 +1,19 @@
-//! A render's exact per-pixel sums ([`Accumulator`]), the parts of an image
-//! that are rendered apart and merged ([`Split`]), and what a call cost
-//! ([`Tally`]).
+//! A render's exact per-pixel sums ([`Accumulator`]), of the whole image or
+//! of a part of it that is rendered apart and merged ([`Split`]).
 
 use glam::Vec3A;
 use rayon::prelude::*;
 use thiserror::Error;
 
+use super::output::{Rendered, Tally};
+use super::split::Split;
 use super::tile::{Target, accumulate_into};
-use super::{Rendered, TILE_ROWS};
 use crate::aov::{Aov, AovSet, AovSums, Layout};
 use crate::camera::Camera;
 use crate::film::Film;
 use crate::fixed::{self, Fixed3};
 use crate::integrators::Integrator;
 use crate::scene::Scene;
-
-/// What a call of [`accumulate`](super::accumulate) cost and found.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct Tally {
-    /// Rays cast (closest-hit and shadow rays).
-    pub rays: u64,
-    /// Samples that came out NaN or infinite: counted here and left out of the
-    /// sums (so they count as black).
-    pub dropped: u64,
-}
-
-impl std::ops::Add for Tally {
-    type Output = Tally;
-    fn add(self, o: Tally) -> Tally {
-        Tally {
-            rays: self.rays + o.rays,
-            dropped: self.dropped + o.dropped,
-        }
-    }
-}
-
-impl std::iter::Sum for Tally {
-    fn sum<I: Iterator<Item = Tally>>(iter: I) -> Tally {
-        iter.fold(Tally::default(), |a, b| a + b)
-    }
-}
-
-/// Which rows of the image a render takes: the `index`-th of `count` parts,
-/// made of the image's row tiles ([`TILE_ROWS`] rows each, from the top)
-/// `index`, `index + count`, `index + 2·count`, ...: interleaved, so that every
-/// part has rows from all over the image and costs about the same. The whole
-/// image is part 0 of 1.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub struct Split {
-    /// Which part (from 0).
-    pub index: u32,
-    /// Parts in all (at least 1).
-    pub count: u32,
-}
-
-impl Split {
-    /// The whole image.
-    pub const WHOLE: Split = Split { index: 0, count: 1 };
-
-    /// Row tiles of an image `height` pixels high.
-    pub fn row_tiles(height: u32) -> u32 {
-        height.div_ceil(TILE_ROWS as u32)
-    }
-
-    /// Part `index` of `count` of an image `height` rows high, if every part
-    /// gets at least one row tile.
-    pub fn new(index: u32, count: u32, height: u32) -> Result<Split, String> {
-        if count == 0 || index >= count {
-            return Err(format!(
-                "tile {index}/{count}: the tile number must be below the number of tiles"
-            ));
-        }
-        let tiles = Self::row_tiles(height);
-        if count > tiles {
-            return Err(format!(
-                "tile {index}/{count}: an image {height} pixels high has at most {tiles} tiles (one per {TILE_ROWS} rows)"
-            ));
-        }
-        Ok(Split { index, count })
-    }
-
-    /// Whether row tile `tile` is in this part.
-    pub fn has_tile(&self, tile: u32) -> bool {
-        tile % self.count == self.index
-    }
-
-    /// Whether this is the whole image.
-    pub fn is_whole(&self) -> bool {
-        self.count == 1
-    }
-}
-
-impl std::fmt::Display for Split {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "{}/{}", self.index, self.count)
-    }
-}
 
 /// The per-pixel sums of a render in progress: samples `first..first + spp` of
 /// every pixel in its [`Split`] (the whole image unless made by

@@ -2,9 +2,12 @@
 //! sample) so the result is bit-identical for any number of threads.
 //!
 //! Here the API and the passes; the exact sums ([`Accumulator`]), the parts
-//! of an image ([`Split`]) and the tiles' loops are in files of their own.
+//! of an image ([`Split`]), what a render gives back ([`Rendered`], [`Tally`])
+//! and the tiles' loops are in files of their own.
 
 mod accumulator;
+mod output;
+mod split;
 mod tile;
 
 use std::ops::Range;
@@ -13,19 +16,17 @@ use std::time::{Duration, Instant};
 
 use glam::Vec3A;
 
-use crate::aov::{AovImage, AovSet};
+use crate::aov::AovSet;
 use crate::camera::Camera;
 use crate::film::Film;
 use crate::integrators::Integrator;
 use crate::integrators::path;
 use crate::materials::Material;
 use crate::scene::{Scene, SurfaceHit};
-pub use accumulator::{Accumulator, PartsError, Split, Tally};
+pub use accumulator::{Accumulator, PartsError};
+pub use output::{Rendered, Tally};
+pub use split::{Split, TILE_ROWS};
 use tile::{AnySampler, PathStart, Target, accumulate_into, pixel_ray};
-
-/// Rows per tile: small enough to balance two cores on small images, large enough
-/// that scheduling costs nothing; even, so that tiles hold whole pixel quads.
-pub const TILE_ROWS: usize = 4;
 
 /// How to render.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -46,20 +47,6 @@ impl Default for RenderSettings {
             seed: 0,
         }
     }
-}
-
-/// A rendered image and what it cost.
-#[derive(Clone, Debug)]
-pub struct Rendered {
-    /// Pixel values (box-filtered averages).
-    pub film: Film,
-    /// Rays cast (camera and shadow rays).
-    pub rays: u64,
-    /// Samples that came out NaN or infinite and were dropped (counted as black).
-    pub dropped: u64,
-    /// The AOVs asked for ([`render_with_aovs`]), averaged over the same samples;
-    /// `None` when none were.
-    pub aovs: Option<AovImage>,
 }
 
 /// Renders `settings.spp` samples per pixel and averages them. `progress` is

@@ -8,7 +8,8 @@ use std::ops::Range;
 use glam::{DVec3, Vec2, Vec3A};
 use rayon::prelude::*;
 
-use super::{Split, TILE_ROWS, Tally};
+use super::output::Tally;
+use super::split::{Split, TILE_ROWS};
 use crate::aov::{FirstHit, Layout};
 use crate::camera::Camera;
 use crate::film::Film;

@@ -5,7 +5,8 @@ use std::io::Cursor;
 
 use image::{DynamicImage, ImageDecoder, ImageError, ImageFormat, ImageReader, Limits};
 
-use super::{Image, MAX_SIDE, MAX_TEXELS, TextureError};
+use super::error::{MAX_SIDE, MAX_TEXELS, TextureError};
+use super::texel::Image;
 
 /// The PNG file signature.
 const PNG_SIGNATURE: &[u8] = b"\x89PNG\r\n\x1a\n";

@@ -17,7 +17,8 @@
 //! extension requires to match that use, is not read), as glTF says of
 //! every image. Only the base level is decoded (raylab samples no mip maps).
 
-use super::{Image, MAX_SIDE, MAX_TEXELS, TextureError};
+use super::error::{MAX_SIDE, MAX_TEXELS, TextureError};
+use super::texel::Image;
 
 /// The KTX2 file identifier (KTX 2.0 §3.1).
 pub(super) const SIGNATURE: &[u8; 12] = b"\xABKTX 20\xBB\r\n\x1A\n";

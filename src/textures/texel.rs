@@ -1,12 +1,38 @@
-//! [`Image`]: texels as decoded, and their filtered lookups.
+//! [`Image`]: texels as decoded, and their filtered lookups, with the
+//! lookups' modes: the colour space of the values ([`ColorSpace`]) and what
+//! indices outside the image map to ([`Wrap`]).
 
 use std::fmt;
 
 use glam::{DVec4, Vec2, Vec3, Vec4};
 use rayon::prelude::*;
 
+use super::error::{MAX_SIDE, MAX_TEXELS};
 use super::srgb::{linear8, linear16, srgb8, srgb16};
-use super::{ColorSpace, Wrap};
+
+/// How a lookup decodes RGB (or grey) values; alpha is always linear.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum ColorSpace {
+    /// Values are linear: `byte / 255` (or `word / 65535`), e.g. metallic–roughness,
+    /// occlusion, normal maps.
+    Linear,
+    /// Values are sRGB-encoded and decoded to linear per texel before filtering,
+    /// e.g. base colour and emission.
+    Srgb,
+}
+
+/// A glTF sampler's `wrapS` / `wrapT`: how texel indices outside the image map
+/// back into it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Wrap {
+    /// Tiles the image (glTF's default, `REPEAT`, 10497).
+    #[default]
+    Repeat,
+    /// Tiles the image, every other copy mirrored (`MIRRORED_REPEAT`, 33648).
+    MirroredRepeat,
+    /// Repeats the edge texels (`CLAMP_TO_EDGE`, 33071).
+    ClampToEdge,
+}
 
 /// The stored channel values, row-major from the top-left, `channels` per texel.
 #[derive(Clone)]
@@ -136,9 +162,9 @@ impl Image {
         let mut r = crate::cache::Reader(bytes);
         let (width, height, channels, bits) = (r.u32()?, r.u32()?, r.u32()?, r.u32()?);
         let texels = u64::from(width) * u64::from(height);
-        let sound = (1..=super::MAX_SIDE).contains(&width)
-            && (1..=super::MAX_SIDE).contains(&height)
-            && texels <= super::MAX_TEXELS
+        let sound = (1..=MAX_SIDE).contains(&width)
+            && (1..=MAX_SIDE).contains(&height)
+            && texels <= MAX_TEXELS
             && (1..=4).contains(&channels)
             && (bits == 8 || bits == 16)
             && r.0.len() as u64 == texels * u64::from(channels) * u64::from(bits / 8);

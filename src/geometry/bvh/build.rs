@@ -359,8 +359,8 @@ fn gather_packets(
                 for p in &prims[ahead as usize..(ahead + len) as usize] {
                     // A triangle (48 bytes) may straddle two cache lines.
                     let t: *const Triangle = &triangles[p.id() as usize];
-                    super::prefetch(t);
-                    super::prefetch(t.cast::<u8>().wrapping_add(size_of::<Triangle>() - 1));
+                    crate::memory::prefetch(t);
+                    crate::memory::prefetch(t.cast::<u8>().wrapping_add(size_of::<Triangle>() - 1));
                 }
             }
             let chunk = &prims[first as usize..(first + len) as usize];

@@ -11,7 +11,8 @@ use glam::{BVec4A, Vec4};
 
 use super::node::{ChildRef, EMPTY, LEAF, WIDTH, safe_inverse};
 use super::packet::{Packet, candidates};
-use super::{Bvh, Stack};
+use super::tree::Bvh;
+use super::walk::Stack;
 use crate::geometry::ray::{Hit, Ray, gamma};
 use crate::geometry::triangle::{self, RayShear, shared_axis_order};
 

@@ -17,7 +17,8 @@ use std::arch::x86_64::*;
 
 use super::node::{ChildRef, EMPTY, Isa, LEAF, WIDTH};
 use super::packet::{Packet, PacketRay};
-use super::{Bvh, Stack};
+use super::tree::Bvh;
+use super::walk::Stack;
 use crate::geometry::packet::{Closest8, Rays8};
 use crate::geometry::ray::{Hit, Ray, gamma};
 use crate::geometry::triangle::{self, Lanes, RayShear, TriangleHit, axis_order_of, t_error_bound};

@@ -284,7 +284,7 @@ fn bounds_of(prims: &[BuildPrim]) -> (Aabb, Aabb) {
         let ahead = prims.len() >= PREFETCH_MIN;
         for (k, p) in prims.iter().enumerate() {
             if ahead {
-                super::prefetch(prims.as_ptr().wrapping_add(k + PREFETCH_AHEAD));
+                crate::memory::prefetch(prims.as_ptr().wrapping_add(k + PREFETCH_AHEAD));
             }
             b.grow(&p.bounds);
             c.grow_point(p.centroid2());
@@ -558,7 +558,7 @@ impl<const SLOTS: usize> Bins<SLOTS> {
     ) {
         for (k, p) in prims.iter().enumerate() {
             if PREFETCH {
-                super::prefetch(prims.as_ptr().wrapping_add(k + PREFETCH_AHEAD));
+                crate::memory::prefetch(prims.as_ptr().wrapping_add(k + PREFETCH_AHEAD));
             }
             let index = grid.bins_of(p);
             for (axis, &i) in index[..3].iter().enumerate() {
@@ -822,14 +822,14 @@ fn partition_with<const PREFETCH: bool>(
         while i < j && left(&prims[i]) {
             add(&mut boxes[0], &prims[i]);
             if PREFETCH {
-                super::prefetch(base.wrapping_add(i + PREFETCH_AHEAD));
+                crate::memory::prefetch(base.wrapping_add(i + PREFETCH_AHEAD));
             }
             i += 1;
         }
         while i < j && !left(&prims[j - 1]) {
             add(&mut boxes[1], &prims[j - 1]);
             if PREFETCH {
-                super::prefetch(base.wrapping_add(j).wrapping_sub(PREFETCH_AHEAD));
+                crate::memory::prefetch(base.wrapping_add(j).wrapping_sub(PREFETCH_AHEAD));
             }
             j -= 1;
         }

@@ -19,8 +19,8 @@ use glam::{Vec3A, Vec4};
 
 use super::node::{BoxQuery, EXIT_SCALE, Isa};
 use super::packet::PacketRay;
-use super::{Bvh, Hit};
-use crate::geometry::ray::Ray;
+use super::tree::Bvh;
+use crate::geometry::ray::{Hit, Ray};
 use crate::geometry::triangle::{Lanes, axis_order_of};
 use crate::simd::F8;
 

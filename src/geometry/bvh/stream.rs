@@ -16,7 +16,8 @@ use std::mem::MaybeUninit;
 
 use super::node::{BoxQuery, ChildRef, Isa, LEAF, WIDTH};
 use super::packet::PacketRay;
-use super::{Bvh, Stack, is_finite_ray};
+use super::tree::Bvh;
+use super::walk::{Stack, is_finite_ray};
 use crate::geometry::ray::{Hit, Ray};
 
 /// Rays traversed together. Four measured best on the shared meshes: two

@@ -9,7 +9,7 @@ use glam::{Vec3A, Vec4};
 
 use crate::geometry::ray::{Hit, Ray, SHADOW_EPSILON};
 use crate::geometry::{sqrt4, step_towards4};
-use crate::integrators::{Integrator, path_from};
+use crate::integrators::integrator::{Integrator, path_from};
 use crate::scene::Scene;
 
 impl Integrator {
@@ -17,7 +17,7 @@ impl Integrator {
     /// ray per lit hit, all towards the light and traced together by `occluded`
     /// (a packet query: rays, their `t_max`, which lanes count).
     #[inline(always)]
-    pub(in crate::integrators) fn radiance_n_from<const N: usize>(
+    pub(crate) fn radiance_n_from<const N: usize>(
         self,
         scene: &Scene,
         rays: &[Ray; N],
@@ -80,7 +80,7 @@ impl Integrator {
 /// scenes, see `crate::job::display`) shows as that colour, and equal to what
 /// `path` shows there in any kind of scene.
 #[inline]
-pub(in crate::integrators) fn unlit_value(rho: Vec3A) -> Vec3A {
+pub(crate) fn unlit_value(rho: Vec3A) -> Vec3A {
     rho * PI
 }
 
@@ -111,12 +111,7 @@ fn unlit_surfaces<const N: usize>(
 /// The lab's `D`: irradiance from the point light at a hit, zero when the light is
 /// behind the face (the lab's normals are one-sided) or something blocks it.
 #[inline]
-pub(in crate::integrators) fn direct_light(
-    scene: &Scene,
-    hit: &Hit,
-    dir: Vec3A,
-    rays: &mut u64,
-) -> Vec3A {
+pub(crate) fn direct_light(scene: &Scene, hit: &Hit, dir: Vec3A, rays: &mut u64) -> Vec3A {
     let Some((shadow, t_max, d)) = unshadowed_light(scene, hit, dir) else {
         return Vec3A::ZERO;
     };
@@ -130,11 +125,7 @@ pub(in crate::integrators) fn direct_light(
 /// For a hit facing the light: the shadow ray towards it, the ray's `t_max`, and
 /// the irradiance `P·cos/(4πr²)` it brings if nothing blocks it.
 #[inline]
-pub(in crate::integrators) fn unshadowed_light(
-    scene: &Scene,
-    hit: &Hit,
-    dir: Vec3A,
-) -> Option<(Ray, f32, Vec3A)> {
+pub(crate) fn unshadowed_light(scene: &Scene, hit: &Hit, dir: Vec3A) -> Option<(Ray, f32, Vec3A)> {
     let light = &scene.light;
     let sp = scene.surface_point(hit, dir);
     let to_light = light.position - sp.p;
@@ -154,7 +145,7 @@ pub(in crate::integrators) fn unshadowed_light(
 /// so that the lanes' square roots and divisions overlap (lane by lane, waiting
 /// for them took about a sixth of the lab's `direct` frame).
 #[inline(always)]
-pub(in crate::integrators) fn unshadowed_lights<const N: usize>(
+pub(crate) fn unshadowed_lights<const N: usize>(
     scene: &Scene,
     rays: &[Ray; N],
     hits: &[Option<Hit>; N],
