@@ -1,11 +1,10 @@
 //! A glTF file's animation in a job: the options that pick an animation and
-//! a moment (`--at`, `--animation`, `--fps`) and the frames of an animated
-//! file, each loaded posed at its time (`frame / fps` seconds).
+//! a moment (`--at`, `--animation`, `--fps`) and the time of each frame of an
+//! animated file (`frame / fps` seconds; `session.rs` loads the file posed at
+//! it).
 
 use clap::Args;
 
-use super::options::SceneOptions;
-use super::{Hooks, Session, load_session};
 use crate::load::gltf::{AnimationChoice, AnimationOptions};
 
 /// Frames per second of `--frames` on an animated file without `--fps`.
@@ -14,7 +13,7 @@ pub const DEFAULT_FPS: f64 = 24.0;
 pub use crate::load::gltf::{AT_EXPECTED, MAX_AT, MAX_FPS, at_in_range, fps_in_range};
 
 /// The options that pose a glTF file's animation (part of
-/// [`SceneOptions`]).
+/// [`SceneOptions`](crate::job::SceneOptions)).
 #[derive(Debug, Clone, Default, Args)]
 pub struct AnimationArgs {
     /// glTF: render the animation (see --animation) at this moment, in
@@ -60,33 +59,4 @@ pub(super) fn parse_fps(s: &str) -> Result<f64, String> {
 /// The time of `frame` at `fps` frames per second, in seconds.
 pub fn frame_time(frame: u32, fps: f64) -> f32 {
     (f64::from(frame) / fps) as f32
-}
-
-/// The scene of `options` loaded posed at `time`, quietly (the first load
-/// of the job, `first`, said its summary and warnings). A file without
-/// cameras keeps `first`'s view (framed once), so that the camera stays put
-/// while the scene moves.
-pub(super) fn posed_session(
-    options: &SceneOptions,
-    first: &Session,
-    time: f32,
-    aov_channels: usize,
-    hooks: &Hooks<'_>,
-) -> anyhow::Result<Session> {
-    let at_time = SceneOptions {
-        animation: AnimationArgs {
-            at: Some(time),
-            ..options.animation.clone()
-        },
-        ..options.clone()
-    };
-    let quiet = Hooks {
-        on_event: &|_| {},
-        stop: hooks.stop,
-    };
-    let mut posed = load_session(&at_time, true, aov_channels, &quiet)?;
-    if posed.scene.cameras.is_empty() {
-        posed.view = first.view;
-    }
-    Ok(posed)
 }

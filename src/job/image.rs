@@ -9,9 +9,11 @@ use std::time::{Duration, Instant};
 
 use anyhow::Context;
 
+use super::hooks::{Event, Hooks, ProgressUnit};
 use super::options::{JobOptions, MAX_SPP};
+use super::report::{ImageReport, NanFound};
+use super::session::Session;
 use super::write::{denoised_clause, write_result};
-use super::{Event, Hooks, ImageReport, NanFound, ProgressUnit, Session};
 use crate::aov::AovSet;
 use crate::checkpoint::{self, Key};
 use crate::denoise::Denoiser;
@@ -286,7 +288,7 @@ impl Images<'_> {
             }
         }
 
-        let display = super::display(
+        let display = super::session::display(
             session.kind,
             integrator,
             args.scene.exposure.unwrap_or(0.0),

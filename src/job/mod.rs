@@ -28,15 +28,15 @@
 //! passes (`raylab render` sets it on Ctrl-C).
 
 pub mod animate;
+mod hooks;
 mod image;
 mod merge;
 pub mod options;
+mod report;
 mod session;
 mod write;
 
 use std::path::{Path, PathBuf};
-use std::sync::atomic::AtomicBool;
-use std::time::Duration;
 
 use anyhow::Context;
 
@@ -46,127 +46,12 @@ use crate::farm;
 use crate::film::Format;
 use crate::render::Ended;
 
+pub use hooks::{Event, Hooks, ProgressUnit};
 pub use merge::{MergeOptions, MergeReport, merge};
 pub use options::{JobOptions, SceneOptions};
+pub use report::{ImageReport, NanFound, Rendered, Report};
 pub use session::{Session, display, load_session};
 pub use write::{Finished, denoised_clause, finish, write_result};
-
-/// What a job tells its caller while it runs.
-#[derive(Clone, Copy, Debug)]
-pub enum Event<'a> {
-    /// A line for the user, as `raylab render` prints it on standard error:
-    /// load summaries, notes, `warning: ...` lines and each image's summary
-    /// (with `quiet`, only warnings about the scene and `--nan-check`'s
-    /// findings). One line, without its newline.
-    Line(&'a str),
-    /// An image's render starts (its scene is loaded): progress goes from
-    /// `done` to `total`, counted in `unit`s.
-    Started {
-        /// Where the image goes.
-        output: &'a Path,
-        /// The progress when finished.
-        total: u64,
-        /// The progress already made (resumed samples, time spent before).
-        done: u64,
-        /// What progress counts.
-        unit: ProgressUnit,
-    },
-    /// Progress of the render started last, from any worker thread: the work
-    /// done so far, out of [`Event::Started`]'s `total`.
-    Progress(u64),
-    /// The render started last has taken its last sample.
-    Finished,
-    /// Files are about to be written through these temporary files: a caller
-    /// that can be killed removes them if it is.
-    Writing(&'a [PathBuf]),
-}
-
-/// What [`Event::Progress`] counts.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum ProgressUnit {
-    /// Samples of image rows (rows × samples per pixel).
-    RowSamples,
-    /// Milliseconds of a time-limited render (`--time`).
-    Milliseconds,
-}
-
-/// What a job's caller hears and how it stops the job.
-#[derive(Clone, Copy)]
-pub struct Hooks<'a> {
-    /// Called with each [`Event`], from the job's thread and (for
-    /// [`Event::Progress`]) from the render's workers.
-    pub on_event: &'a (dyn Fn(Event<'_>) + Sync),
-    /// When set, the render stops after the samples in flight, keeps them in
-    /// its checkpoint and writes the image so far.
-    pub stop: Option<&'a AtomicBool>,
-}
-
-impl Default for Hooks<'_> {
-    /// Hears nothing; never stops.
-    fn default() -> Self {
-        Self {
-            on_event: &|_| {},
-            stop: None,
-        }
-    }
-}
-
-impl Hooks<'_> {
-    fn say(&self, line: &str) {
-        (self.on_event)(Event::Line(line));
-    }
-}
-
-/// How a job went: one entry per image written (frames: one each).
-#[derive(Clone, Debug, Default)]
-pub struct Report {
-    /// The images, in the order rendered.
-    pub images: Vec<ImageReport>,
-}
-
-/// One image of a [`Report`].
-#[derive(Clone, Debug)]
-pub struct ImageReport {
-    /// The file written (nothing is written when stopped before the first
-    /// sample).
-    pub output: PathBuf,
-    /// Samples per pixel in the image (resumed ones included).
-    pub spp: u32,
-    /// Samples per pixel resumed from a checkpoint.
-    pub resumed_spp: u32,
-    /// How the render ended.
-    pub ended: Ended,
-    /// Rays traced by this run.
-    pub rays: u64,
-    /// NaN or infinite samples dropped.
-    pub dropped: u64,
-    /// Time spent rendering by this run.
-    pub elapsed: Duration,
-    /// Time spent denoising, when the image was denoised.
-    pub denoise_time: Option<Duration>,
-}
-
-/// An image rendered in memory ([`Job::render_with`]).
-#[derive(Clone, Debug)]
-pub struct Rendered {
-    /// The image, its noisy twin when denoised, and its AOVs.
-    pub finished: Finished,
-    /// How it went.
-    pub report: ImageReport,
-}
-
-/// `--nan-check` found a NaN or infinite sample (already reported as an
-/// [`Event::Line`]): `raylab render` exits with code 3.
-#[derive(Debug)]
-pub struct NanFound;
-
-impl std::fmt::Display for NanFound {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str("NaN/Inf samples found")
-    }
-}
-
-impl std::error::Error for NanFound {}
 
 /// A render job: options checked and merged with the scene file, ready to
 /// run.
@@ -390,7 +275,7 @@ impl Job {
                 None
             } else {
                 let time = animate::frame_time(frame, fps);
-                let posed = animate::posed_session(&args.scene, session, time, aov_channels, hooks);
+                let posed = session::posed_session(&args.scene, session, time, aov_channels, hooks);
                 Some(posed?)
             };
             let shown = posed.as_ref().unwrap_or(session);

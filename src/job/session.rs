@@ -1,10 +1,12 @@
 //! A loaded scene with what showing it needs: the view (camera, light,
 //! integrator), image size and tone mapping that the options and the scene's
-//! kind give, and how its values are scaled for display.
+//! kind give, and how its values are scaled for display; and an animated
+//! file's scene loaded again, posed at a frame's time.
 
 use std::sync::Arc;
 
-use super::Hooks;
+use super::animate::AnimationArgs;
+use super::hooks::Hooks;
 use super::options::SceneOptions;
 use crate::camera::{Aperture, Camera, DepthOfField, Focus, FocusedLens};
 use crate::film::{Display, ToneMap};
@@ -315,4 +317,33 @@ pub fn focused_lens(
         focus_distance,
         blades: wanted.blades.unwrap_or(0),
     }))
+}
+
+/// The scene of `options` loaded posed at `time`, quietly (the first load
+/// of the job, `first`, said its summary and warnings). A file without
+/// cameras keeps `first`'s view (framed once), so that the camera stays put
+/// while the scene moves.
+pub(super) fn posed_session(
+    options: &SceneOptions,
+    first: &Session,
+    time: f32,
+    aov_channels: usize,
+    hooks: &Hooks<'_>,
+) -> anyhow::Result<Session> {
+    let at_time = SceneOptions {
+        animation: AnimationArgs {
+            at: Some(time),
+            ..options.animation.clone()
+        },
+        ..options.clone()
+    };
+    let quiet = Hooks {
+        on_event: &|_| {},
+        stop: hooks.stop,
+    };
+    let mut posed = load_session(&at_time, true, aov_channels, &quiet)?;
+    if posed.scene.cameras.is_empty() {
+        posed.view = first.view;
+    }
+    Ok(posed)
 }

@@ -6,9 +6,11 @@
 //! The loaders sit above the scene model ([`crate::scene`]), which knows
 //! nothing of files: [`cornell`] (the lab's boxes), [`obj`] with its MTL,
 //! [`gltf`], the scene files of [`shot`], and what they share: the default
-//! view of a mesh ([`framing`]) and the placing of one ([`transform`]).
+//! view of a mesh ([`framing`]) and the placing of one ([`transform`]); why a
+//! load fails is [`LoadError`] (`error.rs`).
 
 pub mod cornell;
+mod error;
 pub mod framing;
 pub mod gltf;
 pub mod obj;
@@ -19,18 +21,19 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use glam::{Mat3A, Vec3A};
-use thiserror::Error;
 
 use crate::camera::{DepthOfField, Lens, SceneCamera, Y_UP_TOWARDS_MINUS_Z};
 use crate::geometry::triangle::Triangle;
-use crate::lights::environment::{EnvError, Environment};
+use crate::lights::environment::Environment;
 use crate::memory::{GEOMETRY_BYTES_PER_TRIANGLE, Ledger, MemoryBudget, MemoryError, Needs};
-use crate::scene::{PointLight, Scene, SceneError};
+use crate::scene::{PointLight, Scene};
 use cornell::MaterialChoice;
-use gltf::{AnimationOptions, GltfError, VariantChoice, load_gltf_posed};
-use obj::{ObjError, load_obj, load_obj_scene_with};
-use shot::{ShotCamera, ShotError, ShotSettings, load_shot_posed};
+use gltf::{AnimationOptions, VariantChoice, load_gltf_posed};
+use obj::{load_obj, load_obj_scene_with};
+use shot::{ShotCamera, ShotSettings, load_shot_posed};
 use transform::Transform;
+
+pub use error::LoadError;
 
 /// What a scene was made from; decides defaults (integrator, image size, tone
 /// mapping) that differ between the lab's scenes and real ones.
@@ -256,42 +259,6 @@ pub struct Loaded {
     pub settings: ShotSettings,
     /// The names of a glTF file's animations (empty for other scenes).
     pub animations: Vec<String>,
-}
-
-/// Why a scene cannot be loaded; the message names the file.
-#[derive(Debug, Error)]
-pub enum LoadError {
-    /// A Wavefront OBJ file is unreadable or malformed.
-    #[error(transparent)]
-    Obj(#[from] ObjError),
-    /// A glTF file is unreadable or malformed.
-    #[error(transparent)]
-    Gltf(#[from] GltfError),
-    /// The scene's content is invalid.
-    #[error("{name}: {cause}")]
-    Scene {
-        /// The scene.
-        name: String,
-        /// What is wrong.
-        cause: SceneError,
-    },
-    /// The name is neither a built-in scene nor a known file type.
-    #[error(
-        "scene '{0}': unknown scene (built in: cornell, cornell-area; or a Wavefront .obj, glTF .gltf or .glb file)"
-    )]
-    Unknown(String),
-    /// An option does not fit the scene.
-    #[error("{0}")]
-    Usage(String),
-    /// An environment map is unreadable or malformed.
-    #[error(transparent)]
-    Env(#[from] EnvError),
-    /// A scene file is unreadable, malformed or inconsistent.
-    #[error(transparent)]
-    Shot(#[from] ShotError),
-    /// The scene would need more memory than [`LoadOptions::max_memory`].
-    #[error(transparent)]
-    Memory(#[from] MemoryError),
 }
 
 /// Charges `triangles` triangles' geometry to `ledger`, less what the loader

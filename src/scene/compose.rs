@@ -3,7 +3,8 @@
 
 use glam::{Affine3A, Mat3A, Vec3A};
 
-use super::{Instance, NO_INSTANCE, SceneParts};
+use super::mesh::Instance;
+use super::parts::{NO_INSTANCE, SceneParts};
 use crate::lights::Light;
 use crate::materials::surface::texture_refs_mut;
 

@@ -9,7 +9,7 @@
 use std::arch::x86_64::*;
 use std::mem::{offset_of, size_of};
 
-use super::Scene;
+use super::model::Scene;
 use crate::geometry::bvh::Singles8;
 use crate::geometry::packet::{Closest8, Rays8};
 use crate::geometry::ray::{Hit, Ray, gamma};

@@ -9,8 +9,9 @@ use std::f32::consts::PI;
 use glam::{Vec2, Vec3A};
 use rayon::prelude::*;
 
-use super::Scene;
-use super::light_tree::{self, LightBounds, LightTree, TreeLight};
+use super::light_table::{AreaLights, LightRef, LightSelection, LightTable};
+use super::light_tree::{self, Facing, LightBounds, LightTree, TreeLight};
+use super::model::Scene;
 use crate::lights::environment::SkyRadiance;
 use crate::lights::{Incident, Light};
 use crate::materials::surface::SurfaceMaterial;
@@ -637,94 +638,10 @@ pub enum LightSample {
     },
 }
 
-/// How [`Scene::sample_light`] chooses among the lights.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
-pub enum LightSelection {
-    /// By a bound on what each light can send to the point being lit
-    /// (distance, orientation, the surface's side), through a light tree over
-    /// the emitting triangles and the point and spot lights, beside the key
-    /// light, the environment and the directional lights.
-    #[default]
-    Tree,
-    /// In proportion to each light's estimated power (the punctual lights
-    /// among themselves by what each sends to the point).
-    Power,
-    /// Every light (every emitting triangle) equally: for comparisons.
-    Uniform,
-}
-
-/// A light other than the key light, as the light table names it.
-#[derive(Clone, Copy, Debug, PartialEq)]
-enum LightRef {
-    /// Punctual light `i` of [`Scene::lights`].
-    Punctual(u32),
-    /// The environment.
-    Environment,
-    /// An emitting triangle.
-    Triangle(u32),
-}
-
-/// What the surface being lit lets through, for choosing among punctual lights
-/// ([`Scene::sample_light`]).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Facing {
-    /// Nothing known: every direction counts alike.
-    Any,
-    /// A reflecting surface: light arrives from the side this unit shading
-    /// normal points to (the side the path leaves by).
-    Side(Vec3A),
-    /// A surface that also transmits: light arrives from either side of this
-    /// unit shading normal.
-    Both(Vec3A),
-}
-
-impl Facing {
-    /// How much a surface so facing takes of light arriving along `to_light`
-    /// (towards the light): `n · to_light`, its absolute value for a surface
-    /// that transmits, 1 for [`Facing::Any`]; a cosine when `to_light` is unit.
-    #[inline]
-    pub fn cosine(self, to_light: Vec3A) -> f32 {
-        match self {
-            Facing::Any => 1.0,
-            Facing::Side(n) => n.dot(to_light),
-            Facing::Both(n) => n.dot(to_light).abs(),
-        }
-    }
-}
-
 /// The most punctual lights [`Scene::sample_light`] weighs by what they send
 /// to the point being lit (the others are chosen by power alone: the weighing
 /// is a loop over them at every vertex that picks one).
 pub const MAX_IMPORTANCE_LIGHTS: usize = 32;
-
-/// The lights other than the key light and an alias table that chooses among
-/// them by weight.
-#[derive(Clone, Debug, Default)]
-pub(super) struct LightTable {
-    /// The table's probability of picking one of the punctual lights.
-    punctual_pmf: f32,
-    /// Whether the punctual light picked is chosen by importance at the point
-    /// ([`Scene::pick_punctual`]).
-    by_importance: bool,
-    alias: AliasTable,
-    /// Sum of the weights (the table's, as `f32`: read per sample).
-    total: f32,
-    entries: Vec<LightRef>,
-    /// The environment's entry, if it is a light.
-    environment: Option<u32>,
-    /// Every triangle's entry (`u32::MAX` for non-emitters); empty when none
-    /// emits.
-    prim_entry: Vec<u32>,
-    /// [`LightSelection::Tree`]: the emitting triangles, point and spot lights.
-    tree: LightTree,
-    /// [`LightSelection::Tree`]: the directional lights (indices of
-    /// [`Scene::lights`]).
-    directional: Vec<u32>,
-    /// [`LightSelection::Tree`]: the environment's weight (0: none).
-    env_importance: f32,
-    /// Whether the light tree chooses ([`Scene::uses_tree`]).
-    tree_active: bool,
-}
 
 /// The most triangles a flat emitter chosen by power instead of the light
 /// tree may have (see [`Scene::uses_tree`]: at most this many triangles of one
@@ -804,18 +721,6 @@ const ONE_BELOW: f32 = 1.0 - f32::EPSILON / 2.0;
 /// Points per triangle at which a textured emitter's radiance is averaged to
 /// estimate its power.
 const EMISSION_ESTIMATE_POINTS: u32 = 16;
-
-/// The emitting triangles and their power, for power-proportional selection.
-#[derive(Clone, Debug, Default)]
-pub(super) struct AreaLights {
-    /// Emitting triangles.
-    prims: Vec<u32>,
-    /// Sum of their powers.
-    total: f32,
-    /// Power and area of every triangle (zero power for non-emitters); empty
-    /// when none emits.
-    per_prim: Vec<(f32, f32)>,
-}
 
 impl AreaLights {
     pub(super) fn build(scene: &Scene) -> Self {

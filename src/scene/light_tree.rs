@@ -15,12 +15,41 @@
 //! every one-sided emitter, outside every spot's cone, below the horizon of the
 //! surface being lit. That keeps the estimator unbiased: a light left out
 //! there contributes nothing.
+//!
+//! [`Facing`], what the surface being lit lets through, is defined here: the
+//! bounds take it, and `light_sampling.rs` weighs the other lights by it.
 
 use std::f32::consts::{FRAC_PI_2, PI};
 
 use glam::{Vec3A, Vec4};
 
-use super::light_sampling::Facing;
+/// What the surface being lit lets through, for choosing among punctual lights
+/// ([`Scene::sample_light`](crate::scene::Scene::sample_light)).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Facing {
+    /// Nothing known: every direction counts alike.
+    Any,
+    /// A reflecting surface: light arrives from the side this unit shading
+    /// normal points to (the side the path leaves by).
+    Side(Vec3A),
+    /// A surface that also transmits: light arrives from either side of this
+    /// unit shading normal.
+    Both(Vec3A),
+}
+
+impl Facing {
+    /// How much a surface so facing takes of light arriving along `to_light`
+    /// (towards the light): `n · to_light`, its absolute value for a surface
+    /// that transmits, 1 for [`Facing::Any`]; a cosine when `to_light` is unit.
+    #[inline]
+    pub fn cosine(self, to_light: Vec3A) -> f32 {
+        match self {
+            Facing::Any => 1.0,
+            Facing::Side(n) => n.dot(to_light),
+            Facing::Both(n) => n.dot(to_light).abs(),
+        }
+    }
+}
 
 /// Where, how much and which way a set of lights emits.
 #[derive(Clone, Copy, Debug, PartialEq)]

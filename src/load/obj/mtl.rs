@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 
 use glam::{Vec2, Vec3A};
 
-use super::ObjError;
+use super::error::ObjError;
 
 /// A texture statement: the file and the options raylab reads.
 #[derive(Clone, Debug, PartialEq)]

@@ -1,0 +1,75 @@
+//! The scene's light tables, as [`Scene`](super::Scene) keeps them: how
+//! lights are chosen ([`LightSelection`]), the table that chooses among the
+//! lights other than the key light, and the emitting triangles with their
+//! power. `light_sampling.rs` builds and reads them.
+
+use super::light_tree::LightTree;
+use crate::sampling::distribution::AliasTable;
+
+/// How [`Scene::sample_light`](crate::scene::Scene::sample_light) chooses among the lights.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum LightSelection {
+    /// By a bound on what each light can send to the point being lit
+    /// (distance, orientation, the surface's side), through a light tree over
+    /// the emitting triangles and the point and spot lights, beside the key
+    /// light, the environment and the directional lights.
+    #[default]
+    Tree,
+    /// In proportion to each light's estimated power (the punctual lights
+    /// among themselves by what each sends to the point).
+    Power,
+    /// Every light (every emitting triangle) equally: for comparisons.
+    Uniform,
+}
+
+/// A light other than the key light, as the light table names it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) enum LightRef {
+    /// Punctual light `i` of [`Scene::lights`](crate::scene::Scene::lights).
+    Punctual(u32),
+    /// The environment.
+    Environment,
+    /// An emitting triangle.
+    Triangle(u32),
+}
+
+/// The lights other than the key light and an alias table that chooses among
+/// them by weight.
+#[derive(Clone, Debug, Default)]
+pub(super) struct LightTable {
+    /// The table's probability of picking one of the punctual lights.
+    pub(super) punctual_pmf: f32,
+    /// Whether the punctual light picked is chosen by importance at the point
+    /// ([`Scene::pick_punctual`](crate::scene::Scene::pick_punctual)).
+    pub(super) by_importance: bool,
+    pub(super) alias: AliasTable,
+    /// Sum of the weights (the table's, as `f32`: read per sample).
+    pub(super) total: f32,
+    pub(super) entries: Vec<LightRef>,
+    /// The environment's entry, if it is a light.
+    pub(super) environment: Option<u32>,
+    /// Every triangle's entry (`u32::MAX` for non-emitters); empty when none
+    /// emits.
+    pub(super) prim_entry: Vec<u32>,
+    /// [`LightSelection::Tree`]: the emitting triangles, point and spot lights.
+    pub(super) tree: LightTree,
+    /// [`LightSelection::Tree`]: the directional lights (indices of
+    /// [`Scene::lights`](crate::scene::Scene::lights)).
+    pub(super) directional: Vec<u32>,
+    /// [`LightSelection::Tree`]: the environment's weight (0: none).
+    pub(super) env_importance: f32,
+    /// Whether the light tree chooses ([`Scene::uses_tree`](crate::scene::Scene::uses_tree)).
+    pub(super) tree_active: bool,
+}
+
+/// The emitting triangles and their power, for power-proportional selection.
+#[derive(Clone, Debug, Default)]
+pub(super) struct AreaLights {
+    /// Emitting triangles.
+    pub(super) prims: Vec<u32>,
+    /// Sum of their powers.
+    pub(super) total: f32,
+    /// Power and area of every triangle (zero power for non-emitters); empty
+    /// when none emits.
+    pub(super) per_prim: Vec<(f32, f32)>,
+}

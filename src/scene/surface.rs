@@ -1,0 +1,340 @@
+//! What a scene holds at a hit: the point with its error bound (one at a
+//! time or four in lanes), the base colour, the texture coordinates and
+//! colour, and everything shading needs ([`SurfaceHit`]: normals, normal
+//! maps, tangents).
+
+use glam::{Vec3A, Vec4};
+
+use super::mesh::{Instance, MeshData, Tangents};
+use super::model::Scene;
+use crate::geometry::ray::{Hit, SurfacePoint};
+use crate::materials::surface::HitAttributes;
+
+/// What a hit looks like: its point, normals and interpolated attributes.
+#[derive(Clone, Copy, Debug)]
+pub struct SurfaceHit {
+    /// The hit point with its error bound; its normal is `ng`.
+    pub point: SurfacePoint,
+    /// Unit front geometric normal.
+    pub ng: Vec3A,
+    /// Unit shading normal (interpolated, normal-mapped), on `ng`'s side.
+    pub ns: Vec3A,
+    /// Unit normal of a clear coat (`KHR_materials_clearcoat`), on `ng`'s
+    /// side: interpolated, then the coat's own normal map if it has one (the
+    /// base's normal map does not apply); `ns` for a material without a coat.
+    pub nc: Vec3A,
+    /// The mesh's unit tangent and bitangent (`TANGENT` or MikkTSpace,
+    /// orthogonalized against the interpolated normal) where the material
+    /// is anisotropic (`KHR_materials_anisotropy`), for
+    /// [`crate::materials::PbrBsdf::orient_anisotropy`]; zero elsewhere and
+    /// without tangents.
+    pub tangent: Vec3A,
+    /// See `tangent`.
+    pub bitangent: Vec3A,
+    /// Texture coordinates and colour.
+    pub attrs: HitAttributes,
+    /// Index of the material.
+    pub material: u32,
+}
+
+impl Scene {
+    /// The hit point of a ray along `dir` with its error bound, for spawning rays
+    /// off the surface. Its normal is the face normal, turned towards the ray's
+    /// origin in a two-sided scene.
+    #[inline]
+    pub fn surface_point(&self, hit: &Hit, dir: Vec3A) -> SurfacePoint {
+        let prim = hit.prim as usize;
+        let mut n = self.normals[prim];
+        if self.two_sided && n.dot(dir) > 0.0 {
+            n = -n;
+        }
+        SurfacePoint::on_triangle(&self.triangles[prim].v, hit.b1, hit.b2, n)
+    }
+
+    /// [`Scene::surface_point`] of four hits (with their rays' directions) in
+    /// the lanes of SSE registers: points, normals and error bounds, each as
+    /// x, y and z lanes. The scalar code's operations in its order, so the
+    /// same values bit for bit; the vertices are gathered once into lanes
+    /// (one at a time, with the points turned into lanes afterwards, this was
+    /// a tenth of a `direct` frame).
+    #[inline(always)]
+    pub fn surface_points4(&self, hits: [&Hit; 4], dirs: [Vec3A; 4]) -> [[Vec4; 3]; 3] {
+        let prims = [
+            hits[0].prim as usize,
+            hits[1].prim as usize,
+            hits[2].prim as usize,
+            hits[3].prim as usize,
+        ];
+        let (t0, t1, t2, t3) = (
+            &self.triangles[prims[0]].v,
+            &self.triangles[prims[1]].v,
+            &self.triangles[prims[2]].v,
+            &self.triangles[prims[3]].v,
+        );
+        let lanes = |a: Vec3A, b: Vec3A, c: Vec3A, d: Vec3A| {
+            [
+                Vec4::new(a.x, b.x, c.x, d.x),
+                Vec4::new(a.y, b.y, c.y, d.y),
+                Vec4::new(a.z, b.z, c.z, d.z),
+            ]
+        };
+        let v0 = lanes(t0[0], t1[0], t2[0], t3[0]);
+        let v1 = lanes(t0[1], t1[1], t2[1], t3[1]);
+        let v2 = lanes(t0[2], t1[2], t2[2], t3[2]);
+        let b1 = Vec4::new(hits[0].b1, hits[1].b1, hits[2].b1, hits[3].b1);
+        let b2 = Vec4::new(hits[0].b2, hits[1].b2, hits[2].b2, hits[3].b2);
+        // `SurfacePoint::on_triangle`.
+        let b0 = Vec4::ONE - b1 - b2;
+        let (a, b, c) = (
+            [b0 * v0[0], b0 * v0[1], b0 * v0[2]],
+            [b1 * v1[0], b1 * v1[1], b1 * v1[2]],
+            [b2 * v2[0], b2 * v2[1], b2 * v2[2]],
+        );
+        let p = [a[0] + b[0] + c[0], a[1] + b[1] + c[1], a[2] + b[2] + c[2]];
+        let g = Vec4::splat(crate::geometry::ray::gamma(7));
+        let bound = |i: usize| g * (a[i].abs() + b[i].abs() + c[i].abs());
+        let error = [bound(0), bound(1), bound(2)];
+        let mut n = lanes(
+            self.normals[prims[0]],
+            self.normals[prims[1]],
+            self.normals[prims[2]],
+            self.normals[prims[3]],
+        );
+        if self.two_sided {
+            // `n.dot(dir) > 0`, in glam's order of the sums.
+            let d = lanes(dirs[0], dirs[1], dirs[2], dirs[3]);
+            let away = (n[0] * d[0] + n[1] * d[1] + n[2] * d[2]).cmpgt(Vec4::ZERO);
+            n = [
+                Vec4::select(away, -n[0], n[0]),
+                Vec4::select(away, -n[1], n[1]),
+                Vec4::select(away, -n[2], n[2]),
+            ];
+        }
+        [p, n, error]
+    }
+
+    /// The base colour at a hit (textures and vertex colours applied), which
+    /// `flat` shows and `direct` uses as ρ.
+    #[inline]
+    pub fn base_color(&self, hit: &Hit) -> Vec3A {
+        let m = self.material(hit.prim);
+        match m.kind {
+            crate::materials::surface::MaterialKind::Fixed(_) => m.reflectance,
+            _ => self.textured_base_color(hit),
+        }
+    }
+
+    /// [`Scene::base_color`] of a glTF material (out of line: the lab's
+    /// `direct` loop stays small).
+    #[inline(never)]
+    fn textured_base_color(&self, hit: &Hit) -> Vec3A {
+        let m = self.material(hit.prim);
+        Vec3A::from(
+            m.base_color(&self.attributes(hit), &self.textures)
+                .truncate(),
+        )
+    }
+
+    /// Texture coordinates and colour at a hit (defaults for bare triangles).
+    #[inline]
+    pub fn attributes(&self, hit: &Hit) -> HitAttributes {
+        match self.mesh_of(hit.prim) {
+            Some((_, mesh, idx)) => attributes_of(mesh, idx, barycentrics(hit)),
+            None => HitAttributes::default(),
+        }
+    }
+
+    /// The instance, mesh and vertex indices of triangle `prim`, if it has
+    /// vertex attributes.
+    #[inline]
+    fn mesh_of(&self, prim: u32) -> Option<(&Instance, &MeshData, [u32; 3])> {
+        let inst = *self.instance_of.get(prim as usize)?;
+        let inst = self.instances.get(inst as usize)?;
+        let mesh = &self.meshes[inst.mesh as usize];
+        let local = (prim - inst.first_triangle) as usize;
+        Some((inst, mesh, mesh.indices[local]))
+    }
+
+    /// Everything shading needs at a hit: the point, its front geometric normal,
+    /// the shading normal (interpolated vertex normals, then the material's
+    /// normal map, turned to the geometric normal's side) and the attributes.
+    /// (Inlined: as a call it wrote the whole record out and the path tracer
+    /// read it back, 1 % of the lab box's `path`.)
+    #[inline(always)]
+    pub fn surface(&self, hit: &Hit) -> SurfaceHit {
+        let prim = hit.prim as usize;
+        let ng = self.normals[prim];
+        let point = SurfacePoint::on_triangle(&self.triangles[prim].v, hit.b1, hit.b2, ng);
+        let material = self.material_of[prim];
+        let Some((inst, mesh, idx)) = self.mesh_of(hit.prim) else {
+            return SurfaceHit {
+                point,
+                ng,
+                ns: ng,
+                nc: ng,
+                tangent: Vec3A::ZERO,
+                bitangent: Vec3A::ZERO,
+                attrs: HitAttributes::default(),
+                material,
+            };
+        };
+        let b = barycentrics(hit);
+        let attrs = attributes_of(mesh, idx, b);
+        let mut ns = ng;
+        if !mesh.normals.is_empty() {
+            let n = interpolate(b, idx.map(|i| mesh.normals[i as usize]));
+            let n = (inst.normal_to_world * Vec3A::from(n)).normalize_or_zero();
+            if n != Vec3A::ZERO && n.is_finite() {
+                ns = if n.dot(ng) < 0.0 { -n } else { n };
+            }
+        }
+        let interpolated = ns;
+        let m = &self.materials[material as usize];
+        if let Some(mapped) = m.mapped_normal(&attrs, &self.textures)
+            && let Some(n) = tangent_to_world(inst, mesh, idx, hit, b, interpolated, mapped)
+        {
+            ns = n;
+        }
+        let mut nc = ns;
+        if m.has_coat() {
+            nc = interpolated;
+            if let Some(mapped) = m.mapped_coat_normal(&attrs, &self.textures)
+                && let Some(n) = tangent_to_world(inst, mesh, idx, hit, b, interpolated, mapped)
+            {
+                nc = n;
+            }
+        }
+        let (mut tangent, mut bitangent) = (Vec3A::ZERO, Vec3A::ZERO);
+        if m.has_anisotropy()
+            && let Some((t, b)) = tangent_frame(inst, mesh, idx, hit, b, interpolated)
+        {
+            (tangent, bitangent) = (t, b);
+        }
+        SurfaceHit {
+            point,
+            ng,
+            ns,
+            nc,
+            tangent,
+            bitangent,
+            attrs,
+            material,
+        }
+    }
+}
+
+/// The barycentric combination of three values.
+#[inline]
+fn interpolate<T>(b: [f32; 3], v: [T; 3]) -> T
+where
+    T: std::ops::Mul<f32, Output = T> + std::ops::Add<Output = T> + Copy,
+{
+    v[0] * b[0] + v[1] * b[1] + v[2] * b[2]
+}
+
+/// The weights of a hit's three vertices.
+#[inline]
+fn barycentrics(hit: &Hit) -> [f32; 3] {
+    [1.0 - hit.b1 - hit.b2, hit.b1, hit.b2]
+}
+
+/// A mesh's texture coordinates and colour at barycentrics `b` of the
+/// triangle with vertices `idx`.
+#[inline]
+fn attributes_of(mesh: &MeshData, idx: [u32; 3], b: [f32; 3]) -> HitAttributes {
+    let mut attrs = HitAttributes::default();
+    for (set, uvs) in mesh.uvs.iter().enumerate() {
+        if !uvs.is_empty() {
+            attrs.uv[set] = interpolate(b, idx.map(|i| uvs[i as usize]));
+        }
+    }
+    if !mesh.colors.is_empty() {
+        attrs.color = interpolate(b, idx.map(|i| mesh.colors[i as usize]));
+    }
+    attrs
+}
+
+/// A normal map's tangent-space normal `mapped` at hit `hit` (barycentrics
+/// `b`) of `mesh`'s triangle `idx`, in world space about the interpolated
+/// normal `n`; `None` without tangents or where the result is degenerate.
+#[inline]
+fn tangent_to_world(
+    inst: &Instance,
+    mesh: &MeshData,
+    idx: [u32; 3],
+    hit: &Hit,
+    b: [f32; 3],
+    n: Vec3A,
+    mapped: Vec3A,
+) -> Option<Vec3A> {
+    let (t, bitangent) = tangent_frame(inst, mesh, idx, hit, b, n)?;
+    let mapped = (mapped.x * t + mapped.y * bitangent + mapped.z * n).normalize_or_zero();
+    (mapped != Vec3A::ZERO && mapped.is_finite()).then_some(mapped)
+}
+
+/// The unit tangent and bitangent in world space at hit `hit` (barycentrics
+/// `b`) of `mesh`'s triangle `idx`, about the interpolated normal `n`: the
+/// tangent orthogonalized against `n`, the bitangent `w (n × t)` (glTF's
+/// `TANGENT.w`, negated by a mirroring instance); `None` without tangents
+/// or where the tangent is degenerate.
+#[inline]
+fn tangent_frame(
+    inst: &Instance,
+    mesh: &MeshData,
+    idx: [u32; 3],
+    hit: &Hit,
+    b: [f32; 3],
+    n: Vec3A,
+) -> Option<(Vec3A, Vec3A)> {
+    let local = (hit.prim - inst.first_triangle) as usize;
+    let tangent = match &mesh.tangents {
+        Tangents::PerVertex(t) => interpolate(b, idx.map(|i| t[i as usize])),
+        Tangents::PerCorner(t) => interpolate(b, t[local]),
+        Tangents::None => return None,
+    };
+    let sign = if inst.mirrors { -tangent.w } else { tangent.w };
+    let t = inst.to_world.matrix3 * Vec3A::from(tangent.truncate());
+    // Gram–Schmidt against the interpolated normal.
+    let t = (t - n * n.dot(t)).normalize_or_zero();
+    if t == Vec3A::ZERO {
+        return None;
+    }
+    Some((t, sign.signum() * n.cross(t)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Four surface points in lanes are the four one at a time, bit for bit,
+    /// in one-sided and two-sided scenes.
+    #[test]
+    fn surface_points_in_lanes_are_surface_points() {
+        let mut rng = crate::sampling::sampler::Rng::new(8, 1);
+        for two_sided in [false, true] {
+            let mut scene = crate::load::cornell::scene();
+            scene.two_sided = two_sided;
+            let n = scene.triangles().len();
+            for _ in 0..5_000 {
+                let hits: [Hit; 4] = std::array::from_fn(|_| Hit {
+                    t: 1.0,
+                    prim: (rng.next_f32() * n as f32) as u32 % n as u32,
+                    b1: rng.next_f32() * 0.6,
+                    b2: rng.next_f32() * 0.4,
+                });
+                let dirs: [Vec3A; 4] = std::array::from_fn(|_| {
+                    Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) - 0.5
+                });
+                let [p, nrm, error] =
+                    scene.surface_points4([&hits[0], &hits[1], &hits[2], &hits[3]], dirs);
+                for lane in 0..4 {
+                    let one = scene.surface_point(&hits[lane], dirs[lane]);
+                    let at = |v: &[Vec4; 3]| [v[0][lane], v[1][lane], v[2][lane]].map(f32::to_bits);
+                    assert_eq!(at(&p), one.p.to_array().map(f32::to_bits));
+                    assert_eq!(at(&nrm), one.n.to_array().map(f32::to_bits));
+                    assert_eq!(at(&error), one.error.to_array().map(f32::to_bits));
+                }
+            }
+        }
+    }
+}
