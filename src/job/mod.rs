@@ -15,7 +15,7 @@
 //! ```no_run
 //! use raylab::job::{Job, JobOptions};
 //!
-//! let mut options = JobOptions::new("../shared/models/DamagedHelmet/DamagedHelmet.gltf");
+//! let mut options = JobOptions::new("assets/models/DamagedHelmet/DamagedHelmet.gltf");
 //! options.output = Some("helmet.png".into());
 //! Job::new(options)?.run()?;
 //! # Ok::<(), anyhow::Error>(())
