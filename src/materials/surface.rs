@@ -8,7 +8,8 @@
 
 use glam::{Vec2, Vec3A, Vec4, Vec4Swizzles};
 
-use super::{Material, PbrBsdf};
+use super::material::Material;
+use super::pbr::PbrBsdf;
 use crate::textures::{ColorSpace, TextureRef, TextureStore};
 
 /// How a material's alpha (base colour alpha × texture alpha × `COLOR_0` alpha)

@@ -6,7 +6,7 @@
 //! transmitted directions below the horizon are binned and integrated like the
 //! reflected ones; the horizon `cos θ = 0` is a bin edge.
 
-use super::Material;
+use super::material::Material;
 use crate::sampling::sampler::Rng;
 use glam::{Vec2, Vec3A};
 use std::f32::consts::PI;
@@ -260,4 +260,18 @@ pub(crate) fn albedo(m: Material, wo: Vec3A, n: usize, key: u64) -> (f64, f64) {
 pub(crate) fn albedo_by_quadrature(m: Material, wo: Vec3A) -> f64 {
     let f = integrate_bins(|wi| m.eval(wo, wi).x);
     f.iter().sum()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn chi2_p_value_matches_known_quantiles() {
+        // χ²(1) at 3.841459 and χ²(10) at 23.209251 have p = 0.05 and 0.01.
+        assert!((gamma_q(0.5, 3.841_459 / 2.0) - 0.05).abs() < 1e-6);
+        assert!((gamma_q(5.0, 23.209_251 / 2.0) - 0.01).abs() < 1e-6);
+        assert!((gamma_q(50.0, 135.807 / 2.0) - 0.01).abs() < 1e-5);
+        assert!((gamma_q(15.0, 43.773 / 2.0) - 0.05).abs() < 1e-5);
+    }
 }

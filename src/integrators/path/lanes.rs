@@ -620,7 +620,7 @@ impl Vertex<'_> {
     }
 }
 
-/// `materials::sin_cos_quarter` lane by lane.
+/// `sin_cos_quarter` of `materials/disk.rs` lane by lane.
 #[inline(always)]
 fn sin_cos_quarter(x: F8) -> (F8, F8) {
     let x2 = x * x;
