@@ -12,6 +12,8 @@ pub mod accessor;
 pub mod animation;
 pub mod draco;
 pub mod meshopt;
+pub(crate) mod object_model;
+pub(crate) mod pointer;
 pub(crate) mod skin;
 pub(crate) mod tangents;
 
@@ -42,6 +44,7 @@ use crate::textures::{TextureError, TextureRef, TextureStore, TextureTransform, 
 
 /// Extensions raylab reads; a file that requires any other is refused.
 pub const SUPPORTED_EXTENSIONS: &[&str] = &[
+    "KHR_animation_pointer",
     "KHR_lights_punctual",
     "KHR_materials_anisotropy",
     "KHR_materials_clearcoat",
@@ -437,6 +440,16 @@ fn load_gltf_inner(
     meshopt::decode_views(&mut root, &mut buffer_data, &mut charge)?;
     // Draco primitives (whose streams a meshopt view could hold) likewise.
     draco::decode_primitives(&mut root, &mut buffer_data, &unreadable, &mut charge)?;
+    // KHR_animation_pointer (pointer.rs): the chosen animation's pointer
+    // channels written into the objects they animate.
+    pointer::apply(
+        json_bytes,
+        &mut root,
+        &buffer_data,
+        &unreadable,
+        animation,
+        &mut warnings,
+    )?;
     let buffers = Buffers {
         root: &root,
         data: &buffer_data,
@@ -511,8 +524,8 @@ pub fn variant_list(variants: &[String]) -> String {
 /// without a core `source` whose `KHR_texture_basisu` or `EXT_texture_webp`
 /// names its image. A file
 /// refused for such a reason is read again as a JSON tree, with integral
-/// numbers written as integers, node-less channels dropped (raylab reads no
-/// extension that animates such targets) and such textures given their KTX2
+/// numbers written as integers, node-less channels dropped (`pointer.rs`
+/// reads `KHR_animation_pointer`'s from the JSON text) and such textures given their KTX2
 /// or WebP image as `source`, and
 /// then deserialized from the tree; files that parse as they are take the
 /// first reading alone, so they load exactly as before. A fraction such as
