@@ -47,11 +47,12 @@ use super::{GltfError, SUPPORTED_EXTENSIONS, valid};
 /// The extension's name.
 pub(crate) const EXTENSION: &str = "KHR_animation_pointer";
 
-/// The animations' channels as the JSON text writes them.
+/// The animations as the JSON text writes them, unread (only the chosen
+/// one is read further).
 #[derive(serde::Deserialize)]
-struct Document {
-    #[serde(default)]
-    animations: Vec<RawAnimation>,
+struct Document<'a> {
+    #[serde(default, borrow)]
+    animations: Vec<&'a serde_json::value::RawValue>,
 }
 
 /// One animation's channels as the JSON text writes them.
@@ -92,6 +93,8 @@ pub(crate) fn apply(
     let Some(raw) = document.animations.get(a) else {
         return Ok(());
     };
+    let raw: RawAnimation = serde_json::from_str(raw.get())
+        .map_err(|e| GltfError::invalid(format!("animation {}: {e}", label(root, a))))?;
     let mut pass = Pass {
         root,
         buffers: &buffers,
@@ -306,15 +309,15 @@ impl Pass<'_, '_> {
     /// animates (the same property, a node's weights and one of them, or a
     /// node channel's property).
     fn claim(&mut self, members: &[String], c: usize) -> Result<(), String> {
-        let whole_weights = |m: &[String]| m.len() == 4 && m[0] == "nodes" && m[2] == "weights";
+        let one_weight = |m: &[String]| m.len() == 4 && m[0] == "nodes" && m[2] == "weights";
         let other = self.claims.get(members).copied().or_else(|| {
-            if whole_weights(members) {
+            if one_weight(members) {
                 // One weight: the node's whole weights too.
                 self.claims.get(&members[..3]).copied()
             } else if members.len() == 3 && members[0] == "nodes" && members[2] == "weights" {
                 // The whole weights: any one of them too.
                 (self.claims.iter())
-                    .filter(|(k, _)| whole_weights(k) && k[..3] == *members)
+                    .filter(|(k, _)| one_weight(k) && k[..3] == *members)
                     .map(|(_, &d)| d)
                     .min()
             } else {
