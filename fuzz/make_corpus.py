@@ -290,6 +290,46 @@ def extension_gltf(doc):
     return d
 
 
+def pointer_gltf(doc, buf):
+    """The feature glTF with a first animation of KHR_animation_pointer channels (what the
+    gltf_json and glb targets pose at 0.7 s): a material's base colour and texture offset, a
+    light's colour, a camera's field of view, a node's visibility (STEP) and translation
+    (CUBICSPLINE), and its buffer grown by their keyframes."""
+    d = json.loads(json.dumps(doc))
+    buf = bytearray(buf)
+
+    def acc(data, ctype, count, typ):
+        while len(buf) % 4:
+            buf.append(0)
+        d["bufferViews"].append({"buffer": 0, "byteOffset": len(buf), "byteLength": len(data)})
+        buf.extend(data)
+        d["accessors"].append({"bufferView": len(d["bufferViews"]) - 1, "componentType": ctype,
+                               "count": count, "type": typ})
+        return len(d["accessors"]) - 1
+
+    times = acc(f32(0, 1), 5126, 2, "SCALAR")
+    d["accessors"][times].update({"min": [0], "max": [1]})
+    channels = [
+        ("/materials/0/pbrMetallicRoughness/baseColorFactor", "LINEAR",
+         acc(f32(1, 0, 0, 1, 0, 0, 1, 1), 5126, 2, "VEC4")),
+        ("/materials/0/pbrMetallicRoughness/baseColorTexture/extensions/KHR_texture_transform/offset",
+         "LINEAR", acc(f32(0, 0, 0.5, 0.25), 5126, 2, "VEC2")),
+        ("/extensions/KHR_lights_punctual/lights/0/color", "LINEAR", acc(f32(1, 1, 1, 0, 0.5, 1), 5126, 2, "VEC3")),
+        ("/cameras/0/perspective/yfov", "LINEAR", acc(f32(0.8, 0.4), 5126, 2, "SCALAR")),
+        ("/nodes/1/extensions/KHR_node_visibility/visible", "STEP", acc(bytes([1, 0]), 5121, 2, "SCALAR")),
+        ("/nodes/4/translation", "CUBICSPLINE", acc(f32(0, 0, 0, 0, 3, 3, 1, 0, 0, 0, 1, 0, 2, 3, 1, 0, 0, 0),
+                                                    5126, 6, "VEC3")),
+    ]
+    d["nodes"][1]["extensions"] = {"KHR_node_visibility": {"visible": True}}
+    d["extensionsUsed"] += ["KHR_animation_pointer", "KHR_node_visibility"]
+    d["animations"] = [{"name": "pointers", "samplers": [
+        {"input": times, "interpolation": i, "output": o} for _, i, o in channels], "channels": [
+        {"sampler": k, "target": {"path": "pointer", "extensions": {"KHR_animation_pointer": {"pointer": p}}}}
+        for k, (p, _, _) in enumerate(channels)]}]
+    d["buffers"][0]["byteLength"] = len(buf)
+    return d, bytes(buf)
+
+
 def animation_seeds():
     """The animation demo of docs/gltf.md (a skin, a morph target, every interpolation), as
     .gltf and .glb."""
@@ -308,6 +348,9 @@ def gltf_seeds(shared):
     ext = extension_gltf(doc)
     put("gltf_json", "extensions.gltf", gltf_text(ext, buf))
     put("glb", "extensions.glb", glb(ext, buf))
+    ptr, ptr_buf = pointer_gltf(doc, buf)
+    put("gltf_json", "animation-pointer.gltf", gltf_text(ptr, ptr_buf))
+    put("glb", "animation-pointer.glb", glb(ptr, ptr_buf))
     fixture = open(os.path.join(HERE, "src", "lib.rs")).read().split('FIXTURE_GLTF: &str = r#"')[1].split('"#;')[0]
     put("gltf_json", "fixture.gltf", fixture)
     put("gltf_json", "minimal.gltf", '{"asset":{"version":"2.0"}}')

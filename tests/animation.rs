@@ -2,8 +2,10 @@
 //! between keyframes and outside them, skins, morph targets and animated
 //! cameras, against numbers worked out by hand; `--animation`'s lookup and
 //! its errors; `--frames` of an animated file against `--at`. Every file is
-//! written by the test itself (see `common/gltf_builder.rs`).
+//! written by the test itself (see `common/gltf_builder.rs` and `common/gltf_animation.rs`).
 
+#[path = "common/gltf_animation.rs"]
+mod anim;
 #[allow(dead_code)]
 #[path = "common/gltf_builder.rs"]
 mod builder;
@@ -12,28 +14,12 @@ mod common;
 use std::f32::consts::FRAC_PI_2;
 use std::path::{Path, PathBuf};
 
-use builder::{F32, Gltf, U8, U16, write_json};
+use anim::{edited, floats, hermite, load_at, posed, write_with};
+use builder::{F32, Gltf, U8, U16};
 use glam::{Quat, Vec3, Vec3A};
 use raylab::Hit;
-use raylab::load::gltf::{AnimationChoice, AnimationOptions};
-use raylab::load::{LoadOptions, Loaded};
+use raylab::load::Loaded;
 use serde_json::{Value, json};
-
-fn load_at(path: &Path, animation: Option<&str>, time: Option<f32>) -> Result<Loaded, String> {
-    let options = LoadOptions {
-        animation: AnimationOptions {
-            animation: animation.map(|a| a.parse::<AnimationChoice>().unwrap()),
-            time,
-            if_animated: false,
-        },
-        ..LoadOptions::default()
-    };
-    raylab::load::load(path.to_str().unwrap(), &options).map_err(|e| e.to_string())
-}
-
-fn posed(path: &Path, animation: Option<&str>, time: Option<f32>) -> Loaded {
-    load_at(path, animation, time).unwrap_or_else(|e| panic!("{e}"))
-}
 
 #[track_caller]
 fn assert_near(got: Vec3A, want: Vec3, tol: f32, what: &str) {
@@ -48,16 +34,6 @@ fn bytes_f32(v: &[f32]) -> Vec<u8> {
     v.iter().flat_map(|x| x.to_le_bytes()).collect()
 }
 
-/// A float accessor of `components` per element over `values`.
-fn floats(g: &mut Gltf, values: &[f32], components: usize) -> usize {
-    let view = g.view(&bytes_f32(values), None);
-    let kind = ["SCALAR", "VEC2", "VEC3", "VEC4"][components - 1];
-    g.accessor(json!({
-        "bufferView": view, "componentType": F32,
-        "count": values.len() / components, "type": kind,
-    }))
-}
-
 /// A sampler (input, interpolation, output) and a channel of it on
 /// `node`'s `path`, as one animation named `name`.
 fn animation(name: &str, node: usize, path: &str, sampler: Value) -> Value {
@@ -68,32 +44,8 @@ fn animation(name: &str, node: usize, path: &str, sampler: Value) -> Value {
     })
 }
 
-/// Writes `g` with `extra` (animations, skins, ...) merged into its JSON.
-fn write_with(g: &Gltf, dir: &Path, name: &str, extra: Value) -> PathBuf {
-    let uri = format!(
-        "data:application/octet-stream;base64,{}",
-        builder::base64(&g.buffer)
-    );
-    let mut root = g.to_json(Some(uri));
-    for (k, v) in extra.as_object().unwrap() {
-        root[k] = v.clone();
-    }
-    write_json(dir, name, &root)
-}
-
 /// The triangle (0,0,0), (1,0,0), (0,1,0).
 const TRIANGLE: [f32; 9] = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0];
-
-/// A hand-written cubic Hermite segment (glTF 2.0, Appendix C): from `v0`
-/// with out-tangent `b0` to `v1` with in-tangent `a1`, keyframes `dt` apart,
-/// at `s` in [0, 1].
-fn hermite(v0: Vec3, b0: Vec3, v1: Vec3, a1: Vec3, dt: f32, s: f32) -> Vec3 {
-    let (s2, s3) = (s * s, s * s * s);
-    (2.0 * s3 - 3.0 * s2 + 1.0) * v0
-        + (s3 - 2.0 * s2 + s) * dt * b0
-        + (-2.0 * s3 + 3.0 * s2) * v1
-        + (s3 - s2) * dt * a1
-}
 
 const CUBIC_B0: Vec3 = Vec3::new(1.0, 0.0, 0.0);
 const CUBIC_V1: Vec3 = Vec3::new(4.0, 0.0, 0.0);
@@ -557,13 +509,6 @@ fn frames_of_an_animated_file_equal_renders_at_their_times_on_any_thread_count()
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("--at 1 renders one moment"), "{err}");
-}
-
-/// `path`'s JSON changed by `edit` and written as `name` beside it.
-fn edited(path: &Path, name: &str, edit: impl FnOnce(&mut Value)) -> PathBuf {
-    let mut root: Value = serde_json::from_slice(&std::fs::read(path).unwrap()).unwrap();
-    edit(&mut root);
-    write_json(path.parent().unwrap(), name, &root)
 }
 
 #[test]

@@ -171,6 +171,18 @@ def r6(v):
     return 0.0 if out == 0 else out
 
 
+def write_scene(gltf, *path):
+    """Writes `gltf` (indented JSON, a newline at the end) to the repository's scenes/ folder
+    at `path` (its folders made if missing), and prints where."""
+    here = os.path.dirname(os.path.abspath(__file__))
+    out = os.path.join(here, "..", "scenes", *path)
+    os.makedirs(os.path.dirname(out), exist_ok=True)
+    with open(out, "w", encoding="utf-8") as f:
+        json.dump(gltf, f, indent=1)
+        f.write("\n")
+    print("wrote", os.path.normpath(out))
+
+
 def generator_main(build, default_out, doc):
     """A generator's command line: `build(OUT_DIR)`, OUT_DIR the first argument or
     `default_out`; -h or --help prints `doc`."""

@@ -269,7 +269,7 @@ pub struct AnimationSummary {
 }
 
 /// A name for animation `i` in messages: `0 'Walk'` or `0`.
-fn label(root: &json::Root, i: usize) -> String {
+pub(crate) fn label(root: &json::Root, i: usize) -> String {
     match root.animations[i].name.as_deref() {
         Some(n) if !n.is_empty() => format!("{i} '{}'", crate::guard::one_line(n)),
         _ => i.to_string(),
@@ -343,7 +343,12 @@ pub(crate) fn summaries(
 }
 
 /// The checked keyframe times of sampler `s` of animation `a`.
-fn times(root: &json::Root, buffers: &Buffers, a: usize, s: usize) -> Result<Vec<f32>, GltfError> {
+pub(crate) fn times(
+    root: &json::Root,
+    buffers: &Buffers,
+    a: usize,
+    s: usize,
+) -> Result<Vec<f32>, GltfError> {
     let what = format!("animation {} sampler {s}", label(root, a));
     let sampler = &root.animations[a].samplers[s];
     let input = sampler.input.value();
@@ -377,7 +382,7 @@ fn times(root: &json::Root, buffers: &Buffers, a: usize, s: usize) -> Result<Vec
 }
 
 /// Components per element of accessor `index`, if it exists and is valid.
-fn components(root: &json::Root, index: usize) -> Option<usize> {
+pub(crate) fn components(root: &json::Root, index: usize) -> Option<usize> {
     let acc = root.accessors.get(index)?;
     valid(&acc.type_).map(|t| type_components(*t))
 }
@@ -399,7 +404,7 @@ pub(crate) fn tracks(
     a: usize,
     warnings: &mut Vec<String>,
 ) -> Result<Vec<Track>, GltfError> {
-    use json::animation::{Interpolation as I, Property as P};
+    use json::animation::Property as P;
     let animation = &root.animations[a];
     let name = label(root, a);
     let mut out = Vec::with_capacity(animation.channels.len().min(1 << 16));
@@ -433,24 +438,9 @@ pub(crate) fn tracks(
                 "{what}: node {node} has a matrix, and glTF animates only nodes given by translation, rotation and scale"
             )));
         }
-        let interpolation = match valid(&sampler.interpolation) {
-            Some(I::Step) => Interpolation::Step,
-            Some(I::Linear) => Interpolation::Linear,
-            Some(I::CubicSpline) => Interpolation::CubicSpline,
-            None => {
-                return Err(GltfError::invalid(format!(
-                    "{what}: sampler {s} has an unknown interpolation"
-                )));
-            }
-        };
+        let interpolation = interpolation_of(sampler, s, &what)?;
         let times = times(root, buffers, a, s)?;
         let output = sampler.output.value();
-        let groups = if interpolation == Interpolation::CubicSpline {
-            3
-        } else {
-            1
-        };
-        let keyframes = times.len() as u64 * groups;
         let out_what = format!("{what} output");
         let (width, values) = match property {
             Property::Translation | Property::Scale => {
@@ -474,25 +464,7 @@ pub(crate) fn tracks(
                 (targets, v.into_iter().flatten().collect())
             }
         };
-        let want = keyframes * width as u64;
-        if values.len() as u64 != want {
-            return Err(GltfError::invalid(format!(
-                "{out_what}: {} values for {} keyframes of {width} value{}{} (expected {want})",
-                values.len(),
-                times.len(),
-                if width == 1 { "" } else { "s" },
-                if groups == 3 {
-                    ", each with two tangents"
-                } else {
-                    ""
-                },
-            )));
-        }
-        if let Some(i) = values.iter().position(|v| !v.is_finite()) {
-            return Err(GltfError::invalid(format!(
-                "{out_what}: value {i} is not finite"
-            )));
-        }
+        check_output(&out_what, &values, times.len(), interpolation, width)?;
         out.push(Track {
             node,
             property,
@@ -503,6 +475,59 @@ pub(crate) fn tracks(
         });
     }
     Ok(out)
+}
+
+/// The interpolation of sampler `s` (`what` names the channel in errors).
+pub(crate) fn interpolation_of(
+    sampler: &json::animation::Sampler,
+    s: usize,
+    what: &str,
+) -> Result<Interpolation, GltfError> {
+    use json::animation::Interpolation as I;
+    match valid(&sampler.interpolation) {
+        Some(I::Step) => Ok(Interpolation::Step),
+        Some(I::Linear) => Ok(Interpolation::Linear),
+        Some(I::CubicSpline) => Ok(Interpolation::CubicSpline),
+        None => Err(GltfError::invalid(format!(
+            "{what}: sampler {s} has an unknown interpolation"
+        ))),
+    }
+}
+
+/// Refuses a sampler's output `values` (`out_what` names them) unless they
+/// are `width` per keyframe of `keyframes` (with `CUBICSPLINE`, each with
+/// its two tangents), all finite.
+pub(crate) fn check_output(
+    out_what: &str,
+    values: &[f32],
+    keyframes: usize,
+    interpolation: Interpolation,
+    width: usize,
+) -> Result<(), GltfError> {
+    let groups = if interpolation == Interpolation::CubicSpline {
+        3
+    } else {
+        1
+    };
+    let want = keyframes as u64 * groups * width as u64;
+    if values.len() as u64 != want {
+        return Err(GltfError::invalid(format!(
+            "{out_what}: {} values for {keyframes} keyframes of {width} value{}{} (expected {want})",
+            values.len(),
+            if width == 1 { "" } else { "s" },
+            if groups == 3 {
+                ", each with two tangents"
+            } else {
+                ""
+            },
+        )));
+    }
+    if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+        return Err(GltfError::invalid(format!(
+            "{out_what}: value {i} is not finite"
+        )));
+    }
+    Ok(())
 }
 
 /// Refuses accessor `index` unless it has `n` components per element.

@@ -12,6 +12,7 @@ use crate::memory::{Ledger, Needs};
 
 /// Extensions raylab reads; a file that requires any other is refused.
 pub const SUPPORTED_EXTENSIONS: &[&str] = &[
+    "KHR_animation_pointer",
     "KHR_lights_punctual",
     "KHR_materials_anisotropy",
     "KHR_materials_clearcoat",
@@ -98,8 +99,8 @@ pub(super) fn split_glb(bytes: &[u8]) -> Result<(&[u8], Option<&[u8]>), GltfErro
 /// without a core `source` whose `KHR_texture_basisu` or `EXT_texture_webp`
 /// names its image. A file
 /// refused for such a reason is read again as a JSON tree, with integral
-/// numbers written as integers, node-less channels dropped (raylab reads no
-/// extension that animates such targets) and such textures given their KTX2
+/// numbers written as integers, node-less channels dropped (`pointer.rs`
+/// reads `KHR_animation_pointer`'s from the JSON text) and such textures given their KTX2
 /// or WebP image as `source`, and
 /// then deserialized from the tree; files that parse as they are take the
 /// first reading alone, so they load exactly as before. A fraction such as

@@ -13,7 +13,7 @@ use super::buffers::{Buffers, load_buffers, read_file};
 use super::document::{SUPPORTED_EXTENSIONS, parse_root, split_glb};
 use super::error::GltfError;
 use super::loader::{GltfScene, Loader};
-use super::{draco, meshopt};
+use super::{draco, meshopt, pointer};
 use crate::memory::{Ledger, Needs};
 use crate::scene::SceneParts;
 
@@ -146,6 +146,16 @@ fn load_gltf_inner(
     meshopt::decode_views(&mut root, &mut buffer_data, &mut charge)?;
     // Draco primitives (whose streams a meshopt view could hold) likewise.
     draco::decode_primitives(&mut root, &mut buffer_data, &unreadable, &mut charge)?;
+    // KHR_animation_pointer (pointer.rs): the chosen animation's pointer
+    // channels written into the objects they animate.
+    pointer::apply(
+        json_bytes,
+        &mut root,
+        &buffer_data,
+        &unreadable,
+        animation,
+        &mut warnings,
+    )?;
     let buffers = Buffers {
         root: &root,
         data: &buffer_data,

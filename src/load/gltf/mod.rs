@@ -40,6 +40,8 @@ mod material;
 mod mesh;
 pub mod meshopt;
 mod nodes;
+pub(crate) mod object_model;
+pub(crate) mod pointer;
 pub(crate) mod skin;
 pub(crate) mod tangents;
 mod texture;
