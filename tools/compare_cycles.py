@@ -5,7 +5,7 @@ denoised, each renderer judged against its own converged image.
 Usage (from the project folder; the raylab binary must be built, ../shared beside the project for
 the Cycles peer):
 
-    python3 tools/compare_cycles.py [--scenes helmet-venice,showcase,cornell-glass,street]
+    python3 tools/compare_cycles.py [--scenes helmet-venice,showcase,cornell-glass,street,glass-lamps]
                                     [--spp 16,64] [--rounds 1] [--threads 2] [--ref-spp 1024]
                                     [--size 320x240] [--box-size 256x256] [--json PATH]
                                     [--raylab PATH] [--venv DIR] [--shared DIR] [--cache DIR]
@@ -13,6 +13,8 @@ the Cycles peer):
                                     [--ladder 8,12,16,...] [--target-spp 16]
     python3 tools/compare_cycles.py --curve [--curve-spp 1,2,4,...,1024] [--curve-ref-spp 4096]
                                     [--csv PATH] [--plot docs/denoise-curve.png] [--scenes ...]
+    python3 tools/compare_cycles.py --adaptive 0.1,0.03,0.01 [--adaptive-spp 1024] [--scenes ...]
+                                    [--rounds 1] [--ref-spp 1024] [--json PATH] ...
 
 Scenes (glTF 2.0, read by both renderers under docs/scene-conventions.md):
   helmet-venice  scenes/helmet-venice/helmet-venice.gltf (the DamagedHelmet, helmet-hdri.toml's
@@ -24,7 +26,11 @@ Scenes (glTF 2.0, read by both renderers under docs/scene-conventions.md):
                  mirror and a glass block, tools/make_cornell_glass.py), --box-size (default 256×256);
   street         scenes/street/street.gltf (a night street and plaza: about 2,000 small emissive
                  lamps, 50 spot and 2 point lights, five DamagedHelmets, no environment;
-                 tools/make_street.py), --size.
+                 tools/make_street.py), --size;
+  glass-lamps    scenes/glass-lamps/glass-lamps.gltf (small bright emissive spheres inside clear
+                 glass tubes and a glass pane on a table with a high-frequency mosaic texture, two
+                 point lights; made to fool a denoiser's blend, issue 42; tools/make_glass_lamps.py),
+                 --size.
 
 Renderers, same size, same threads (--threads, default 2), same seeds:
   raylab  `raylab render SCENE --spp N --threads T --seed S --width W --height H
@@ -79,6 +85,32 @@ scene's other runs), and a table gives, per scene, the fewest of them whose wors
 measures) are at most Cycles+OIDN's worst at --target-spp (default 16), with its best time over
 Cycles+OIDN's best time: how soon raylab's denoised image is as good as Cycles'.
 
+--adaptive T1,T2,...: adaptive sampling at equal noise thresholds. Per round, scene and threshold T:
+  raylab adaptive  `raylab render SCENE --spp CAP --noise-threshold T ...` (CAP = --adaptive-spp,
+                   default 1024); its average samples per pixel from the summary line's
+                   `N.N spp on average` (the cap when the line has none, marked ‡). Until
+                   `raylab render --help` lists --noise-threshold these rows say n/a and the rest
+                   runs (raylab's fixed run then takes Cycles' adaptive average, marked *);
+  Cycles adaptive  render_gltf.py through tools/cycles_adaptive.py, which turns on
+                   scene.cycles.use_adaptive_sampling with adaptive_threshold T,
+                   adaptive_min_samples 0 (Cycles' automatic minimum, Blender's default) and
+                   samples CAP (render_gltf.py turns adaptive sampling off and lives in ../shared,
+                   so it is wrapped, not edited); the average samples per pixel from Cycles'
+                   "Debug Sample Count" pass (see that script: a compositor File Output node writes
+                   the pass, the render's sample count comes from Cycles' progress reports). If
+                   it cannot be read the row shows "?", the time is still compared, and Cycles'
+                   fixed run is skipped;
+  raylab fixed, Cycles fixed  each renderer with adaptive sampling off at the spp of its own
+                   adaptive run's average, rounded: adaptive against fixed at an equal sample
+                   budget.
+  Each against its own --ref-spp reference, as above (they are the same cached files). The table
+  gives per scene and threshold the mean spp, the best seconds, the worst relMSE and FLIP and
+  their products with the seconds for the four runs, and the ratios raylab adaptive ÷ raylab
+  fixed, Cycles adaptive ÷ Cycles fixed (below 1: adaptive sampling pays) and raylab adaptive ÷
+  Cycles adaptive. Previews: SCENE-adaptive-T.png = raylab adaptive | raylab fixed | Cycles
+  adaptive | Cycles fixed (round 1). JSON: --json, default CACHE/compare_cycles-adaptive-last.json.
+  --spp, --ladder and the denoised runs are not used.
+
 --curve: raylab only. For each scene, renders at --curve-spp (default 1, 2, 4, ..., 1024), noisy and
 denoised (one `--denoise` run gives both, from the same samples; without --denoise only the noisy
 curve), measures both errors against raylab's own --curve-ref-spp render (default 4096, cached),
@@ -124,8 +156,10 @@ SCENES = {
     "showcase": ("scenes/showcase/showcase.gltf", None, 0.0, False),
     "cornell-glass": ("scenes/cornell-glass/cornell-glass.gltf", None, 0.0, True),
     "street": ("scenes/street/street.gltf", None, 0.0, False),
+    "glass-lamps": ("scenes/glass-lamps/glass-lamps.gltf", None, 0.0, False),
 }
 REF_SEED = 1 << 20
+ADAPTIVE_WRAPPER = os.path.join(ROOT, "tools", "cycles_adaptive.py")
 # --curve: a denoised error at most this fraction above the noisy one is a tie, not worse.
 TIE = 0.002
 
@@ -393,7 +427,8 @@ class Scene:
             hint = {"cornell-glass": " (python3 tools/make_cornell_glass.py makes it)",
                     "helmet-venice": " (python3 tools/make_helmet_venice.py makes it)",
                     "showcase": " (python3 tools/make_showcase.py makes it)",
-                    "street": " (python3 tools/make_street.py makes it)"}[name]
+                    "street": " (python3 tools/make_street.py makes it)",
+                    "glass-lamps": " (python3 tools/make_glass_lamps.py makes it)"}[name]
             raise Fail(f"scene file {rel} not found{hint}")
         self.env = os.path.join(ROOT, "assets", env) if env else None
         if self.env and not os.path.isfile(self.env):
@@ -436,7 +471,9 @@ class Result:
         self.noisy, self.noisy_seconds = noisy, noisy_seconds
 
 
-SUMMARY = re.compile(r"^wrote .*?: (\d+)x(\d+), (\S+), (\d+) spp, ([0-9.]+) ms.*$", re.M)
+SUMMARY = re.compile(r"^wrote .*?: (\d+)x(\d+), (\S+), (\d+) spp, (?:[^,\n]*, )*?([0-9.]+) ms.*$",
+                     re.M)
+SPP_MEAN = re.compile(r"([0-9.]+) spp on average")
 DENOISED = re.compile(r"denoised in ([0-9.]+) ms([^;\n]*)")
 
 
@@ -457,30 +494,42 @@ class Raylab:
         self.threads, self.tmp, self.timeout = threads, tmp, timeout
         out, _, _ = run([self.binary, "render", "--help"], 60, "raylab render --help")
         self.has_denoise = "--denoise" in out
+        self.has_noise_threshold = "--noise-threshold" in out
         self.version = one_line(run([self.binary, "--version"], 60, "raylab --version")[0])
 
     def describe(self):
         return (f"{self.version} {self.source} (built {self.mtime}, sha256 {self.sha}; "
-                f"--denoise {'yes' if self.has_denoise else 'not yet'})")
+                f"--denoise {'yes' if self.has_denoise else 'not yet'}; "
+                f"--noise-threshold {'yes' if self.has_noise_threshold else 'not yet'})")
 
-    def render(self, scene, spp, seed, denoise=False, out=None):
+    def render(self, scene, spp, seed, denoise=False, out=None, noise_threshold=None):
+        """noise_threshold: adaptive sampling (`--noise-threshold T`, spp the cap); the result's
+        info then has `spp_mean`, the summary line's `N spp on average` (spp when it has none)."""
         out = out or os.path.join(self.tmp, "raylab.exr")
         cmd = [self.binary, "render", scene.file, "--spp", str(spp), "--threads", str(self.threads),
                "--seed", str(seed), "--width", str(scene.width), "--height", str(scene.height),
                "--default-light", "off", *scene.env_args(), "-o", out]
         if denoise:
             cmd.append("--denoise")
-        what = f"raylab {scene.name} {spp} spp{' --denoise' if denoise else ''}"
+        if noise_threshold is not None:
+            cmd += ["--noise-threshold", f"{noise_threshold:g}"]
+        what = (f"raylab {scene.name} {spp} spp{' --denoise' if denoise else ''}"
+                + (f" --noise-threshold {noise_threshold:g}" if noise_threshold is not None else ""))
         _, err, wall = run(cmd, self.timeout, what)
         m = SUMMARY.search(err)
         if not m:
             raise Fail(f"{what}: no summary line (`wrote ...: WxH, path, N spp, T ms, ...`) on "
                        f"stderr: {one_line(err)}")
         w, h, integrator, done, ms = m.groups()
-        if (int(w), int(h), int(done)) != (scene.width, scene.height, spp) or integrator != "path":
+        # adaptive: `N spp` is the cap, or at most the cap
+        spp_ok = int(done) == spp or (noise_threshold is not None and int(done) <= spp)
+        if (int(w), int(h)) != (scene.width, scene.height) or not spp_ok or integrator != "path":
             raise Fail(f"{what}: unexpected summary: {m.group(0)}")
         render_s = float(ms) / 1e3
         info = {"render_s": render_s, "wall_s": wall, "summary": m.group(0)}
+        a = SPP_MEAN.search(m.group(0))
+        info["spp_mean"] = float(a.group(1)) if a else float(spp)
+        info["spp_mean_reported"] = bool(a)
         layers = read_exr(out)
         notes = []
         img = finite(layers["rgb"], what, notes)
@@ -521,14 +570,21 @@ class Cycles:
         return (f"Blender {self.blender or 'bpy ' + self.bpy} Cycles CPU via {self.script} "
                 f"(sha256 {self.sha}), {self.py}")
 
-    def render(self, scene, spp, seed, denoise=False, out=None):
+    def render(self, scene, spp, seed, denoise=False, out=None, noise_threshold=None):
+        """noise_threshold: Cycles' adaptive sampling at that threshold, spp the cap, through
+        tools/cycles_adaptive.py; the result's info then has `spp_mean` (None if unknown)."""
         out = out or os.path.join(self.tmp, "cycles.exr")
-        cmd = [self.py, self.script, scene.file, "-o", out, "--width", str(scene.width),
+        script = [self.script]
+        if noise_threshold is not None:
+            script = [ADAPTIVE_WRAPPER, "--render-gltf", self.script,
+                      "--noise-threshold", f"{noise_threshold:g}"]
+        cmd = [self.py, *script, scene.file, "-o", out, "--width", str(scene.width),
                "--height", str(scene.height), "--spp", str(spp), "--threads", str(self.threads),
                "--seed", str(seed), "--quiet", *scene.env_args()]
         if denoise:
             cmd.append("--denoise")
-        what = f"Cycles {scene.name} {spp} spp{' --denoise' if denoise else ''}"
+        what = (f"Cycles {scene.name} {spp} spp{' --denoise' if denoise else ''}"
+                + (f" adaptive {noise_threshold:g}" if noise_threshold is not None else ""))
         stdout, _, wall = run(cmd, self.timeout, what)
         info = None
         for line in reversed(stdout.splitlines()):
@@ -540,13 +596,16 @@ class Cycles:
                     continue
         if info is None:
             raise Fail(f"{what}: no JSON line on stdout from render_gltf.py: {one_line(stdout)}")
-        if info.get("spp_done") not in (None, spp):
+        done = info.get("spp_done")
+        if done is not None and (done > spp if noise_threshold is not None else done != spp):
             raise Fail(f"{what}: Cycles did {info['spp_done']} of {spp} spp")
         secs = info.get("cycles_path_trace_s")
         if secs is None:
             raise Fail(f"{what}: no cycles_path_trace_s in its JSON line (OpenEXR header unread?)")
         self.blender = info.get("blender", self.blender)
         info["wall_s"] = wall
+        if noise_threshold is None:
+            info["spp_mean"] = float(spp)
         notes = []
         img = finite(read_exr(out)["rgb"], what, notes)
         info["notes_tool"] = notes
@@ -622,19 +681,12 @@ def fmt_r(x):
     return "n/a" if x is None else f"{x:.2f}"
 
 
-def compare(args, tmp):
-    import numpy as np
-
-    scenes = [Scene(s, args) for s in args.scenes]
-    raylab = Raylab(args.raylab, args.threads, tmp, args.timeout)
-    cycles = Cycles(args.venv, args.shared, args.threads, tmp, args.timeout)
-    renderers = (raylab, cycles)
-    log(f"raylab: {raylab.describe()}")
-    start = time.perf_counter()
-
+def both_references(scenes, raylab, cycles, args):
+    """Each renderer's converged image of each scene (cached), how the two differ, and a preview
+    SCENE-refs.png of them: (refs, ref_meta, cross), keyed by (scene, renderer) and scene."""
     refs, ref_meta, cross = {}, {}, {}
     for sc in scenes:
-        for r in renderers:
+        for r in (raylab, cycles):
             refs[(sc.name, r.name)], ref_meta[(sc.name, r.name)] = reference(r, sc, args.ref_spp, args)
             if r is cycles and not cycles.blender:
                 cycles.blender = ref_meta[(sc.name, r.name)].get("blender")
@@ -647,6 +699,19 @@ def compare(args, tmp):
                 ratio_map(refs[(sc.name, "raylab")], refs[(sc.name, "Cycles")])]
         save_png(os.path.join(args.previews, f"{sc.name}-refs.png"), [disp])
     log(f"Cycles: {cycles.describe()}")
+    return refs, ref_meta, cross
+
+
+def compare(args, tmp):
+    import numpy as np
+
+    scenes = [Scene(s, args) for s in args.scenes]
+    raylab = Raylab(args.raylab, args.threads, tmp, args.timeout)
+    cycles = Cycles(args.venv, args.shared, args.threads, tmp, args.timeout)
+    renderers = (raylab, cycles)
+    log(f"raylab: {raylab.describe()}")
+    start = time.perf_counter()
+    refs, ref_meta, cross = both_references(scenes, raylab, cycles, args)
 
     runs, ladder_runs = [], []
     modes = ("noisy", "denoised")
@@ -884,6 +949,198 @@ def write_json(path, obj):
 
 
 # ----------------------------------------------------------------------------------------------
+# Adaptive mode: each renderer's adaptive sampling at equal noise thresholds, and each against
+# itself at fixed spp (its adaptive run's average).
+
+RUNS = (("raylab", "adaptive"), ("raylab", "fixed"), ("Cycles", "adaptive"), ("Cycles", "fixed"))
+
+
+def adaptive(args, tmp):
+    import numpy as np
+
+    scenes = [Scene(s, args) for s in args.scenes]
+    raylab = Raylab(args.raylab, args.threads, tmp, args.timeout)
+    cycles = Cycles(args.venv, args.shared, args.threads, tmp, args.timeout)
+    log(f"raylab: {raylab.describe()}")
+    if not raylab.has_noise_threshold:
+        log("raylab has no --noise-threshold yet: its adaptive rows are n/a, and its fixed-spp runs "
+            "take Cycles' adaptive average")
+    start = time.perf_counter()
+    refs, ref_meta, cross = both_references(scenes, raylab, cycles, args)
+    cap = args.adaptive_spp
+
+    runs = []
+
+    def one(r, sc, t, seed, mode, spp=None, spp_from=None):
+        """One render (adaptive at threshold t, or `spp` fixed), its errors: (record, image)."""
+        if mode == "adaptive":
+            res = r.render(sc, cap, seed, noise_threshold=t)
+            spp = res.info.get("spp_mean")
+        else:
+            res = r.render(sc, spp, seed)
+        e = errors(res.img, refs[(sc.name, r.name)])
+        rec = {"round": seed, "seed": seed, "scene": sc.name, "threshold": t, "renderer": r.name,
+               "mode": mode, "cap": cap if mode == "adaptive" else None, "spp": spp,
+               "spp_from": spp_from, "seconds": res.seconds, **e, "info": res.info}
+        runs.append(rec)
+        log(f"round {seed}: {r.name:6} {sc.name} T={t:g} {mode:8} "
+            f"{'?' if spp is None else f'{spp:.1f}':>6} spp {res.seconds:7.3f} s  "
+            f"relMSE {e['relmse']:.3e}  FLIP {e['flip']:.4f}")
+        return rec, res.img
+
+    for rnd in range(args.rounds):
+        seed = rnd + 1
+        for si, sc in enumerate(scenes):
+            for ti, t in enumerate(args.adaptive):
+                order = (raylab, cycles) if (rnd + si + ti) % 2 == 0 else (cycles, raylab)
+                got, imgs = {}, {}
+                for r in order:
+                    if r is not raylab or raylab.has_noise_threshold:
+                        got[(r.name, "adaptive")], imgs[(r.name, "adaptive")] = one(
+                            r, sc, t, seed, "adaptive")
+                # Fixed spp: the adaptive run's average, rounded (raylab without --noise-threshold:
+                # Cycles' average, so that its row still says something).
+                for r in order:
+                    src, spp_from = got.get((r.name, "adaptive")), f"{r.name} adaptive"
+                    if src is None and r is raylab:
+                        src, spp_from = got.get(("Cycles", "adaptive")), "Cycles adaptive"
+                    if src is None or src["spp"] is None:
+                        log(f"round {rnd + 1}: {r.name} {sc.name} T={t:g}: no average spp to match, "
+                            "no fixed-spp run")
+                        continue
+                    got[(r.name, "fixed")], imgs[(r.name, "fixed")] = one(
+                        r, sc, t, seed, "fixed", max(1, int(round(src["spp"]))), spp_from)
+                if rnd == 0:
+                    row = []
+                    for name, mode in RUNS:
+                        img = imgs.get((name, mode))
+                        row.append(display(img) if img is not None
+                                   else 0.5 * np.ones_like(display(refs[(sc.name, name)])))
+                    save_png(os.path.join(args.previews, f"{sc.name}-adaptive-{t:g}.png"), [row])
+
+    # Summary: mean spp, best time and worst errors over the rounds.
+    summary = []
+    for sc in scenes:
+        for t in args.adaptive:
+            row = {"scene": sc.name, "threshold": t}
+            for name, mode in RUNS:
+                rs = [x for x in runs if (x["scene"], x["threshold"], x["renderer"], x["mode"])
+                      == (sc.name, t, name, mode)]
+                if not rs:
+                    row[f"{name} {mode}"] = None
+                    continue
+                spps = [x["spp"] for x in rs]
+                s = min(x["seconds"] for x in rs)
+                rel, fl = max(x["relmse"] for x in rs), max(x["flip"] for x in rs)
+                row[f"{name} {mode}"] = {
+                    "spp": None if None in spps else sum(spps) / len(spps), "seconds": s,
+                    "relmse": rel, "flip": fl, "relmse_x_s": rel * s, "flip_x_s": fl * s,
+                    "runs": len(rs), "spp_from": rs[0]["spp_from"]}
+
+            def ratio(a, b):
+                a, b = row[a], row[b]
+                if not (a and b):
+                    return None
+                return {k: div(a[k], b[k]) if a[k] is not None and b[k] is not None else None
+                        for k in ("spp", "seconds", "relmse", "relmse_x_s", "flip", "flip_x_s")}
+
+            row["ratios"] = {
+                "raylab adaptive ÷ fixed": ratio("raylab adaptive", "raylab fixed"),
+                "Cycles adaptive ÷ fixed": ratio("Cycles adaptive", "Cycles fixed"),
+                "raylab ÷ Cycles, adaptive": ratio("raylab adaptive", "Cycles adaptive")}
+            summary.append(row)
+
+    took = time.perf_counter() - start
+    print()
+    print(f"Adaptive sampling at equal noise thresholds (cap {cap} spp), and each renderer at fixed "
+          f"spp equal to its adaptive run's average (rounded); {args.threads} threads each, seeds "
+          f"1..{args.rounds}; spp: the mean over the rounds of the samples per pixel on average "
+          "(raylab: its summary line's `spp on average`; Cycles: its sample-count pass, "
+          "tools/cycles_adaptive.py); seconds: the best of the rounds (raylab: render time of its "
+          "summary line; Cycles: cycles_path_trace_s); errors: the worst of the rounds, against the "
+          f"renderer's own {args.ref_spp}-spp render (relMSE clamped at the 99.9th percentile; FLIP "
+          f"after PBR Neutral + sRGB). Run took {took:.0f} s.")
+    print()
+    print("| scene | threshold | run | spp | seconds | relMSE | relMSE × s | FLIP | FLIP × s |")
+    print("| --- | ---: | --- | ---: | ---: | ---: | ---: | ---: | ---: |")
+    marked = nominal = borrowed = False
+    for row in summary:
+        head = [row["scene"], f"{row['threshold']:g}"]
+        for name, mode in RUNS:
+            v = row[f"{name} {mode}"]
+            label = f"{name} {mode}"
+            if v is None:
+                why = ("n/a (raylab has no --noise-threshold)" if name == "raylab" and mode == "adaptive"
+                       and not raylab.has_noise_threshold else "n/a")
+                print("| " + " | ".join(head + [label, "", why, "", "", "", ""]) + " |")
+            else:
+                own = ref_meta[(row["scene"], name)]["own_relmse"]
+                mark = "†" if own > 0.25 * v["relmse"] else ""
+                marked = marked or bool(mark)
+                spp = "?" if v["spp"] is None else f"{v['spp']:.1f}"
+                if name == "raylab" and mode == "adaptive" and any(
+                        not x["info"].get("spp_mean_reported", True) for x in runs
+                        if (x["scene"], x["threshold"], x["renderer"], x["mode"])
+                        == (row["scene"], row["threshold"], name, mode)):
+                    spp += "‡"
+                    nominal = True
+                if mode == "fixed" and v["spp_from"] != f"{name} adaptive":
+                    spp += "*"
+                    borrowed = True
+                print("| " + " | ".join(head + [label, spp, fmt_s(v["seconds"]),
+                                              fmt_e(v["relmse"]) + mark, fmt_e(v["relmse_x_s"]),
+                                              fmt_f(v["flip"]), fmt_e(v["flip_x_s"])]) + " |")
+            head = ["", ""]
+        for label, q in row["ratios"].items():
+            if q is None:
+                print("| " + " | ".join(head + [label, "n/a", "", "", "", "", ""]) + " |")
+                continue
+            print("| " + " | ".join(head + [
+                f"**{label}**", fmt_r(q["spp"]), fmt_r(q["seconds"]), fmt_r(q["relmse"]),
+                f"**{fmt_r(q['relmse_x_s'])}**", fmt_r(q["flip"]), f"**{fmt_r(q['flip_x_s'])}**"]) + " |")
+    print()
+    print("Ratios below 1 favour the first of the two: adaptive ÷ fixed below 1 means adaptive "
+          "sampling pays (less error × time than the same samples spread evenly); raylab ÷ Cycles "
+          "below 1 means raylab's adaptive sampling is the more efficient.")
+    if marked:
+        print("† the reference's own noise is more than a quarter of this relMSE, which it inflates: "
+              "raise --ref-spp.")
+    if nominal:
+        print(f"‡ raylab's summary line did not say `spp on average`: the cap ({cap}) is shown and "
+              "its fixed run used it.")
+    if borrowed:
+        print("* raylab has no --noise-threshold: its fixed run takes Cycles' adaptive average.")
+    unknown = [x for x in runs if x["renderer"] == "Cycles" and x["mode"] == "adaptive"
+               and x["spp"] is None]
+    if unknown:
+        print("* Cycles' samples per pixel were not known in "
+              f"{len(unknown)} run(s) (" + "; ".join(sorted({w for x in unknown
+                                                             for w in x["info"].get("warnings", [])
+                                                             if "cycles_adaptive" in w}))
+              + "): no fixed-spp run for them, time only.")
+    print(f"* previews: {args.previews} (SCENE-adaptive-T.png: raylab adaptive | raylab fixed | "
+          "Cycles adaptive | Cycles fixed, round 1; grey: not rendered)")
+
+    out = {"tool": "tools/compare_cycles.py --adaptive", "date": time.strftime("%Y-%m-%d %H:%M:%S"),
+           "argv": sys.argv[1:], "threads": args.threads, "rounds": args.rounds,
+           "thresholds": args.adaptive, "cap_spp": cap, "ref_spp": args.ref_spp,
+           "aggregation": "spp: mean of the rounds; seconds: best of the rounds; errors: worst of "
+                          "the rounds",
+           "raylab": {"binary": raylab.source, "sha256": raylab.sha, "version": raylab.version,
+                      "has_noise_threshold": raylab.has_noise_threshold},
+           "cycles": {"blender": cycles.blender, "render_gltf_sha256": cycles.sha,
+                      "python": cycles.py, "wrapper": os.path.relpath(ADAPTIVE_WRAPPER, ROOT)},
+           "scenes": {sc.name: {"file": os.path.relpath(sc.file, ROOT), "size": [sc.width, sc.height],
+                                "env": sc.env, "env_rotate": sc.rotate} for sc in scenes},
+           "references": {f"{k[0]}/{k[1]}": v for k, v in ref_meta.items()},
+           "raylab_vs_cycles_references": cross,
+           "summary": summary, "runs": runs, "seconds": took}
+    write_json(args.json, out)
+    print(f"* all numbers: {args.json}")
+    return 0
+
+
+# ----------------------------------------------------------------------------------------------
 # Curve mode (raylab only).
 
 
@@ -1011,6 +1268,16 @@ def parse_list(text):
     return out
 
 
+def parse_thresholds(text):
+    try:
+        out = [float(x) for x in text.split(",") if x.strip()]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected numbers separated by commas, got {text!r}")
+    if not out or min(out) <= 0 or max(out) > 1:
+        raise argparse.ArgumentTypeError(f"expected noise thresholds in (0, 1], got {text!r}")
+    return out
+
+
 def parse_scenes(text):
     out = [x.strip() for x in text.split(",") if x.strip()]
     for s in out:
@@ -1031,7 +1298,7 @@ def main():
     ap.add_argument("--ref-spp", type=int, default=1024,
                     help="spp of each renderer's own converged render (default 1024)")
     ap.add_argument("--size", type=parse_size, default=(320, 240),
-                    help="WxH of helmet-venice, showcase and street (default 320x240)")
+                    help="WxH of helmet-venice, showcase, street and glass-lamps (default 320x240)")
     ap.add_argument("--box-size", type=parse_size, default=(256, 256),
                     help="WxH of cornell-glass (default 256x256)")
     ap.add_argument("--raylab", default=default_raylab(),
@@ -1058,13 +1325,23 @@ def main():
     ap.add_argument("--curve-spp", type=parse_list,
                     default=[1 << k for k in range(11)], help="default 1,2,4,...,1024")
     ap.add_argument("--curve-ref-spp", type=int, default=4096, help="default 4096")
+    ap.add_argument("--adaptive", type=parse_thresholds, metavar="T1,T2,...",
+                    help="adaptive sampling at these noise thresholds (e.g. 0.1,0.03,0.01): raylab "
+                         "--noise-threshold against Cycles' adaptive sampling, and each at fixed spp")
+    ap.add_argument("--adaptive-spp", type=int, default=1024,
+                    help="the cap of the adaptive runs' samples per pixel (default 1024)")
     ap.add_argument("--csv", help="curve CSV (default CACHE/denoise_curve.csv)")
     ap.add_argument("--plot", help="curve plot PNG (default CACHE/denoise_curve.png)")
     args = ap.parse_args()
     if args.rounds < 1 or args.threads < 1 or args.ref_spp < 2 or args.curve_ref_spp < 2:
         ap.error("--rounds and --threads must be at least 1, the reference spp at least 2")
+    if args.adaptive and args.curve:
+        ap.error("--adaptive and --curve are two different runs")
+    if args.adaptive_spp < 1:
+        ap.error("--adaptive-spp must be at least 1")
     args.cache = os.path.abspath(args.cache)
-    args.json = args.json or os.path.join(args.cache, "compare_cycles-last.json")
+    args.json = args.json or os.path.join(
+        args.cache, "compare_cycles-adaptive-last.json" if args.adaptive else "compare_cycles-last.json")
     args.previews = args.previews or os.path.join(args.cache, "previews")
     args.csv = args.csv or os.path.join(args.cache, "denoise_curve.csv")
     args.plot = args.plot or os.path.join(args.cache, "denoise_curve.png")
@@ -1080,7 +1357,12 @@ def main():
         elif missing_modules():
             ensure_venv(args)
         with tempfile.TemporaryDirectory(prefix="compare_cycles.") as tmp:
-            status = curve(args, tmp) if args.curve else compare(args, tmp)
+            if args.curve:
+                status = curve(args, tmp)
+            elif args.adaptive:
+                status = adaptive(args, tmp)
+            else:
+                status = compare(args, tmp)
     except Fail as e:
         print(f"{PROG}: error: {e}", file=sys.stderr)
         sys.exit(1)
