@@ -42,9 +42,9 @@ docs/scene-conventions.md (radiometric light units, one-sided emission):
 The noise is where the lamps' light is: around them on the table (caustics) and in the glass,
 and in sparse fireflies on the wall; the texture elsewhere is lit directly. At 320 x 240 and 16
 spp raylab's clamped relMSE against a converged render is about 8e-2, most of it near the lamps.
-Each lamp shows its sphere twice: through the tube's front wall, and mirrored by the inside of
-its back wall (a 4 % Fresnel reflection of so bright a sphere is still white after tone
-mapping). 2,180 triangles. Own work, CC0.
+Each lamp shows its sphere twice: through the tube's front wall (below), and mirrored by its
+back wall (above: the Fresnel reflections of the wall's two surfaces, about 8 % together, so
+dimmer and less white after tone mapping). 2,180 triangles. Own work, CC0.
 """
 
 import json
