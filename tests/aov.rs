@@ -257,7 +257,7 @@ fn misses_are_zero_albedo_and_normal_and_infinite_depth_and_position() {
             Aov::Albedo | Aov::Normal => 0.0,
             Aov::Depth | Aov::Position => f32::INFINITY,
             // (Not gathered here.)
-            Aov::Variance => unreachable!(),
+            Aov::Variance | Aov::Half | Aov::Samples => unreachable!(),
         };
         assert!(layer.values.iter().all(|&v| v == want), "{:?}", layer.aov);
     }

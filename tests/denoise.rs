@@ -384,6 +384,40 @@ fn the_denoised_lab_box_at_4_spp_is_ten_times_closer_to_mitsuba() {
 }
 
 #[test]
+fn the_guarded_image_is_never_worse_than_the_noisy_one_from_few_samples_to_many() {
+    let Some(mut denoiser) = denoiser(0) else {
+        return;
+    };
+    let reference = common::reference_image("cornell-path-mitsuba-256.exr");
+    let scene = cornell::scene();
+    let camera = Camera::lab(cornell::CAMERA_POSITION, 0.0, 0.0, 256, 256);
+    for spp in [2, 16, 128] {
+        let rendered = render(&scene, &camera, spp, GUIDES, 2);
+        let guarded = denoiser
+            .denoise_guarded(&rendered.film, rendered.aovs.as_ref().unwrap())
+            .unwrap();
+        let check = guarded
+            .check
+            .as_ref()
+            .expect("two halves from two samples on");
+        assert_eq!(check.halves.iter().filter(|h| h.is_none()).count(), 0);
+        let noisy = rel_mse(&rendered.film, &reference);
+        let out = rel_mse(&guarded.image, &reference);
+        let unguarded = rel_mse(&guarded.denoised, &reference);
+        let weights = guarded.weights.unwrap();
+        let mean = weights.iter().map(|&w| f64::from(w)).sum::<f64>() / weights.len() as f64;
+        eprintln!(
+            "{spp} spp: relMSE against Mitsuba noisy {noisy:.3e}, denoised {unguarded:.3e}, \
+             guarded {out:.3e} (mean weight {mean:.2})"
+        );
+        assert!(
+            out <= noisy * 1.002,
+            "{spp} spp: noisy {noisy:.3e}, guarded {out:.3e}"
+        );
+    }
+}
+
+#[test]
 fn denoised_images_are_the_same_on_any_thread_count() {
     let Some(mut one) = denoiser(1) else {
         return;

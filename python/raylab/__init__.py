@@ -44,7 +44,7 @@ __all__ = [
 _PLAIN = (1.0, 0.0, "clamp")
 
 #: The AOVs raylab renders (``aovs=[...]``).
-AOVS = ("albedo", "normal", "depth", "position", "variance")
+AOVS = ("albedo", "normal", "depth", "position", "variance", "half", "samples")
 
 
 class Image(np.ndarray):
@@ -109,7 +109,8 @@ class Image(np.ndarray):
 class Render:
     """A render with AOVs: ``.image`` (an :class:`Image`) and one array per
     AOV asked for, as attributes and in ``.aovs``: ``albedo``, ``normal`` and
-    ``position`` are ``(H, W, 3)``, ``depth`` and ``variance`` ``(H, W)``;
+    ``position`` are ``(H, W, 3)``, ``depth``, ``variance`` and ``samples``
+    ``(H, W)``, ``half`` ``(H, W, 4)`` (a half's mean colour and its count);
     ``.noisy`` is the image before denoising (with ``denoise=True``), else
     None. Shows its image in Jupyter."""
 

@@ -57,6 +57,8 @@ class Render:
     depth: np.ndarray
     position: np.ndarray
     variance: np.ndarray
+    half: np.ndarray
+    samples: np.ndarray
     @property
     def info(self) -> dict: ...
     def __init__(self, image: Image, aovs: Optional[Mapping[str, np.ndarray]] = ..., noisy: Optional[Image] = ...) -> None: ...
@@ -67,7 +69,7 @@ class RenderInterrupted(KeyboardInterrupt):
     @property
     def image(self) -> Optional[Image]: ...
 
-_Aov = Literal["albedo", "normal", "depth", "position", "variance"]
+_Aov = Literal["albedo", "normal", "depth", "position", "variance", "half", "samples"]
 
 def render(
     scene: Union[Scene, _Path] = "cornell",
@@ -111,6 +113,7 @@ def render(
     aov: Union[None, str, Sequence[_Aov]] = None,
     spp: Optional[int] = None,
     time: Optional[float] = None,
+    noise_threshold: Optional[float] = None,
     seed: Optional[int] = None,
     threads: Optional[int] = None,
     checkpoint: Optional[_Path] = None,

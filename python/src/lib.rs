@@ -185,7 +185,7 @@ fn run_blocking<T: Send + 'static>(
             Event::Progress(done) => {
                 mailbox.done.fetch_max(done, Ordering::Relaxed);
             }
-            Event::Finished | Event::Writing(_) => {}
+            Event::Samples(_) | Event::Finished | Event::Writing(_) => {}
         };
         let hooks = Hooks {
             on_event: &on_event,

@@ -180,6 +180,7 @@ def valid_values(tmp_path):
         "aov": (["depth"], {}),
         "spp": (2, {}),
         "time": (0.05, {}),
+        "noise_threshold": (0.2, {"spp": 48, "integrator": "path"}),
         "seed": (7, {}),
         "threads": (1, {}),
         "checkpoint": (tmp_path / "c.ckpt", {"output": out}),
@@ -225,6 +226,8 @@ def test_wrong_keywords_and_values_raise(tmp_path):
         raylab.render("cornell", spp=0)
     with pytest.raises(ValueError, match="max_depth: invalid value '0'"):
         raylab.render("cornell", max_depth=0)
+    with pytest.raises(ValueError, match="noise_threshold"):
+        raylab.render("cornell", noise_threshold=0)
     with pytest.raises(ValueError, match="pitch"):
         raylab.render("cornell", pitch=90)
     with pytest.raises(ValueError, match="integrator"):

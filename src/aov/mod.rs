@@ -50,6 +50,6 @@ mod sums;
 
 pub use guides::{GUIDE_SAMPLES, Guides};
 pub use image::{AovImage, AovLayer};
-pub use set::{Aov, AovSet, luminance};
+pub use set::{Aov, AovSet, in_half, luminance};
 pub use sums::{AovSums, VARIANCE_CLAMP};
 pub(crate) use sums::{FirstHit, Layout};

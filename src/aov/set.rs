@@ -13,6 +13,25 @@ pub fn luminance(c: Vec3A) -> f32 {
     c.dot(Vec3A::new(0.2126, 0.7152, 0.0722))
 }
 
+/// Whether sample `sample` of pixel number `pixel` (row-major over the whole
+/// image) of a render with `seed` belongs to the [`Aov::Half`] half: of each
+/// pair of samples `2k, 2k + 1` exactly one does, chosen by a hash of
+/// `(seed, pixel, k)`. Not simply the odd samples: the Sobol' sampler puts a
+/// pair's two samples in opposite halves of the pixel (and of every other
+/// stratified dimension), so the odd samples alone would see the pixel's
+/// right half and their difference from the even ones an edge, not noise.
+#[inline]
+pub fn in_half(seed: u64, pixel: u64, sample: u32) -> bool {
+    let mut h = seed ^ 0x9e37_79b9_7f4a_7c15;
+    h ^= pixel.wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    h ^= u64::from(sample >> 1).wrapping_mul(0x94d0_49bb_1331_11eb);
+    // SplitMix64's finaliser.
+    h = (h ^ (h >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    h = (h ^ (h >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    h ^= h >> 31;
+    (h & 1) as u32 == sample & 1
+}
+
 /// One output variable.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Aov {
@@ -28,16 +47,27 @@ pub enum Aov {
     Position,
     /// Variance of the pixel's luminance estimate.
     Variance,
+    /// The mean of one half of the pixel's samples (of each pair of samples
+    /// `2k, 2k + 1`, the one a hash of the seed, pixel and pair picks; see
+    /// [`in_half`]) and how many samples that half holds: with the image,
+    /// two independent estimates whose difference is the pixel's noise
+    /// (adaptive sampling and the denoiser's guard measure it so).
+    Half,
+    /// The number of samples the pixel took (adaptive sampling stops
+    /// converged pixels early).
+    Samples,
 }
 
 impl Aov {
     /// Every AOV, in the order the README lists them.
-    pub const ALL: [Aov; 5] = [
+    pub const ALL: [Aov; 7] = [
         Aov::Albedo,
         Aov::Normal,
         Aov::Depth,
         Aov::Position,
         Aov::Variance,
+        Aov::Half,
+        Aov::Samples,
     ];
 
     /// The name on the command line and of the EXR layer.
@@ -48,18 +78,23 @@ impl Aov {
             Aov::Depth => "depth",
             Aov::Position => "position",
             Aov::Variance => "variance",
+            Aov::Half => "half",
+            Aov::Samples => "samples",
         }
     }
 
     /// The channels' suffixes, as compositors read them: colours `R, G, B`,
     /// vectors `X, Y, Z`, depth `Z` (Nuke's `depth.Z`), variance `Y` (of
-    /// the luminance).
+    /// the luminance), the half's colour and sample count `R, G, B, N`, the
+    /// sample count `N`.
     pub fn channels(self) -> &'static [&'static str] {
         match self {
             Aov::Albedo => &["R", "G", "B"],
             Aov::Normal | Aov::Position => &["X", "Y", "Z"],
             Aov::Depth => &["Z"],
             Aov::Variance => &["Y"],
+            Aov::Half => &["R", "G", "B", "N"],
+            Aov::Samples => &["N"],
         }
     }
 
@@ -102,7 +137,7 @@ impl FromStr for Aov {
 /// A set of AOVs in the order given, each at most once (possibly empty).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct AovSet {
-    list: [Aov; 5],
+    list: [Aov; 7],
     len: u8,
 }
 
@@ -225,7 +260,7 @@ mod tests {
         let err = "albedo,colour".parse::<AovSet>().unwrap_err();
         assert_eq!(
             err,
-            "unknown AOV 'colour' (expected albedo, normal, depth, position, variance)"
+            "unknown AOV 'colour' (expected albedo, normal, depth, position, variance, half, samples)"
         );
         assert!(
             "normal,normal"

@@ -23,14 +23,14 @@ pub const VARIANCE_CLAMP: f32 = (1u32 << 20) as f32;
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) struct Layout {
     /// Offset of each AOV (indexed as [`Aov::ALL`]) if gathered.
-    offset: [Option<usize>; 5],
+    offset: [Option<usize>; 7],
     /// Values per pixel.
     pub(crate) stride: usize,
 }
 
 impl Layout {
     pub(crate) fn new(set: AovSet) -> Self {
-        let mut offset = [None; 5];
+        let mut offset = [None; 7];
         let mut next = 0;
         for a in set.iter() {
             offset[a as usize] = Some(next);
@@ -77,7 +77,9 @@ impl Layout {
     /// `out` (the guides only from the first [`GUIDE_SAMPLES`]; a miss adds the
     /// environment to the albedo and nothing to the normal, and depth and
     /// position only count hits; a value that is not finite, which the image
-    /// drops, adds nothing to the variance). `shaded` is what
+    /// drops, adds nothing to the variance or the half's colour, but counts
+    /// as a sample). `half` says whether the sample is in [`Aov::Half`]'s
+    /// half ([`super::in_half`]). `shaded` is what
     /// [`Layout::first_hit`] made of the hit if the integrator shaded it;
     /// otherwise the hit is shaded here, as far as the AOVs need. Out of line:
     /// a call per sample costs nothing measurable, while inlined it changed
@@ -94,9 +96,18 @@ impl Layout {
         shaded: Option<&FirstHit>,
         value: Vec3A,
         sample: u32,
+        half: bool,
         out: &mut [i128],
     ) {
-        let [mut albedo, mut normal, depth, position, variance] = self.offset;
+        let [
+            mut albedo,
+            mut normal,
+            depth,
+            position,
+            variance,
+            in_half,
+            samples,
+        ] = self.offset;
         if !adds_guides(sample) {
             (albedo, normal) = (None, None);
         }
@@ -105,6 +116,18 @@ impl Layout {
         {
             let l = luminance(value).clamp(0.0, VARIANCE_CLAMP);
             out[at] += crate::fixed::fixed(l * l);
+        }
+        let one = 1 << crate::fixed::FRACTION_BITS;
+        if let Some(at) = in_half
+            && half
+        {
+            if value.is_finite() {
+                crate::fixed::add3((&mut out[at..at + 3]).try_into().unwrap(), value);
+            }
+            out[at + 3] += one;
+        }
+        if let Some(at) = samples {
+            out[at] += one;
         }
         let Some(hit) = hit else {
             if let Some(at) = albedo {
@@ -151,7 +174,7 @@ impl Layout {
         let d = (p - camera.position).dot(camera.forward());
         add(depth, Vec3A::splat(d), 1);
         add(position, p, 3);
-        out[self.stride - 1] += 1 << crate::fixed::FRACTION_BITS;
+        out[self.stride - 1] += one;
     }
 }
 
@@ -242,8 +265,10 @@ impl AovSums {
                             let hits = f64::from(record[stride - 1]);
                             let count = match aov {
                                 // The record holds the finished estimate
-                                // (see `AovSums::sums`).
-                                Aov::Variance => 1.0,
+                                // (see `AovSums::sums`), or a count.
+                                Aov::Variance | Aov::Samples => 1.0,
+                                // The mean over the half's own samples.
+                                Aov::Half => f64::from(record[at + 3]),
                                 a if a.over_hits() => hits,
                                 Aov::Albedo | Aov::Normal => guide_n,
                                 _ => n,
@@ -255,15 +280,26 @@ impl AovSums {
                                     f32::INFINITY
                                 };
                             }
+                            if aov == Aov::Half {
+                                // Its count as it is (zero where the half is
+                                // empty, whose colour is then +∞).
+                                pixel[3] = record[at + 3];
+                            }
                         }
                     });
                 AovLayer { aov, values }
             })
             .collect();
+        // Per pixel over its own samples where they are counted (adaptive
+        // sampling stops pixels at different counts).
+        let counted = layout.offset(Aov::Samples);
         let coverage = self
             .sums
             .par_chunks(stride)
-            .map(|record| (f64::from(record[stride - 1]) / n).min(1.0) as f32)
+            .map(|record| {
+                let n = counted.map_or(n, |at| f64::from(record[at]).max(1.0));
+                (f64::from(record[stride - 1]) / n).min(1.0) as f32
+            })
             .collect();
         AovImage {
             width: self.width,

@@ -1,124 +1,316 @@
-//! Keeping the noisy image where it is already good enough.
+//! The guard: the denoised image only where the render's own estimate says
+//! it is better than the noisy one.
 //!
-//! A denoiser trades noise for bias: where a render has converged, or where
-//! the guides miss a feature, its output can be worse than its input, and a
-//! perceptual measure sees even a shift of a fifth of a percent spread over
-//! a smooth region (measured: the HDRI-lit helmet's mean FLIP doubles when
-//! its noisy image is scaled by 1.002, more than its noise costs at 64 spp).
-//! So the denoised value `y` of a pixel is only taken as far as it helps:
-//! the output is `x + w (y − x)`, `x` the noisy value, with
+//! A denoiser trades noise for bias, and where a render has (nearly)
+//! converged, or where the guides miss a feature (a caustic, a small bright
+//! light seen through glass, a texture finer than the noise), its output is
+//! worse than its input. No rule fitted to a few scenes can say where; the
+//! render itself can, because it controls every sample. Each pixel's samples
+//! are split into two halves `A` and `B` (one sample of each pair
+//! `2k, 2k + 1`, [`crate::aov::in_half`]), two estimates of the pixel with
+//! half the samples each, and the denoiser runs a second time, on `A` alone
+//! (cross-validation, as in Bitterli et al. 2016, "Nonlinearly weighted
+//! first-order regression for denoising Monte Carlo renderings", and
+//! Rousselle et al. 2012). `B` is independent of `A` and of `f(A)`, so per
+//! pixel
 //!
-//! `w = min(1, 4V/D) · gate(√min(V, D) / L) · c`,
+//! `s = (f(A) − B)² − (A − B)²` has mean `M_A − V_A`,
 //!
-//! where, as means over a window of (2 [`RADIUS`] + 1)² pixels (a pixel's
-//! own numbers are too noisy to weigh by, and a weight that followed a
-//! pixel's own noise would bias the image), `V` is the noisy value's
-//! variance (the `variance` AOV), `D` the squared difference `(y − x)²` and
-//! `L` the noisy luminance, all of luminance:
+//! the denoised half's squared error minus the noisy half's: `B`'s own noise
+//! cancels. Over a window of pixels the sum `S` of `s` and the sum `Q` of
+//! `s²` give the evidence `t = −S / √Q` (in standard errors) that the
+//! denoiser beats the noise, and the denoised value's weight is `t` clamped
+//! to `[0, 1]`: whole where it wins by a standard error or more, none where
+//! it does not win. This is measured twice, and the smaller weight is taken:
 //!
-//! * `min(1, 4V/D)`: `y − x` is the noise plus the denoiser's bias `b`, so
-//!   `D ≈ V + b²`, and `V/(V + b²)` would be the weight of least expected
-//!   squared error: 1 where the difference is all noise, falling where the
-//!   denoiser changed more than the noise explains. The factor
-//!   [`TOLERANCE`] (the change may be twice the noise's standard deviation
-//!   before the weight falls) allows for the variance estimate's own error:
-//!   a few samples of heavy-tailed path contributions mostly underestimate
-//!   it (on the showcase at 4 spp, `V/D` gave 1.5× the relMSE of `4V/D`);
-//! * `gate`: 0 below a relative noise of [`GATE_LOW`], 1 above [`GATE_HIGH`],
-//!   linear between: where the noise (or the change the denoiser would make,
-//!   whichever is smaller) is a percent or two of the value, it is not worth
-//!   a denoiser's subtle shifts;
-//! * `c`: the share of the pixel's samples whose camera ray hit a surface. A
-//!   sample that escaped shows the environment straight, with no path noise;
-//!   its only noise is antialiasing, which the denoiser keeps too (its guides
-//!   have the same samples), so a pixel of sky is kept as it is.
+//! * per pixel, relative to the pixel's value (each channel's difference
+//!   over `y² + ε`, `y` the denoised image, the best guess of the truth,
+//!   `ε` 1 % of its squared mean): what a relative MSE sees, over windows of
+//!   (2 [`RADIUS`] + 1)² pixels;
+//! * as a viewer sees it: the differences in an opponent colour space
+//!   (luminance, red − green, blue − yellow), each channel blurred by FLIP's
+//!   contrast-sensitivity filter at its standard 67 pixels per degree
+//!   ([`CSF_SIGMA`]), over windows of (2 [`SEEN_RADIUS`] + 1)² pixels. A
+//!   denoiser's faint bias over a smooth region, or a fine texture it
+//!   blurs, shows there even where it removed far more noise than it added
+//!   per pixel.
 //!
-//! With fewer than two samples the variance is unknown (`+∞`): `V/D` is then
-//! 1, and the gate looks at `D` alone. The constants were chosen on the
-//! helmet under the Venice HDRI and the showcase at 1 to 1024 spp against
-//! 4096-spp renders (`docs/denoising.md`): with them the output is never
-//! worse than the noisy image there in clamped relMSE or mean FLIP.
+//! What is compared is the two halves: the decision assumes that what holds
+//! between `f(A)` and `A` holds between `f(x)` and `x` (both made of twice
+//! the samples). There is no constant tuned to a scene: the windows set how
+//! many pixels an estimate averages, the standard error how sure it must be,
+//! FLIP's published filters what a viewer sees.
+//!
+//! Caveats, measured (docs/denoising.md): the halves of a stratified
+//! (Sobol') render are not quite independent, so `(A − B)²` overestimates
+//! the halves' variance by up to a third, and the full image converges
+//! faster than two halves would suggest; both favour the denoiser a little.
+//! The heuristic blend ([`super::heuristic`]) still lowers the weight where
+//! it would (the weight is the smaller of the two).
+//!
+//! **One sample per pixel** has no second half: nothing is known of the
+//! noise, and the heuristic blend decides alone (with the variance unknown
+//! it keeps the noisy value only where escaped camera rays see the
+//! environment). A single path per pixel is the noisiest image a render
+//! makes; on every scene of `tools/compare_cycles.py` it is many times worse
+//! than the denoised image in both measures. With two samples each half is
+//! one sample: the estimates are noisy, and the standard error says so.
 //!
 //! Deterministic: every pixel is computed from the same inputs in the same
 //! order whatever the number of threads.
 
+use glam::Vec3A;
 use rayon::prelude::*;
 
 use crate::aov::luminance;
 use crate::film::Film;
 
-/// Half the width of the window the weights are averaged over.
-pub const RADIUS: usize = 3;
-/// How many times the noise's variance the squared change may be before
-/// the denoised value's weight falls (see the module documentation).
-pub const TOLERANCE: f64 = 4.0;
-/// Relative noise below which the noisy value is kept.
-pub const GATE_LOW: f64 = 0.02;
-/// Relative noise above which the denoised value is taken (as far as `V/D`
-/// allows).
-pub const GATE_HIGH: f64 = 0.06;
-/// Luminance below which the gate's relative noise is taken relative to
-/// this instead (black pixels are all noise).
-const DARK: f64 = 1e-4;
+/// Half the width of the window the per-pixel estimates are averaged over.
+pub const RADIUS: usize = 8;
 
-/// `noisy` moved towards `denoised` by each pixel's weight (see the module
-/// documentation); `variance` holds the variance AOV and `coverage` the
-/// share of samples that hit a surface, one value per pixel each.
-pub fn blend(noisy: &Film, denoised: &Film, variance: &[f32], coverage: &[f32]) -> Film {
+/// The standard deviations, in pixels, of FLIP's contrast-sensitivity
+/// filters (Andersson et al. 2020) at its standard 67 pixels per degree, of
+/// the achromatic, red–green and blue–yellow channels: `√(b / 2π²) · 67` for
+/// their widths `b` = 0.0047, 0.0053 and 0.04 deg².
+pub const CSF_SIGMA: [f64; 3] = [1.03, 1.10, 3.0];
+
+/// Half the width of the window the filtered estimates are averaged over:
+/// wider, as filtered values are correlated over the filters' widths.
+pub const SEEN_RADIUS: usize = 16;
+
+/// The two halves of each pixel's samples, `A` and `B`: from the image `x`
+/// (the mean of all `n` samples) and the [`crate::aov::Aov::Half`] layer
+/// (`B`'s mean and count `n_B`, four values a pixel), `A = (n x − n_B B) /
+/// (n − n_B)`. `counts` gives each pixel's `n` where it differs (adaptive
+/// sampling), else `samples` is every pixel's. `None` where a half is empty
+/// (one sample) or a value is not finite.
+pub fn halves(
+    image: &Film,
+    half: &[f32],
+    counts: Option<&[f32]>,
+    samples: u32,
+) -> Vec<Option<(Vec3A, Vec3A)>> {
+    image
+        .pixels
+        .par_iter()
+        .enumerate()
+        .map(|(i, &x)| {
+            let h = &half[4 * i..4 * i + 4];
+            let n = counts.map_or(samples as f32, |c| c[i]);
+            let (b, n_b) = (Vec3A::new(h[0], h[1], h[2]), h[3]);
+            let n_a = n - n_b;
+            if n_b < 1.0 || n_a < 1.0 || !b.is_finite() {
+                return None;
+            }
+            // In f64: `n x` and `n_B B` nearly cancel where A ≈ B.
+            let (x64, b64) = (x.as_dvec3(), b.as_dvec3());
+            let a = (x64 * f64::from(n) - b64 * f64::from(n_b)) / f64::from(n_a);
+            let a = a.max(glam::DVec3::ZERO).as_vec3a();
+            a.is_finite().then_some((a, b))
+        })
+        .collect()
+}
+
+/// The guard's weight of `denoised` (`y`, the denoiser's output for the
+/// noisy image `noisy`, `x`) in each pixel, estimated from the `halves` and
+/// `denoised_a` (the denoiser's output for `A`, from the same guides); see
+/// the module documentation. The output is `x + w (y − x)`
+/// ([`super::heuristic::apply`]).
+pub fn guard(
+    noisy: &Film,
+    denoised: &Film,
+    halves: &[Option<(Vec3A, Vec3A)>],
+    denoised_a: &Film,
+) -> Vec<f32> {
     let (w, h) = (noisy.width as usize, noisy.height as usize);
     assert_eq!(noisy.pixels.len(), w * h);
     assert_eq!(denoised.pixels.len(), w * h);
-    assert_eq!(variance.len(), w * h);
-    assert_eq!(coverage.len(), w * h);
-    let diff2: Vec<f64> = noisy
-        .pixels
+    assert_eq!(halves.len(), w * h);
+    assert_eq!(denoised_a.pixels.len(), w * h);
+    let eps = epsilon(denoised);
+    let relative = relative_to(denoised);
+    // Per pixel, (f(A) − B)² − (A − B)²: its mean is M_A − V_A.
+    let s: Vec<f64> = halves
         .par_iter()
         .zip(&denoised.pixels)
-        .map(|(x, y)| {
-            let d = f64::from(luminance(*y - *x));
-            d * d
+        .zip(&denoised_a.pixels)
+        .map(|((halves, &y), &ya)| match halves {
+            Some((a, b)) => relative(ya - *b, y) - relative(*a - *b, y),
+            None => 0.0,
         })
         .collect();
-    let var: Vec<f64> = variance
-        .par_iter()
-        .map(|&v| f64::from(v.max(0.0)))
-        .collect();
-    let lum: Vec<f64> = noisy
+    let sharp = weights(&s, w, h, RADIUS);
+    // The same through the eye's filters (FLIP's): the differences in an
+    // opponent space, each channel blurred by its contrast sensitivity.
+    let opponent = |d: Vec3A| [luminance(d), d.x - d.y, d.z - 0.5 * (d.x + d.y)];
+    let channels = |pick: &(dyn Fn(&(Vec3A, Vec3A), Vec3A) -> Vec3A + Sync)| -> [Vec<f64>; 3] {
+        let o: Vec<[f32; 3]> = halves
+            .par_iter()
+            .zip(&denoised_a.pixels)
+            .map(|(halves, &ya)| match halves {
+                Some(ab) => opponent(pick(ab, ya)),
+                None => [0.0; 3],
+            })
+            .collect();
+        std::array::from_fn(|c| {
+            let plane: Vec<f64> = o.iter().map(|v| f64::from(v[c])).collect();
+            gaussian(&plane, w, h, CSF_SIGMA[c])
+        })
+    };
+    let noisy_seen = channels(&|(a, b), _| *a - *b);
+    let denoised_seen = channels(&|(_, b), ya| ya - *b);
+    let scale: Vec<f64> = denoised
         .pixels
         .par_iter()
-        .map(|x| f64::from(luminance(*x).max(0.0)))
+        .map(|&y| {
+            let l = f64::from(luminance(y));
+            1.0 / (l * l + eps)
+        })
         .collect();
-    let d = box_mean(&diff2, w, h, RADIUS);
-    let v = box_mean(&var, w, h, RADIUS);
-    let l = box_mean(&lum, w, h, RADIUS);
-    let mut out = Film::new(noisy.width, noisy.height);
-    out.pixels.par_iter_mut().enumerate().for_each(|(i, o)| {
-        let (x, y) = (noisy.pixels[i], denoised.pixels[i]);
-        let weight = weight(v[i], d[i], l[i]) * coverage[i].clamp(0.0, 1.0);
-        *o = x + (y - x) * weight;
-    });
-    out
+    let seen: Vec<f64> = (0..w * h)
+        .into_par_iter()
+        .map(|i| {
+            let square = |c: &[Vec<f64>; 3]| c.iter().map(|p| p[i] * p[i]).sum::<f64>();
+            (square(&denoised_seen) - square(&noisy_seen)) * scale[i]
+        })
+        .collect();
+    let seen = weights(&seen, w, h, SEEN_RADIUS);
+    sharp.iter().zip(&seen).map(|(a, b)| a.min(*b)).collect()
 }
 
-/// The weight of the denoised value for window means `v` (variance), `d`
-/// (squared difference) and `l` (luminance), before coverage.
-#[inline]
-pub fn weight(v: f64, d: f64, l: f64) -> f32 {
-    let mse = if d > 0.0 && TOLERANCE * v < d {
-        TOLERANCE * v / d
-    } else {
-        1.0
+/// The guard's per-pixel estimates, for a look at them: over each pixel's
+/// window of (2 [`RADIUS`] + 1)² pixels, the mean relative squared error of
+/// the noisy half `A` (`V_A ≈ (A − B)² / 2`) and of the denoised half `f(A)`
+/// (`M_A ≈ (f(A) − B)² − (A − B)² / 2`), measured as [`guard`] measures them
+/// per pixel. `true_error` gives the same means of `(v − truth)²` for a
+/// reference image, to set beside them.
+pub fn estimates(
+    denoised: &Film,
+    halves: &[Option<(Vec3A, Vec3A)>],
+    denoised_a: &Film,
+) -> (Vec<f64>, Vec<f64>) {
+    let (w, h) = (denoised.width as usize, denoised.height as usize);
+    let relative = relative_to(denoised);
+    let (dx, dy): (Vec<f64>, Vec<f64>) = halves
+        .par_iter()
+        .zip(&denoised.pixels)
+        .zip(&denoised_a.pixels)
+        .map(|((halves, &y), &ya)| match halves {
+            Some((a, b)) => (relative(*a - *b, y), relative(ya - *b, y)),
+            None => (0.0, 0.0),
+        })
+        .unzip();
+    let (dx, dy) = (
+        window_mean(&dx, w, h, RADIUS),
+        window_mean(&dy, w, h, RADIUS),
+    );
+    let noisy = dx.iter().map(|d| d / 2.0).collect();
+    let denoised = dx.iter().zip(&dy).map(|(x, y)| y - x / 2.0).collect();
+    (noisy, denoised)
+}
+
+/// The window means (as [`estimates`]) of the relative squared error of
+/// `image` against `truth`, relative to `denoised` as the guard measures.
+pub fn true_error(image: &Film, truth: &Film, denoised: &Film) -> Vec<f64> {
+    let (w, h) = (denoised.width as usize, denoised.height as usize);
+    let relative = relative_to(denoised);
+    let e: Vec<f64> = (image.pixels.par_iter())
+        .zip(&truth.pixels)
+        .zip(&denoised.pixels)
+        .map(|((&v, &t), &y)| relative(v - t, y))
+        .collect();
+    window_mean(&e, w, h, RADIUS)
+}
+
+/// `ε`: 1 % of the squared mean of `denoised` (over pixels and channels).
+fn epsilon(denoised: &Film) -> f64 {
+    let n = (3 * denoised.pixels.len()).max(1) as f64;
+    let mean = denoised
+        .pixels
+        .iter()
+        .map(|p| f64::from(p.element_sum()))
+        .sum::<f64>()
+        / n;
+    0.01 * mean * mean
+}
+
+/// Each channel's squared difference over `y² + ε`, summed ([`epsilon`]).
+fn relative_to(denoised: &Film) -> impl Fn(Vec3A, Vec3A) -> f64 + Sync + use<> {
+    let eps = epsilon(denoised);
+    move |d: Vec3A, y: Vec3A| {
+        let (d, y) = (d.as_dvec3(), y.as_dvec3());
+        (d * d / (y * y + eps)).element_sum()
+    }
+}
+
+/// [`box_sum`] over the number of pixels in each clipped window.
+fn window_mean(values: &[f64], w: usize, h: usize, r: usize) -> Vec<f64> {
+    let ones = vec![1.0; values.len()];
+    let (sum, count) = (box_sum(values, w, h, r), box_sum(&ones, w, h, r));
+    sum.iter().zip(&count).map(|(s, c)| s / c).collect()
+}
+
+/// The weights [`weight`] gives each pixel's window (of `(2r + 1)²`
+/// pixels) of the per-pixel differences `s`.
+fn weights(s: &[f64], w: usize, h: usize, r: usize) -> Vec<f32> {
+    let squares: Vec<f64> = s.par_iter().map(|s| s * s).collect();
+    let (sum, squares) = (box_sum(s, w, h, r), box_sum(&squares, w, h, r));
+    sum.par_iter()
+        .zip(&squares)
+        .map(|(&s, &q)| weight(s, q))
+        .collect()
+}
+
+/// `values` (a `w × h` image) blurred by a Gaussian of standard deviation
+/// `sigma` pixels, truncated at 3σ and renormalised at the image's edges.
+fn gaussian(values: &[f64], w: usize, h: usize, sigma: f64) -> Vec<f64> {
+    let r = (3.0 * sigma).ceil() as usize;
+    let kernel: Vec<f64> = (0..=r)
+        .map(|k| (-((k * k) as f64) / (2.0 * sigma * sigma)).exp())
+        .collect();
+    let row_len = w.max(1);
+    let pass = |get: &(dyn Fn(usize, usize) -> f64 + Sync), along_x: bool| -> Vec<f64> {
+        let mut out = vec![0.0; w * h];
+        out.par_chunks_mut(row_len)
+            .enumerate()
+            .for_each(|(y, row)| {
+                for (x, o) in row.iter_mut().enumerate() {
+                    let (at, len) = if along_x { (x, w) } else { (y, h) };
+                    let (mut sum, mut total) = (0.0, 0.0);
+                    for j in at.saturating_sub(r)..(at + r + 1).min(len) {
+                        let k = kernel[j.abs_diff(at)];
+                        sum += k * if along_x { get(j, y) } else { get(x, j) };
+                        total += k;
+                    }
+                    *o = sum / total;
+                }
+            });
+        out
     };
-    let relative = v.min(d).sqrt() / l.max(DARK);
-    let gate = ((relative - GATE_LOW) / (GATE_HIGH - GATE_LOW)).clamp(0.0, 1.0);
-    (mse * gate) as f32
+    let rows = pass(&|x, y| values[y * w + x], true);
+    pass(&|x, y| rows[y * w + x], false)
 }
 
-/// The mean of `values` (a `w × h` image) over the window of `(2r + 1)²`
+/// The denoised value's weight from a window's sum `s` of the per-pixel
+/// differences `(f(A) − B)² − (A − B)²` (whose mean is `M_A − V_A`) and the
+/// sum `q` of their squares: the evidence `t = −s / √q` that the denoised
+/// half is better (`s` in units of its own standard error, were the pixels
+/// independent), clamped to `[0, 1]`. So the denoised value is taken whole
+/// where it is better by at least a standard error, not at all where it is
+/// not better, and in proportion between.
+#[inline]
+pub fn weight(s: f64, q: f64) -> f32 {
+    if q.is_nan() || q <= 0.0 || q.is_infinite() || s.is_nan() {
+        return 0.0;
+    }
+    (-s / q.sqrt()).clamp(0.0, 1.0) as f32
+}
+
+/// The sum of `values` (a `w × h` image) over the window of `(2r + 1)²`
 /// pixels around each pixel, clipped to the image, summed directly (no
-/// running sums, whose cancellation a firefly's huge variance would ruin).
+/// running sums, whose cancellation a firefly's huge value would ruin).
 /// Infinities spread to the windows they are in.
-fn box_mean(values: &[f64], w: usize, h: usize, r: usize) -> Vec<f64> {
+fn box_sum(values: &[f64], w: usize, h: usize, r: usize) -> Vec<f64> {
     let row_len = w.max(1);
     // Rows first: each row's sums over its horizontal windows.
     let mut rows = vec![0.0f64; w * h];
@@ -136,9 +328,7 @@ fn box_mean(values: &[f64], w: usize, h: usize, r: usize) -> Vec<f64> {
         .for_each(|(y, out)| {
             let (a, b) = (y.saturating_sub(r), (y + r + 1).min(h));
             for (x, o) in out.iter_mut().enumerate() {
-                let sum: f64 = (a..b).map(|yy| rows[yy * w + x]).sum();
-                let count = (b - a) * ((x + r + 1).min(w) - x.saturating_sub(r));
-                *o = sum / count as f64;
+                *o = (a..b).map(|yy| rows[yy * w + x]).sum();
             }
         });
     out
@@ -147,7 +337,6 @@ fn box_mean(values: &[f64], w: usize, h: usize, r: usize) -> Vec<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use glam::Vec3A;
 
     fn film(w: u32, h: u32, f: impl Fn(usize) -> Vec3A) -> Film {
         let mut film = Film::new(w, h);
@@ -158,64 +347,80 @@ mod tests {
     }
 
     #[test]
-    fn the_weight_is_the_share_of_the_difference_that_noise_explains() {
-        // Noise of 20 % of the value: the gate is open, the MSE weight rules.
-        let l = 1.0;
-        assert_eq!(weight(0.01, 0.16, l), 0.25);
-        assert_eq!(weight(0.04, 0.16, l), 1.0);
-        assert_eq!(weight(0.16, 0.04, l), 1.0);
-        assert_eq!(weight(f64::INFINITY, 0.04, l), 1.0);
-        // Noise of 1 %: below the gate, the noisy value stays.
-        assert_eq!(weight(1e-4, 1e-4, l), 0.0);
-        // Halfway up the gate (4 %).
-        assert!((weight(16e-4, 16e-4, l) - 0.5).abs() < 1e-6);
-        // Nothing changed, nothing known: 0 (the gate sees no change).
-        assert_eq!(weight(f64::INFINITY, 0.0, l), 0.0);
+    fn the_weight_is_the_evidence_that_the_denoised_half_is_better() {
+        // Better by 1.5 standard errors: whole.
+        assert_eq!(weight(-3.0, 4.0), 1.0);
+        // Better by half a standard error: half.
+        assert_eq!(weight(-1.0, 4.0), 0.5);
+        // Worse: not at all.
+        assert_eq!(weight(1.0, 4.0), 0.0);
+        // No halves, no noise or no number: the noisy image stays.
+        assert_eq!(weight(0.0, 0.0), 0.0);
+        assert_eq!(weight(f64::NAN, 1.0), 0.0);
+        assert_eq!(weight(-1.0, f64::INFINITY), 0.0);
     }
 
     #[test]
-    fn a_denoised_image_within_the_noise_is_kept_and_a_biased_one_is_not() {
-        let (w, h) = (16u32, 12u32);
-        let n = (w * h) as usize;
-        let noisy = film(w, h, |i| Vec3A::splat(if i % 2 == 0 { 1.2 } else { 0.8 }));
-        let clean = film(w, h, |_| Vec3A::ONE);
-        let all = vec![1.0f32; n];
-        // Noise of standard deviation 0.2 per pixel: the denoised image's
-        // difference is all noise, so it is taken whole.
-        let variance = vec![0.04f32; n];
-        let out = blend(&noisy, &clean, &variance, &all);
-        assert!(
-            out.pixels
-                .iter()
-                .all(|p| (*p - Vec3A::ONE).abs().max_element() < 1e-6)
-        );
-        // A denoiser that darkened the image to 0.5 is partly undone: at
-        // (8, 6) the window's columns 5..=11 hold three of 1.2 and four of
-        // 0.8, so D = (3 · 0.7² + 4 · 0.3²)/7 and w = 4 · 0.04 / D.
-        let dark = film(w, h, |_| Vec3A::splat(0.5));
-        let out = blend(&noisy, &dark, &variance, &all);
-        let centre = out.get(8, 6);
-        let d = (3.0 * 0.49 + 4.0 * 0.09) / 7.0f32;
-        let expect = 1.2 + (0.5 - 1.2) * (0.16 / d);
-        assert!((centre.x - expect).abs() < 2e-3, "{centre} {expect}");
-        // Sky (no sample hit): kept as it is.
-        let sky = vec![0.0f32; n];
-        assert_eq!(blend(&noisy, &clean, &variance, &sky).pixels, noisy.pixels);
-        // Unknown variance (one sample): the denoised image where it changed
-        // more than the gate.
-        let unknown = vec![f32::INFINITY; n];
-        assert_eq!(blend(&noisy, &clean, &unknown, &all).pixels, clean.pixels);
+    fn halves_recover_both_means() {
+        // 4 samples: A = {1, 3}, B = {5, 7}: x = 4, B = 6, n_B = 2.
+        let image = film(1, 1, |_| Vec3A::splat(4.0));
+        let half = [6.0, 6.0, 6.0, 2.0];
+        let h = halves(&image, &half, None, 4);
+        assert_eq!(h[0], Some((Vec3A::splat(2.0), Vec3A::splat(6.0))));
+        // One sample: no second half.
+        let one = [f32::INFINITY, f32::INFINITY, f32::INFINITY, 0.0];
+        assert_eq!(halves(&image, &one, None, 1)[0], None);
+        // Counts per pixel (adaptive): 8 samples of mean 4, B = 3 of mean 6.
+        let h = halves(&image, &[6.0, 6.0, 6.0, 3.0], Some(&[8.0]), 64);
+        let a = (4.0 * 8.0 - 6.0 * 3.0) / 5.0;
+        assert!((h[0].unwrap().0 - Vec3A::splat(a)).abs().max_element() < 1e-6);
+    }
+
+    /// Halves of a value with noise: `truth` ± `noise` in each half, the
+    /// signs in a checkerboard in `A` and by column in `B` (uncorrelated
+    /// over a window, as independent halves are).
+    fn noisy_halves(w: u32, h: u32, truth: f32, noise: f32) -> (Film, Vec<Option<(Vec3A, Vec3A)>>) {
+        let w = w as usize;
+        let sign = |odd: bool| if odd { -noise } else { noise };
+        let halves: Vec<_> = (0..w * h as usize)
+            .map(|i| {
+                let (x, y) = (i % w, i / w);
+                let a = truth + sign((x + y) % 2 == 1);
+                let b = truth + sign((x / 2) % 2 == 1);
+                Some((Vec3A::splat(a), Vec3A::splat(b)))
+            })
+            .collect();
+        let noisy = film(w as u32, h, |i| {
+            let (a, b) = halves[i].unwrap();
+            (a + b) * 0.5
+        });
+        (noisy, halves)
     }
 
     #[test]
-    fn box_means_average_over_the_clipped_window() {
+    fn a_good_denoiser_is_taken_and_a_biased_one_is_not() {
+        let (w, h) = (24u32, 20u32);
+        let (noisy, halves) = noisy_halves(w, h, 1.0, 0.3);
+        // A denoiser that finds the truth from either input.
+        let truth = film(w, h, |_| Vec3A::ONE);
+        let weights = guard(&noisy, &truth, &halves, &truth);
+        assert!(weights.iter().all(|&w| w == 1.0));
+        // One that darkens everything by 40 %: its error (0.16) is far above
+        // the noisy image's, so the noisy image stays.
+        let dark = film(w, h, |_| Vec3A::splat(0.6));
+        let weights = guard(&noisy, &dark, &halves, &dark);
+        assert!(weights.iter().all(|&w| w == 0.0), "{weights:?}");
+    }
+
+    #[test]
+    fn box_sums_add_over_the_clipped_window() {
         let (w, h) = (5, 4);
         let values: Vec<f64> = (0..w * h).map(|i| i as f64).collect();
-        let m = box_mean(&values, w, h, 1);
-        // Corner (0, 0): the mean of 0, 1, 5, 6.
-        assert_eq!(m[0], 3.0);
-        // Inside (2, 1): the mean of rows 0..3, columns 1..4.
-        let inside: f64 = [1, 2, 3, 6, 7, 8, 11, 12, 13].iter().sum::<i32>() as f64 / 9.0;
+        let m = box_sum(&values, w, h, 1);
+        // Corner (0, 0): 0 + 1 + 5 + 6.
+        assert_eq!(m[0], 12.0);
+        // Inside (2, 1): rows 0..3, columns 1..4.
+        let inside: f64 = [1, 2, 3, 6, 7, 8, 11, 12, 13].iter().sum::<i32>() as f64;
         assert_eq!(m[w + 2], inside);
     }
 }

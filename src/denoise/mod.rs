@@ -57,6 +57,7 @@
 //! differ in the last bits).
 
 pub mod blend;
+pub mod heuristic;
 pub mod oidn;
 
 use std::sync::Arc;
@@ -67,11 +68,12 @@ use thiserror::Error;
 use crate::aov::{Aov, AovImage, AovSet};
 use crate::film::Film;
 
-pub use blend::blend;
+pub use blend::guard;
 pub use oidn::{OidnError, Quality};
 
-/// The AOVs the denoiser needs: the guides and each pixel's variance.
-pub const GUIDES: AovSet = AovSet::of(&[Aov::Albedo, Aov::Normal, Aov::Variance]);
+/// The AOVs the denoiser needs: the guides, and the half of the samples its
+/// guard measures the error by.
+pub const GUIDES: AovSet = AovSet::of(&[Aov::Albedo, Aov::Normal, Aov::Variance, Aov::Half]);
 
 /// Samples per pixel below which [`Prefilter::Auto`] prefilters the guides.
 pub const PREFILTER_BELOW_SPP: u32 = 4;
@@ -98,8 +100,9 @@ pub struct DenoiseOptions {
     /// Whether the guides are denoised first (they are then clean);
     /// otherwise they are taken as clean as they are (raylab's are).
     pub prefilter: Prefilter,
-    /// Blend the denoised image back towards the noisy one where the noisy
-    /// pixels are already as good ([`blend()`]).
+    /// Keep the noisy image where the render's own estimate says it is
+    /// better than the denoised one ([`guard()`]: a second denoiser run, on
+    /// one half of the samples, cross-validated against the other).
     pub blend: bool,
 }
 
@@ -136,6 +139,7 @@ pub enum DenoiseError {
 pub struct Denoiser {
     // Filters before the device: they are released first.
     color: Option<oidn::Filter>,
+    half: Option<oidn::Filter>,
     guide: Option<oidn::Filter>,
     device: oidn::Device,
     options: DenoiseOptions,
@@ -166,6 +170,7 @@ impl Denoiser {
         let device = oidn::Device::cpu(library, options.threads)?;
         Ok(Denoiser {
             color: None,
+            half: None,
             guide: None,
             device,
             options: *options,
@@ -201,9 +206,19 @@ impl Denoiser {
         self.last
     }
 
-    /// `image` denoised with the guides and variance of `aovs` (which must
-    /// hold [`GUIDES`]; the variance only with [`DenoiseOptions::blend`]).
+    /// `image` denoised with the guides of `aovs` and guarded by its half
+    /// of the samples (which must hold [`GUIDES`]; the half only with
+    /// [`DenoiseOptions::blend`]).
     pub fn denoise(&mut self, image: &Film, aovs: &AovImage) -> Result<Film, DenoiseError> {
+        self.denoise_guarded(image, aovs).map(|g| g.image)
+    }
+
+    /// [`Denoiser::denoise`], with what the guard decided from.
+    pub fn denoise_guarded(
+        &mut self,
+        image: &Film,
+        aovs: &AovImage,
+    ) -> Result<Guarded, DenoiseError> {
         let start = Instant::now();
         if (image.width, image.height) != (aovs.width, aovs.height) {
             return Err(DenoiseError::Size(
@@ -219,11 +234,12 @@ impl Denoiser {
                 .ok_or(DenoiseError::MissingAov(aov))
         };
         let (albedo, normal) = (layer(Aov::Albedo)?, layer(Aov::Normal)?);
-        let variance = if self.options.blend {
-            Some(layer(Aov::Variance)?)
+        let (half, variance) = if self.options.blend {
+            (Some(layer(Aov::Half)?), Some(layer(Aov::Variance)?))
         } else {
-            None
+            (None, None)
         };
+        let counts = aovs.layer(Aov::Samples).map(|l| l.values.as_slice());
         let (w, h) = (image.width as usize, image.height as usize);
         // OIDN takes HDR values in [0, ∞): radiance is never negative, but
         // the film's values are clamped to be sure.
@@ -280,18 +296,102 @@ impl Denoiser {
             },
             settings(true, true),
         )?;
-        let mut denoised = Film::new(image.width, image.height);
-        for (p, v) in denoised.pixels.iter_mut().zip(out.chunks_exact(3)) {
-            *p = glam::Vec3A::new(v[0], v[1], v[2]);
-        }
-        denoised.clamp_to_finite();
-        let result = match variance {
-            Some(v) => blend(image, &denoised, v, &aovs.coverage),
-            None => denoised,
+        let to_film = |out: &[f32]| {
+            let mut film = Film::new(image.width, image.height);
+            for (p, v) in film.pixels.iter_mut().zip(out.chunks_exact(3)) {
+                *p = glam::Vec3A::new(v[0], v[1], v[2]);
+            }
+            film.clamp_to_finite();
+            film
+        };
+        let denoised = to_film(&out);
+        let halves = half.map(|half| blend::halves(image, half, counts, aovs.samples));
+        let result = match halves {
+            // Some pixel has two halves: the guard.
+            Some(halves) if halves.iter().any(Option::is_some) => {
+                let a: Vec<f32> = halves
+                    .iter()
+                    .zip(&image.pixels)
+                    .flat_map(|(h, x)| match h {
+                        Some((a, _)) => a.to_array(),
+                        // No halves: the pixel's value (its estimate is 0).
+                        None => x.max(glam::Vec3A::ZERO).to_array(),
+                    })
+                    .collect();
+                let filter = take_filter(&mut self.half, &self.device)?;
+                filter.run(
+                    oidn::Images {
+                        width: w,
+                        height: h,
+                        input: ("color", &a),
+                        guides: vec![("albedo", albedo), ("normal", normal)],
+                        output: &mut out,
+                    },
+                    settings(true, true),
+                )?;
+                let denoised_a = to_film(&out);
+                let mut weights = guard(image, &denoised, &halves, &denoised_a);
+                if let Some(v) = variance {
+                    let heuristic = heuristic::weights(image, &denoised, v, &aovs.coverage);
+                    for (w, h) in weights.iter_mut().zip(heuristic) {
+                        *w = w.min(h);
+                    }
+                }
+                Guarded {
+                    image: heuristic::apply(image, &denoised, &weights),
+                    denoised,
+                    weights: Some(weights),
+                    check: Some(Check {
+                        halves,
+                        denoised_half: denoised_a,
+                    }),
+                }
+            }
+            // One sample: nothing is known of the noise (see `blend`); the
+            // heuristic blend alone.
+            _ => match variance {
+                Some(v) => {
+                    let weights = heuristic::weights(image, &denoised, v, &aovs.coverage);
+                    Guarded {
+                        image: heuristic::apply(image, &denoised, &weights),
+                        denoised,
+                        weights: Some(weights),
+                        check: None,
+                    }
+                }
+                None => Guarded {
+                    image: denoised.clone(),
+                    denoised,
+                    weights: None,
+                    check: None,
+                },
+            },
         };
         self.last = start.elapsed();
         Ok(result)
     }
+}
+
+/// What [`Denoiser::denoise_guarded`] made.
+#[derive(Clone, Debug)]
+pub struct Guarded {
+    /// The result: the noisy image moved towards `denoised` by `weights`.
+    pub image: Film,
+    /// The denoiser's output for the whole noisy image.
+    pub denoised: Film,
+    /// Each pixel's weight of `denoised` (`None` without the guard).
+    pub weights: Option<Vec<f32>>,
+    /// The guard's cross-validation, where it ran (two samples or more).
+    pub check: Option<Check>,
+}
+
+/// The guard's second denoiser run and what it is compared with.
+#[derive(Clone, Debug)]
+pub struct Check {
+    /// Each pixel's halves `(A, B)` ([`blend::halves`]).
+    pub halves: Vec<Option<(glam::Vec3A, glam::Vec3A)>>,
+    /// The denoiser's output for `A`.
+    pub denoised_half: Film,
 }
 
 /// The filter in `slot`, made on `device` the first time.

@@ -28,6 +28,9 @@ pub enum Event<'a> {
     /// Progress of the render started last, from any worker thread: the work
     /// done so far, out of [`Event::Started`]'s `total`.
     Progress(u64),
+    /// Adaptive sampling (`noise_threshold`): after each pass of the render
+    /// started last, the samples its pixels took on average so far.
+    Samples(f64),
     /// The render started last has taken its last sample.
     Finished,
     /// Files are about to be written through these temporary files: a caller

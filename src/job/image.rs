@@ -20,7 +20,7 @@ use crate::denoise::Denoiser;
 use crate::farm;
 use crate::fingerprint::Fingerprint;
 use crate::nan_check::first_bad_sample;
-use crate::render::{Accumulator, Ended, Passes, RenderSettings, Split, render_passes};
+use crate::render::{Accumulator, Adaptive, Ended, Passes, RenderSettings, Split, render_passes};
 
 /// The render settings of `args`: without `time`, exactly `spp` samples (1
 /// if not given); with it, at most `spp`.
@@ -199,8 +199,12 @@ impl Images<'_> {
             budget,
             spent,
             stop: hooks.stop,
+            adaptive: args.noise_threshold.map(Adaptive::new),
         };
         let mut after_pass = |acc: &Accumulator, spent: Duration| {
+            if args.noise_threshold.is_some() {
+                (hooks.on_event)(Event::Samples(acc.mean_spp()));
+            }
             // Periodic saves only when asked for (--checkpoint), never after the
             // last pass (the image is about to be written), and at most every
             // twentieth of the time on saving.
@@ -391,6 +395,11 @@ impl Images<'_> {
                     b.as_secs_f64()
                 ),
             };
+            // Adaptive sampling: the samples the pixels took on average.
+            let spp = match args.noise_threshold {
+                Some(_) => format!("{spp}, {:.1} spp on average", acc.mean_spp()),
+                None => spp,
+            };
             let resumed = if resumed_spp > 0 {
                 format!(" ({} resumed)", resumed_spp)
             } else {
@@ -543,8 +552,8 @@ fn render_key(
     use std::fmt::Write;
     let _ = write!(
         view,
-        "{camera:?}|{:?}|{}|{aovs}",
-        settings.integrator, settings.seed
+        "{camera:?}|{:?}|{}|{aovs}|{:?}",
+        settings.integrator, settings.seed, args.noise_threshold
     );
     Key {
         build: build.value(),

@@ -335,15 +335,19 @@ impl JobOptions {
         self.scene.denoise.unwrap_or(false)
     }
 
-    /// The AOVs a render gathers (those asked for, and the denoiser's
-    /// guides) and those written as layers (those asked for).
+    /// The AOVs a render gathers (those asked for, the denoiser's guides
+    /// and the half of the samples its guard and adaptive sampling measure
+    /// the noise by, and the sample counts of adaptive sampling) and those
+    /// written as layers (those asked for).
     pub fn aov_sets(&self) -> (AovSet, AovSet) {
         let layers = self.aov.unwrap_or_default();
-        let gathered = if self.denoise() {
-            layers.with(crate::denoise::GUIDES)
-        } else {
-            layers
-        };
+        let mut gathered = layers;
+        if self.denoise() {
+            gathered = gathered.with(crate::denoise::GUIDES);
+        }
+        if self.noise_threshold.is_some() {
+            gathered = gathered.with(crate::render::adaptive::AOVS);
+        }
         (gathered, layers)
     }
 }

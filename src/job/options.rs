@@ -195,6 +195,16 @@ pub struct JobOptions {
     /// Render progressively until this many seconds are spent, then write.
     #[arg(long, value_name = "SECONDS", allow_hyphen_values = true, value_parser = parse_time)]
     pub time: Option<f64>,
+    /// Adaptive sampling: after a minimum of samples (32 at 0.1, 64 at 0.01),
+    /// pixels whose estimated error is below T stop taking samples, checked
+    /// every 16 samples; --spp caps them, --time bounds the render. The error
+    /// is Blender Cycles' (the difference of two halves of the samples over
+    /// the square root of the brightness), so that T means what Cycles'
+    /// noise threshold means (0.01 is Blender's default). The summary says
+    /// how many samples the pixels took on average; `--aov samples` shows
+    /// where.
+    #[arg(long, value_name = "T", allow_hyphen_values = true, value_parser = parse_threshold)]
+    pub noise_threshold: Option<f32>,
     /// Seed of the sample positions; the same seed gives the same image on any
     /// number of threads.
     #[arg(long, value_name = "S", allow_hyphen_values = true)]
@@ -286,6 +296,12 @@ impl JobOptions {
                     "error: {what} cannot be combined with --time: every part must take the same samples"
                 ));
             }
+        }
+        if let (Some((a, b)), Some(t)) = (self.samples, self.noise_threshold) {
+            return Err(format!(
+                "error: --samples {a}..{b} cannot be combined with --noise-threshold {t}: \
+                 which pixels stop depends on all of their earlier samples (split by --tile instead)"
+            ));
         }
         if let Some((a, b)) = self.samples {
             let Some(spp) = self.spp else {
@@ -561,6 +577,7 @@ impl JobOptions {
             scene: self.scene.with_file_settings(&s),
             spp: self.spp.or(s.spp),
             time: self.time.or(s.time),
+            noise_threshold: self.noise_threshold.or(s.noise_threshold),
             seed: self.seed.or(s.seed),
             fps: self.fps.or(s.fps),
             ..self.clone()
@@ -701,6 +718,16 @@ fn parse_time(s: &str) -> Result<f64, String> {
         Ok(v) if v > 0.0 && v <= MAX_TIME => Ok(v),
         _ => Err(format!(
             "expected a time in seconds > 0 and at most {MAX_TIME}"
+        )),
+    }
+}
+
+/// A noise threshold: above 0, at most 1.
+pub fn parse_threshold(s: &str) -> Result<f32, String> {
+    match s.trim().parse::<f32>() {
+        Ok(v) if v > 0.0 && v <= 1.0 => Ok(v),
+        _ => Err(format!(
+            "expected a noise threshold above 0 and at most 1 (e.g. 0.01), got '{s}'"
         )),
     }
 }

@@ -208,7 +208,32 @@ impl Accumulator {
         n: u32,
         progress: &(dyn Fn(u64) + Sync),
     ) -> Tally {
+        self.add_active(scene, camera, integrator, seed, n, None, progress)
+    }
+
+    /// [`Accumulator::add`] of the pixels `active` marks (row-major, the
+    /// whole image) only, if given: the others keep their sums. Each pixel's
+    /// samples are then counted in the [`Aov::Samples`] AOV, which these sums
+    /// must gather (adaptive sampling, `render::adaptive`).
+    #[allow(clippy::too_many_arguments)]
+    pub fn add_active(
+        &mut self,
+        scene: &Scene,
+        camera: &Camera,
+        integrator: Integrator,
+        seed: u64,
+        n: u32,
+        active: Option<&[bool]>,
+        progress: &(dyn Fn(u64) + Sync),
+    ) -> Tally {
         assert_eq!((self.width, self.height), (camera.width, camera.height));
+        if let Some(active) = active {
+            assert_eq!(active.len(), self.image.len());
+            assert!(
+                self.aov_set().contains(Aov::Samples),
+                "an adaptive render counts its samples"
+            );
+        }
         let start = self.first + self.spp;
         let samples = start..start.saturating_add(n);
         let k = samples.len() as u64;
@@ -226,6 +251,7 @@ impl Accumulator {
                 image: &mut self.image,
                 aovs,
                 split: self.split,
+                active,
             },
             &|rows| progress(rows * k),
         );
@@ -249,13 +275,15 @@ impl Accumulator {
                 // The estimate from the exact sums, in f64 (Σ L² − (Σ L)²/n
                 // cancels where a pixel's noise is small), kept in the record.
                 let stride = Layout::new(*set).stride;
-                let n = f64::from(self.spp);
+                let counted = Layout::new(*set).offset(Aov::Samples);
                 sums.sums
                     .par_chunks_mut(stride)
                     .zip(wide.par_chunks(stride))
                     .zip(self.image.par_iter())
                     .for_each(|((record, exact), image)| {
-                        record[at] = if self.spp < 2 {
+                        let spp = counted.map_or(self.spp, |c| count(exact[c]));
+                        let n = f64::from(spp);
+                        record[at] = if spp < 2 {
                             f32::INFINITY
                         } else {
                             let sum = image.map(fixed::to_f64);
@@ -288,9 +316,54 @@ impl Accumulator {
             .for_each(|(p, w)| {
                 *p = Vec3A::ZERO + Vec3A::from_array(w.map(|c| fixed::to_f64(c) as f32))
             });
-        film.average(self.spp);
+        match self.sample_counts() {
+            // Each pixel over its own samples, as `Film::average` divides.
+            Some(counts) if counts.iter().any(|&c| c != self.spp) => {
+                film.pixels
+                    .par_iter_mut()
+                    .zip(counts.par_iter())
+                    .for_each(|(p, &c)| *p *= 1.0 / c.max(1) as f32);
+                film.clamp_to_finite();
+            }
+            _ => film.average(self.spp),
+        }
         film
     }
+
+    /// Each pixel's number of samples, if the sums count them
+    /// ([`Aov::Samples`]: adaptive sampling), row-major.
+    pub fn sample_counts(&self) -> Option<Vec<u32>> {
+        let (set, sums) = self.aovs.as_ref()?;
+        let layout = Layout::new(*set);
+        let at = layout.offset(Aov::Samples)?;
+        Some(
+            sums.par_chunks(layout.stride)
+                .map(|record| count(record[at]))
+                .collect(),
+        )
+    }
+
+    /// The mean number of samples the pixels of the sums' rows took: their
+    /// [`Accumulator::spp`] but for an adaptive render.
+    pub fn mean_spp(&self) -> f64 {
+        let Some(counts) = self.sample_counts() else {
+            return f64::from(self.spp);
+        };
+        let width = self.width.max(1) as usize;
+        let (mut sum, mut pixels) = (0u64, 0u64);
+        for (row, counts) in counts.chunks(width).enumerate() {
+            if self.split.has_tile((row / super::split::TILE_ROWS) as u32) {
+                sum += counts.iter().map(|&c| u64::from(c)).sum::<u64>();
+                pixels += counts.len() as u64;
+            }
+        }
+        sum as f64 / pixels.max(1) as f64
+    }
+}
+
+/// A count kept as a fixed-point sum of ones.
+fn count(sum: i128) -> u32 {
+    (sum >> fixed::FRACTION_BITS).clamp(0, i128::from(u32::MAX)) as u32
 }
 
 /// `len` zeros, written rather than lazily zeroed (see [`AovSums::new`]).

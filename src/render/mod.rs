@@ -6,6 +6,7 @@
 //! and the tiles' loops are in files of their own.
 
 mod accumulator;
+pub mod adaptive;
 mod output;
 mod split;
 mod tile;
@@ -24,6 +25,7 @@ use crate::integrators::path;
 use crate::materials::Material;
 use crate::scene::{Scene, SurfaceHit};
 pub use accumulator::{Accumulator, PartsError};
+pub use adaptive::Adaptive;
 pub use output::{Rendered, Tally};
 pub use split::{Split, TILE_ROWS};
 use tile::{AnySampler, PathStart, Target, accumulate_into, pixel_ray};
@@ -167,12 +169,17 @@ pub struct Passes<'a> {
     /// Checked between passes: when set, the render stops after the samples in
     /// flight, with whole samples of every pixel.
     pub stop: Option<&'a AtomicBool>,
+    /// Adaptive sampling: pixels stop when their error is below its threshold
+    /// (`settings.spp` still caps them). The accumulator must gather
+    /// [`crate::aov::Aov::Half`] and [`crate::aov::Aov::Samples`].
+    pub adaptive: Option<Adaptive>,
 }
 
 /// How [`render_passes`] ended.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Ended {
-    /// Every sample asked for was taken.
+    /// Every sample asked for was taken (or, with adaptive sampling, every
+    /// pixel stopped).
     Complete,
     /// The time budget was spent.
     Budget,
@@ -210,6 +217,23 @@ pub fn render_passes(
         if passes.stop.is_some_and(|s| s.load(Ordering::Relaxed)) {
             return Ended::Stopped;
         }
+        // Which pixels go on (made again from the sums before every pass, so
+        // that a resumed render decides as the one that was stopped).
+        let active = passes
+            .adaptive
+            .as_ref()
+            .and_then(|a| adaptive::active_pixels(acc, a));
+        if active.as_ref().is_some_and(|a| !a.contains(&true)) {
+            // Every pixel stopped: the render is complete (its pixels count
+            // their own samples), as one that went on to `spp` would be.
+            acc.spp = max_spp;
+            return Ended::Complete;
+        }
+        // Passes end at the checks.
+        let until_check = passes
+            .adaptive
+            .as_ref()
+            .map_or(u32::MAX, |a| a.next_check(acc.spp) - acc.spp);
         let spent = passes.spent + start.elapsed();
         let n = if acc.spp == 0 {
             1
@@ -226,12 +250,13 @@ pub fn render_passes(
             let fit = room.as_secs_f64() / per_sample.as_secs_f64().max(1e-9);
             (fit.round().min(u32::MAX as f64) as u32).clamp(1, max_spp - acc.spp)
         };
-        acc.add(
+        acc.add_active(
             scene,
             camera,
             settings.integrator,
             settings.seed,
-            n,
+            n.min(until_check),
+            active.as_deref(),
             progress,
         );
         after_pass(acc, passes.spent + start.elapsed());

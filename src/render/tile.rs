@@ -10,7 +10,7 @@ use rayon::prelude::*;
 
 use super::output::Tally;
 use super::split::{Split, TILE_ROWS};
-use crate::aov::{FirstHit, Layout};
+use crate::aov::{Aov, FirstHit, Layout, in_half};
 use crate::camera::Camera;
 use crate::film::Film;
 use crate::fixed::{self, Fixed3};
@@ -33,11 +33,13 @@ pub(super) enum Target<'a> {
     /// straight, several are summed in f64 per tile first.
     Narrow(&'a mut Film),
     /// Exact sums kept across calls ([`super::Accumulator`]), with the AOVs' if
-    /// any, of the row tiles of `split`.
+    /// any, of the row tiles of `split`; only of the pixels `active` marks if
+    /// given (adaptive sampling).
     Wide {
         image: &'a mut [Fixed3],
         aovs: Option<(Layout, &'a mut [i128])>,
         split: Split,
+        active: Option<&'a [bool]>,
     },
 }
 
@@ -64,6 +66,7 @@ pub(super) fn accumulate_into(
     // Each tile's slice of the sums and of the AOV sums (empty ones without
     // AOVs, so that the tiles still zip with them).
     let mut split = Split::WHOLE;
+    let mut active = None;
     let (tiles, layout, aov_tiles): (Vec<TileSums>, _, Vec<&mut [i128]>) = match target {
         Target::Narrow(film) => {
             assert_eq!((film.width, film.height), (camera.width, camera.height));
@@ -79,8 +82,10 @@ pub(super) fn accumulate_into(
             image,
             aovs,
             split: s,
+            active: a,
         } => {
             split = s;
+            active = a;
             assert_eq!(image.len(), width * camera.height as usize);
             let tiles: Vec<_> = image.chunks_mut(tile_pixels).map(TileSums::Wide).collect();
             match aovs {
@@ -103,6 +108,7 @@ pub(super) fn accumulate_into(
         .map(|(tile, (sums, aov_rows))| {
             let y0 = tile * TILE_ROWS;
             let mut dropped = 0u64;
+            let halves = layout.is_some_and(|l| l.offset(Aov::Half).is_some());
             // The AOVs are summed exactly, into the accumulator's sums.
             let mut gather = |i: usize,
                               ray: &Ray,
@@ -112,7 +118,8 @@ pub(super) fn accumulate_into(
                               sample: u32| {
                 if let Some(layout) = &layout {
                     let record = &mut aov_rows[i * layout.stride..(i + 1) * layout.stride];
-                    layout.gather(scene, camera, ray, hit, shaded, value, sample, record);
+                    let half = halves && in_half(seed, (y0 * width + i) as u64, sample);
+                    layout.gather(scene, camera, ray, hit, shaded, value, sample, half, record);
                 }
             };
             let n_rows = match &sums {
@@ -128,6 +135,7 @@ pub(super) fn accumulate_into(
                 width,
                 y0,
                 n_rows,
+                active: active.map(|a| &a[y0 * width..(y0 + n_rows) * width]),
             };
             // Each target with its own copy of the loop (no per-sample test of
             // which target it is).
@@ -303,6 +311,8 @@ struct Tile<'a> {
     y0: usize,
     /// Rows.
     n_rows: usize,
+    /// The pixels (of the tile) that take samples, if not all.
+    active: Option<&'a [bool]>,
 }
 
 impl Tile<'_> {
@@ -346,6 +356,7 @@ impl Tile<'_> {
         // lab box, less on `cornell-area` (docs/performance.md).
         #[cfg(target_arch = "x86_64")]
         if !AOVS
+            && self.active.is_none()
             && options.sampler == SamplerKind::Sobol
             && std::arch::is_x86_feature_detected!("avx2")
             && self.scene.path_lanes_apply()
@@ -378,6 +389,36 @@ impl Tile<'_> {
                 gather(i, &start.ray, hit, shaded.as_ref(), v, sample);
                 v
             };
+        if let Some(active) = self.active {
+            // Only the active pixels, eight camera rays at a time (the
+            // samples' values do not depend on which pixels share a packet).
+            let pixels = active_pixels(active, width);
+            for s in samples.clone() {
+                for chunk in pixels.chunks(8) {
+                    if let &[a, b, c, d, e, f, g, h] = chunk {
+                        let block = [a, b, c, d, e, f, g, h];
+                        let mut starts = block
+                            .map(|(x, y)| PathStart::new(camera, &options, seed, (x, y0 + y), s));
+                        let primary = starts.each_ref().map(|p| p.ray);
+                        rays += 8;
+                        let hits = scene.intersect8(&primary, f32::INFINITY);
+                        for (((x, y), start), hit) in block.into_iter().zip(&mut starts).zip(hits) {
+                            let v = path_sample(y * width + x, start, hit, s, &mut rays);
+                            add.add(y * width + x, v);
+                        }
+                    } else {
+                        for &(x, y) in chunk {
+                            let mut start = PathStart::new(camera, &options, seed, (x, y0 + y), s);
+                            rays += 1;
+                            let hit = scene.intersect(&start.ray, f32::INFINITY);
+                            let v = path_sample(y * width + x, &mut start, hit, s, &mut rays);
+                            add.add(y * width + x, v);
+                        }
+                    }
+                }
+            }
+            return rays;
+        }
         for s in samples.clone() {
             // Camera rays of 4×2 pixel blocks traced together (eight AVX2
             // lanes), then each path on its own; the last columns as 2×2
@@ -550,8 +591,27 @@ impl Tile<'_> {
             width,
             y0,
             n_rows,
+            active,
         } = self;
         let mut rays = 0u64;
+        if let Some(active) = active {
+            // Only the active pixels, one ray at a time (the lanes' values are
+            // these bit for bit).
+            let pixels = active_pixels(active, width);
+            for s in samples.clone() {
+                for &(x, y) in &pixels {
+                    let ray = pixel_ray(camera, seed, s, x, y0 + y, width);
+                    rays += 1;
+                    let hit = scene.intersect(&ray, f32::INFINITY);
+                    let v = integrator.radiance_from(scene, &ray, hit, &mut rays);
+                    if AOVS {
+                        gather(y * width + x, &ray, hit, None, v, s);
+                    }
+                    add.add(y * width + x, v);
+                }
+            }
+            return rays;
+        }
         // Whether the blocks are shaded in lanes (checked once a tile; pixel
         // coordinates below 2²⁴, which `block_points` counts on being exact
         // in f32; the lanes make pinhole rays only).
@@ -672,6 +732,14 @@ impl Tile<'_> {
         }
         rays
     }
+}
+
+/// The `(x, y)` (in the tile) of the pixels `active` marks, row by row.
+fn active_pixels(active: &[bool], width: usize) -> Vec<(usize, usize)> {
+    (active.iter().enumerate())
+        .filter(|(_, a)| **a)
+        .map(|(i, _)| (i % width, i / width))
+        .collect()
 }
 
 /// The sampler of one `path` sample.

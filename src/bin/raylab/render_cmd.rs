@@ -53,9 +53,12 @@ pub fn run(options: &JobOptions) -> anyhow::Result<()> {
             bar.set_draw_target(ProgressDrawTarget::hidden());
             let template = match unit {
                 // Time-limited: the bar fills with the time spent.
-                ProgressUnit::Milliseconds => "{elapsed_precise} [{wide_bar}] {pos}/{len} ms",
-                ProgressUnit::RowSamples => "{elapsed_precise} [{wide_bar}] {percent}% eta {eta}",
+                ProgressUnit::Milliseconds => "{elapsed_precise} [{wide_bar}] {pos}/{len} ms{msg}",
+                ProgressUnit::RowSamples => {
+                    "{elapsed_precise} [{wide_bar}] {percent}% eta {eta}{msg}"
+                }
             };
+            bar.set_message("");
             bar.set_style(ProgressStyle::with_template(template).expect("valid template"));
             bar.set_length(total);
             bar.set_position(done);
@@ -70,6 +73,9 @@ pub fn run(options: &JobOptions) -> anyhow::Result<()> {
                 bar.set_draw_target(ProgressDrawTarget::stderr());
             }
         }
+        // Adaptive sampling: the bar counts every pixel's samples up to
+        // --spp, and says how many the pixels took so far.
+        Event::Samples(mean) => bar.set_message(format!(", {mean:.1} spp on average")),
         Event::Finished => bar.finish_and_clear(),
         Event::Writing(paths) => {
             let paths: Vec<&std::path::Path> = paths.iter().map(|p| p.as_path()).collect();

@@ -43,6 +43,8 @@ pub struct RenderSection {
     pub spp: Option<u32>,
     /// Seconds to render for.
     pub time: Option<f64>,
+    /// Adaptive sampling's noise threshold (`--noise-threshold`).
+    pub noise_threshold: Option<f32>,
     /// Seed of the sample positions.
     pub seed: Option<u64>,
     /// `flat`, `direct` or `path`.

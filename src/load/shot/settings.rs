@@ -21,6 +21,8 @@ pub struct ShotSettings {
     pub spp: Option<u32>,
     /// Seconds to render for.
     pub time: Option<f64>,
+    /// Adaptive sampling's noise threshold.
+    pub noise_threshold: Option<f32>,
     /// Seed.
     pub seed: Option<u64>,
     /// Integrator (with `max_depth` applied).
@@ -79,6 +81,13 @@ pub(super) fn settings(path: &Path, r: &RenderSection) -> Result<ShotSettings, S
             "time = {t:?}: expected seconds > 0 and at most {MAX_TIME}"
         )));
     }
+    if let Some(t) = r.noise_threshold
+        && !(t > 0.0 && t <= 1.0)
+    {
+        return Err(bad(format!(
+            "noise_threshold = {t:?}: expected a threshold above 0 and at most 1 (e.g. 0.01)"
+        )));
+    }
     if r.max_depth == Some(0) {
         return Err(bad("max_depth = 0: expected at least 1".into()));
     }
@@ -127,6 +136,7 @@ pub(super) fn settings(path: &Path, r: &RenderSection) -> Result<ShotSettings, S
         height: r.height,
         spp: r.spp,
         time: r.time,
+        noise_threshold: r.noise_threshold,
         seed: r.seed,
         integrator,
         max_depth: r.max_depth,
