@@ -88,22 +88,36 @@ fn stopped_pixels_are_below_the_threshold_and_the_others_take_every_sample() {
         assert!(c == spp || a.checks_at(c), "stopped at {c}");
     }
     // A stopped pixel's estimated error (Cycles' measure, from its two
-    // halves) is below the threshold.
+    // halves), averaged over its neighbours in its row tile, was below the
+    // threshold when it stopped: checked where the neighbours stopped at the
+    // same count (their sums are still those the decision saw).
     let rendered = acc.rendered();
     let aovs = rendered.aovs.unwrap();
     let half = &aovs.layer(Aov::Half).unwrap().values;
+    let error = |i: usize| {
+        let (x, h) = (rendered.film.pixels[i], &half[4 * i..4 * i + 4]);
+        let diff: f32 = (0..3).map(|c| (x[c] - h[c]).abs()).sum();
+        diff / (1e-4 + x.element_sum().max(0.0).sqrt())
+    };
+    let (w, h) = (48usize, 36usize);
     let mut checked = 0;
-    for (i, (&n, x)) in counts.iter().zip(&rendered.film.pixels).enumerate() {
+    for (i, &n) in counts.iter().enumerate() {
         if n == spp {
             continue;
         }
-        let h = &half[4 * i..4 * i + 4];
-        assert!(h[3] >= 1.0 && h[3] < n as f32);
-        let diff: f32 = (0..3).map(|c| (x[c] - h[c]).abs()).sum();
-        let error = diff / (1e-4 + x.element_sum().max(0.0).sqrt());
+        assert!(half[4 * i + 3] >= 1.0 && half[4 * i + 3] < n as f32);
+        let (x, y) = (i % w, i / w);
+        let neighbours: Vec<usize> = (y.saturating_sub(1)..=(y + 1).min(h - 1))
+            .filter(|ny| ny / raylab::render::TILE_ROWS == y / raylab::render::TILE_ROWS)
+            .flat_map(|ny| (x.saturating_sub(1)..=(x + 1).min(w - 1)).map(move |nx| ny * w + nx))
+            .collect();
+        if neighbours.iter().any(|&j| counts[j] != n) {
+            continue;
+        }
+        let mean = neighbours.iter().map(|&j| error(j)).sum::<f32>() / neighbours.len() as f32;
         assert!(
-            error < threshold * 1.001,
-            "pixel {i}: error {error} after {n} samples"
+            mean < threshold * 1.001,
+            "pixel {i}: error {mean} after {n} samples"
         );
         checked += 1;
     }

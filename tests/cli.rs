@@ -878,7 +878,7 @@ fn aov_errors_are_one_line_usage_errors() {
         ),
         (
             vec!["render", "--aov", "albedo,colour", "-o", "x.exr"],
-            "unknown AOV 'colour' (expected albedo, normal, depth, position, variance)",
+            "unknown AOV 'colour' (expected albedo, normal, depth, position, variance, half, samples)",
         ),
         (
             vec!["render", "--aov", "depth,depth", "-o", "x.exr"],

@@ -25,8 +25,10 @@
 //!
 //! * per pixel, relative to the pixel's value (each channel's difference
 //!   over `y² + ε`, `y` the denoised image, the best guess of the truth,
-//!   `ε` 1 % of its squared mean): what a relative MSE sees, over windows of
-//!   (2 [`RADIUS`] + 1)² pixels;
+//!   `ε` 1 % of its squared mean), both squared differences clamped at the
+//!   [`CLAMP_QUANTILE`] of the pixels' `(A − B)²` (a firefly counts as that
+//!   quantile, as in the clamped relative MSE): what a relative MSE sees,
+//!   over windows of (2 [`RADIUS`] + 1)² pixels;
 //! * as a viewer sees it: the differences in an opponent colour space
 //!   (luminance, red − green, blue − yellow), each channel blurred by FLIP's
 //!   contrast-sensitivity filter at its standard 67 pixels per degree
@@ -67,6 +69,12 @@ use crate::film::Film;
 
 /// Half the width of the window the per-pixel estimates are averaged over.
 pub const RADIUS: usize = 8;
+
+/// The quantile of the pixels' `(A − B)²` at which both squared differences
+/// are clamped: that of the clamped relative MSE the comparisons measure by
+/// (`tools/compare_cycles.py`: per-pixel errors clamped at their 99.9th
+/// percentile).
+pub const CLAMP_QUANTILE: f64 = 0.999;
 
 /// The standard deviations, in pixels, of FLIP's contrast-sensitivity
 /// filters (Andersson et al. 2020) at its standard 67 pixels per degree, of
@@ -129,15 +137,24 @@ pub fn guard(
     assert_eq!(denoised_a.pixels.len(), w * h);
     let eps = epsilon(denoised);
     let relative = relative_to(denoised);
-    // Per pixel, (f(A) − B)² − (A − B)²: its mean is M_A − V_A.
-    let s: Vec<f64> = halves
+    // Per pixel, (f(A) − B)² − (A − B)²: its mean is M_A − V_A. Both are
+    // clamped at the 99.9th percentile of (A − B)², as the clamped relative
+    // MSE clamps its per-pixel errors: a firefly counts as that quantile, so
+    // removing one does not buy blurring everything around it.
+    let (dx, dy): (Vec<f64>, Vec<f64>) = halves
         .par_iter()
         .zip(&denoised.pixels)
         .zip(&denoised_a.pixels)
         .map(|((halves, &y), &ya)| match halves {
-            Some((a, b)) => relative(ya - *b, y) - relative(*a - *b, y),
-            None => 0.0,
+            Some((a, b)) => (relative(*a - *b, y), relative(ya - *b, y)),
+            None => (0.0, 0.0),
         })
+        .unzip();
+    let cap = quantile(&dx, CLAMP_QUANTILE);
+    let s: Vec<f64> = dx
+        .par_iter()
+        .zip(&dy)
+        .map(|(&x, &y)| y.min(cap) - x.min(cap))
         .collect();
     let sharp = weights(&s, w, h, RADIUS);
     // The same through the eye's filters (FLIP's): the differences in an
@@ -248,6 +265,18 @@ fn window_mean(values: &[f64], w: usize, h: usize, r: usize) -> Vec<f64> {
     let ones = vec![1.0; values.len()];
     let (sum, count) = (box_sum(values, w, h, r), box_sum(&ones, w, h, r));
     sum.iter().zip(&count).map(|(s, c)| s / c).collect()
+}
+
+/// The `q`-quantile of `values` (the lower of the two around it), ignoring
+/// values that are not finite; +∞ if there is none.
+fn quantile(values: &[f64], q: f64) -> f64 {
+    let mut sorted: Vec<f64> = values.iter().copied().filter(|v| v.is_finite()).collect();
+    if sorted.is_empty() {
+        return f64::INFINITY;
+    }
+    sorted.sort_unstable_by(f64::total_cmp);
+    let at = ((sorted.len() - 1) as f64 * q).floor() as usize;
+    sorted[at]
 }
 
 /// The weights [`weight`] gives each pixel's window (of `(2r + 1)²`

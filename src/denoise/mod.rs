@@ -123,7 +123,7 @@ pub enum DenoiseError {
     /// The render lacks an AOV the denoiser needs.
     #[error(
         "the image has no {0} AOV, which the denoiser needs (render with {guides})",
-        guides = "--denoise or --aov albedo,normal,variance"
+        guides = "--denoise or --aov albedo,normal,variance,half"
     )]
     MissingAov(Aov),
     /// The image and its AOVs differ in size.

@@ -93,13 +93,17 @@ pub fn merge(
         (merged.acc.width(), merged.acc.height()),
         merged.acc.tally(),
     );
+    // Adaptive sampling's parts count each pixel's samples.
+    let spp = match merged.acc.sample_counts() {
+        Some(_) => format!("{} spp, {:.1} spp on average", r.spp, merged.acc.mean_spp()),
+        None => format!("{} spp", r.spp),
+    };
     let summary = format!(
-        "merged {} parts into {}: {}x{}, {} spp, {} rays, {} NaN/Inf samples dropped, {:.1} ms{clause}",
+        "merged {} parts into {}: {}x{}, {spp}, {} rays, {} NaN/Inf samples dropped, {:.1} ms{clause}",
         parts.len(),
         output.display(),
         size.0,
         size.1,
-        r.spp,
         tally.rays,
         tally.dropped,
         start.elapsed().as_secs_f64() * 1e3

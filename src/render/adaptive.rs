@@ -14,10 +14,13 @@
 //! the error relative to the square root of the pixel's brightness: a
 //! relative error that, like the eye and every tone map, forgives dark pixels
 //! more (a plain relative error would keep near-black pixels sampling
-//! forever). A pixel stops when `e < T` for it and for its neighbours in the
-//! row above and below and to either side (a stopped pixel next to a noisy one
-//! would show as a speck), but only within its row tile ([`TILE_ROWS`] rows),
-//! so that a part of a split render decides exactly as the whole render does.
+//! forever). One pixel's `e` is a single difference, below the threshold by
+//! chance as often as not, so a pixel counts as converged when the mean of
+//! `e` over it and its eight neighbours is below `T`, and it stops when it
+//! and its neighbours are all converged (a stopped pixel next to a noisy one
+//! would show as a speck). Neighbours are taken only within the pixel's row
+//! tile ([`TILE_ROWS`] rows), so that a part of a split render decides
+//! exactly as the whole render does.
 //!
 //! When: after a minimum of samples (Cycles' automatic rule, `16 / T^0.3`
 //! rounded up to an even number: 32 at `T = 0.1`, 64 at `0.01`, 128 at
@@ -100,16 +103,15 @@ pub fn active_pixels(acc: &Accumulator, adaptive: &Adaptive) -> Option<Vec<bool>
     }
     let width = acc.width() as usize;
     let image = acc.image_sums();
-    let noisy: Vec<bool> = (0..image.len())
+    // Each pixel's error (f64::INFINITY where its halves are not both
+    // there).
+    let errors: Vec<f64> = (0..image.len())
         .map(|i| {
-            if !active[i] {
-                return false;
-            }
             let record = &records[i * stride..(i + 1) * stride];
             let n_half = (record[half + 3] >> fixed::FRACTION_BITS) as f64;
-            let n = f64::from(spp);
+            let n = counted(i) as f64;
             if n_half <= 0.0 || n_half >= n {
-                return true;
+                return f64::INFINITY;
             }
             let mut diff = 0.0;
             let mut sum = 0.0;
@@ -120,12 +122,35 @@ pub fn active_pixels(acc: &Accumulator, adaptive: &Adaptive) -> Option<Vec<bool>
                 sum += x;
             }
             let error = diff / (1e-4 + sum.max(0.0).sqrt());
-            // (A NaN error is noisy.)
-            error.is_nan() || error >= f64::from(adaptive.threshold)
+            // (A NaN error counts as noisy.)
+            if error.is_nan() { f64::INFINITY } else { error }
+        })
+        .collect();
+    let height = image.len() / width.max(1);
+    // A pixel is noisy where the mean error of it and its neighbours (in its
+    // row tile) is not below the threshold: one pixel's own estimate is a
+    // single difference, below the threshold by chance as often as not.
+    let noisy: Vec<bool> = (0..image.len())
+        .map(|i| {
+            if !active[i] {
+                return false;
+            }
+            let (x, y) = (i % width, i / width);
+            let tile = y / TILE_ROWS;
+            let (mut sum, mut count) = (0.0, 0.0);
+            for ny in y.saturating_sub(1)..=(y + 1).min(height - 1) {
+                if ny / TILE_ROWS != tile {
+                    continue;
+                }
+                for nx in x.saturating_sub(1)..=(x + 1).min(width - 1) {
+                    sum += errors[ny * width + nx];
+                    count += 1.0;
+                }
+            }
+            sum / count >= f64::from(adaptive.threshold) || sum.is_nan()
         })
         .collect();
     // A pixel goes on if it or a neighbour (in its row tile) is still noisy.
-    let height = image.len() / width.max(1);
     for y in 0..height {
         let tile = y / TILE_ROWS;
         for x in 0..width {
