@@ -261,7 +261,7 @@ fn relative_to(denoised: &Film) -> impl Fn(Vec3A, Vec3A) -> f64 + Sync + use<> {
 }
 
 /// [`box_sum`] over the number of pixels in each clipped window.
-fn window_mean(values: &[f64], w: usize, h: usize, r: usize) -> Vec<f64> {
+pub(super) fn window_mean(values: &[f64], w: usize, h: usize, r: usize) -> Vec<f64> {
     let ones = vec![1.0; values.len()];
     let (sum, count) = (box_sum(values, w, h, r), box_sum(&ones, w, h, r));
     sum.iter().zip(&count).map(|(s, c)| s / c).collect()

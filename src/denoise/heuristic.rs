@@ -136,33 +136,9 @@ pub fn weight(v: f64, d: f64, l: f64) -> f32 {
 }
 
 /// The mean of `values` (a `w × h` image) over the window of `(2r + 1)²`
-/// pixels around each pixel, clipped to the image, summed directly (no
-/// running sums, whose cancellation a firefly's huge variance would ruin).
-/// Infinities spread to the windows they are in.
+/// pixels around each pixel, clipped to the image.
 fn box_mean(values: &[f64], w: usize, h: usize, r: usize) -> Vec<f64> {
-    let row_len = w.max(1);
-    // Rows first: each row's sums over its horizontal windows.
-    let mut rows = vec![0.0f64; w * h];
-    rows.par_chunks_mut(row_len)
-        .zip(values.par_chunks(row_len))
-        .for_each(|(out, row)| {
-            for (x, o) in out.iter_mut().enumerate() {
-                let (a, b) = (x.saturating_sub(r), (x + r + 1).min(w));
-                *o = row[a..b].iter().sum::<f64>();
-            }
-        });
-    let mut out = vec![0.0f64; w * h];
-    out.par_chunks_mut(row_len)
-        .enumerate()
-        .for_each(|(y, out)| {
-            let (a, b) = (y.saturating_sub(r), (y + r + 1).min(h));
-            for (x, o) in out.iter_mut().enumerate() {
-                let sum: f64 = (a..b).map(|yy| rows[yy * w + x]).sum();
-                let count = (b - a) * ((x + r + 1).min(w) - x.saturating_sub(r));
-                *o = sum / count as f64;
-            }
-        });
-    out
+    super::blend::window_mean(values, w, h, r)
 }
 
 #[cfg(test)]
