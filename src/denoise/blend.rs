@@ -406,20 +406,20 @@ mod tests {
     }
 
     /// Halves of a value with noise: `truth` ± `noise` in each half, the
-    /// signs in a checkerboard in `A` and by column in `B` (uncorrelated
-    /// over a window, as independent halves are).
+    /// signs drawn independently per pixel and half (white noise, which the
+    /// eye's filters do not remove either).
     fn noisy_halves(w: u32, h: u32, truth: f32, noise: f32) -> (Film, Vec<Option<(Vec3A, Vec3A)>>) {
-        let w = w as usize;
-        let sign = |odd: bool| if odd { -noise } else { noise };
-        let halves: Vec<_> = (0..w * h as usize)
-            .map(|i| {
-                let (x, y) = (i % w, i / w);
-                let a = truth + sign((x + y) % 2 == 1);
-                let b = truth + sign((x / 2) % 2 == 1);
-                Some((Vec3A::splat(a), Vec3A::splat(b)))
-            })
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut sign = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            if state & 1 == 0 { noise } else { -noise }
+        };
+        let halves: Vec<_> = (0..(w * h) as usize)
+            .map(|_| Some((Vec3A::splat(truth + sign()), Vec3A::splat(truth + sign()))))
             .collect();
-        let noisy = film(w as u32, h, |i| {
+        let noisy = film(w, h, |i| {
             let (a, b) = halves[i].unwrap();
             (a + b) * 0.5
         });
@@ -428,7 +428,7 @@ mod tests {
 
     #[test]
     fn a_good_denoiser_is_taken_and_a_biased_one_is_not() {
-        let (w, h) = (24u32, 20u32);
+        let (w, h) = (48u32, 40u32);
         let (noisy, halves) = noisy_halves(w, h, 1.0, 0.3);
         // A denoiser that finds the truth from either input.
         let truth = film(w, h, |_| Vec3A::ONE);
