@@ -6,7 +6,6 @@
 //! AOVs hold what was taken.
 
 use std::path::Path;
-use std::process::Command;
 
 use raylab::Integrator;
 use raylab::aov::{Aov, AovSet, in_half};
@@ -14,12 +13,10 @@ use raylab::camera::Camera;
 use raylab::load::cornell;
 use raylab::render::{Accumulator, Adaptive, Passes, RenderSettings, adaptive, render_passes};
 
+mod common;
+
 fn raylab(args: &[&str], dir: &Path) -> (i32, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_raylab"))
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .unwrap();
+    let out = common::raylab(args, dir);
     (
         out.status.code().unwrap_or(-1),
         String::from_utf8_lossy(&out.stderr).into_owned(),

@@ -136,20 +136,11 @@ pub fn guard(
     assert_eq!(halves.len(), w * h);
     assert_eq!(denoised_a.pixels.len(), w * h);
     let eps = epsilon(denoised);
-    let relative = relative_to(denoised);
     // Per pixel, (f(A) − B)² − (A − B)²: its mean is M_A − V_A. Both are
     // clamped at the 99.9th percentile of (A − B)², as the clamped relative
     // MSE clamps its per-pixel errors: a firefly counts as that quantile, so
     // removing one does not buy blurring everything around it.
-    let (dx, dy): (Vec<f64>, Vec<f64>) = halves
-        .par_iter()
-        .zip(&denoised.pixels)
-        .zip(&denoised_a.pixels)
-        .map(|((halves, &y), &ya)| match halves {
-            Some((a, b)) => (relative(*a - *b, y), relative(ya - *b, y)),
-            None => (0.0, 0.0),
-        })
-        .unzip();
+    let (dx, dy) = squared_differences(denoised, halves, denoised_a);
     let cap = quantile(&dx, CLAMP_QUANTILE);
     let s: Vec<f64> = dx
         .par_iter()
@@ -207,16 +198,7 @@ pub fn estimates(
     denoised_a: &Film,
 ) -> (Vec<f64>, Vec<f64>) {
     let (w, h) = (denoised.width as usize, denoised.height as usize);
-    let relative = relative_to(denoised);
-    let (dx, dy): (Vec<f64>, Vec<f64>) = halves
-        .par_iter()
-        .zip(&denoised.pixels)
-        .zip(&denoised_a.pixels)
-        .map(|((halves, &y), &ya)| match halves {
-            Some((a, b)) => (relative(*a - *b, y), relative(ya - *b, y)),
-            None => (0.0, 0.0),
-        })
-        .unzip();
+    let (dx, dy) = squared_differences(denoised, halves, denoised_a);
     let (dx, dy) = (
         window_mean(&dx, w, h, RADIUS),
         window_mean(&dy, w, h, RADIUS),
@@ -237,6 +219,25 @@ pub fn true_error(image: &Film, truth: &Film, denoised: &Film) -> Vec<f64> {
         .map(|((&v, &t), &y)| relative(v - t, y))
         .collect();
     window_mean(&e, w, h, RADIUS)
+}
+
+/// Per pixel, the relative squared differences `(A − B)²` and `(f(A) − B)²`
+/// ([`relative_to`]; zero where the pixel has no halves).
+fn squared_differences(
+    denoised: &Film,
+    halves: &[Option<(Vec3A, Vec3A)>],
+    denoised_a: &Film,
+) -> (Vec<f64>, Vec<f64>) {
+    let relative = relative_to(denoised);
+    halves
+        .par_iter()
+        .zip(&denoised.pixels)
+        .zip(&denoised_a.pixels)
+        .map(|((halves, &y), &ya)| match halves {
+            Some((a, b)) => (relative(*a - *b, y), relative(ya - *b, y)),
+            None => (0.0, 0.0),
+        })
+        .unzip()
 }
 
 /// `ε`: 1 % of the squared mean of `denoised` (over pixels and channels).
