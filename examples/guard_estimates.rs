@@ -81,8 +81,13 @@ fn main() -> anyhow::Result<()> {
             .map(|(h, x)| h.map_or(*x, |h| h.0))
             .collect(),
     };
-    let true_noisy = blend::true_error(&half_a, &truth, &guarded.denoised);
-    let true_denoised = blend::true_error(&check.denoised_half, &truth, &guarded.denoised);
+    let true_noisy = blend::true_error(&half_a, &truth, &guarded.denoised, &check.halves);
+    let true_denoised = blend::true_error(
+        &check.denoised_half,
+        &truth,
+        &guarded.denoised,
+        &check.halves,
+    );
     let weights: Vec<f64> = guarded
         .weights
         .unwrap_or_default()
