@@ -779,6 +779,56 @@ def draco_seeds():
         pick = 0 if ext["attributes"]["POSITION"] == 0 else 1
         put("draco", name.rsplit(".", 1)[0], bytes([pick]) + buf[start:start + v["byteLength"]])
 
+# ---------------------------------------------------------------- Mitsuba XML
+
+MITSUBA_FULL = """<?xml version="1.0" encoding="utf-8"?>
+<scene version="3.0.0">
+    <default name="spp" value="16"/>
+    <path value="."/>
+    <include filename="fixture.xml"/>
+    <integrator type="path"><integer name="max_depth" value="8"/></integrator>
+    <sensor type="perspective" id="cam">
+        <float name="fov" value="39.3"/>
+        <transform name="to_world">
+            <translate value="1, 2 3"/><rotate x="1" y="1" z="1" angle="120"/>
+            <scale value="2"/><scale x="1" y="-1"/>
+            <matrix value="1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1"/>
+            <matrix value="1 0 0 0 1 0 0 0 1"/>
+            <lookat origin="0, 0, 5" target="0, 0, 0" up="0, 1, 0"/>
+            <lookat origin="0 0 0" target="0 0 1"/>
+        </transform>
+        <sampler type="independent"><integer name="sample_count" value="$spp"/></sampler>
+        <film type="hdrfilm"><integer name="width" value="64"/><rfilter type="box"/></film>
+    </sensor>
+    <bsdf type="twosided" id="m"><bsdf type="diffuse"><texture name="reflectance" type="checkerboard"/></bsdf></bsdf>
+    <alias id="m" as="m2"/>
+    <shape type="obj"><string name="filename" value="fixture.obj"/><ref id="m2"/><ref name="other" id="fixture_bsdf"/></shape>
+    <shape type="sphere"><point name="center" value="0 1 0"/><vector name="v" x="1" y="2" z="3"/>
+        <boolean name="flip_normals" value="true"/><ref id="later"/>
+        <emitter type="area"><rgb name="radiance" value="1"/><spectrum name="s" value="400:1, 500:2"/></emitter>
+    </shape>
+    <bsdf type="dielectric" id="later"><string name="int_ior" value="bk7"/><spectrum name="k" value="0.5"/></bsdf>
+    <emitter type="envmap"><spectrum name="irradiance" type="blackbody"><float name="temperature" value="5000"/></spectrum></emitter>
+    <string name="escaped" value="\\$spp"/>
+</scene>
+"""
+
+MITSUBA_OLD = """<scene version="0.6.0">
+    <integrator type="path"><integer name="maxDepth" value="5"/></integrator>
+    <sensor type="perspective"><transform name="toWorld"><lookAt origin="0,0,5" target="0,0,0" up="0,1,0"/></transform></sensor>
+    <bsdf type="diffuse"><texture type="bitmap" name="diffuseReflectance"><float name="uscale" value="4"/><float name="voffset" value="0.5"/></texture></bsdf>
+</scene>
+"""
+
+
+def mitsuba_seeds():
+    put("mitsuba_xml", "full.xml", MITSUBA_FULL)
+    put("mitsuba_xml", "old-0.6.xml", MITSUBA_OLD)
+    put("mitsuba_xml", "root-bsdf.xml", '<bsdf version="2.1.0" type="roughconductor"><float name="alpha" value="0.1"/></bsdf>\n')
+    put("mitsuba_xml", "self-include.xml", '<scene version="3.0.0"><include filename="in.xml"/></scene>\n')
+    put("mitsuba_xml", "cycle.xml", '<scene version="3.0.0"><bsdf type="a" id="a"><bsdf type="b"><ref id="a"/></bsdf></bsdf></scene>\n')
+    put("mitsuba_xml", "dtd.xml", '<?xml version="1.0"?>\n<!DOCTYPE scene [<!ENTITY v "3.0.0">]>\n<scene version="&v;"><float name="x" value="1e39"/></scene>\n')
+
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
@@ -796,6 +846,7 @@ def main():
     meshopt_seeds()
     ktx2_seeds()
     draco_seeds()
+    mitsuba_seeds()
     for t in sorted(os.listdir(os.path.join(HERE, "corpus"))):
         files = os.listdir(os.path.join(HERE, "corpus", t))
         size = sum(os.path.getsize(os.path.join(HERE, "corpus", t, f)) for f in files)

@@ -56,6 +56,14 @@ vt 0 0\nvt 1 0\nvt 0.5 1\nvt 1 1\n\
 vn 0 0 1\n\
 f 1/1/1 2/2/1 3/3/1\nf 2/2/1 4/4/1 3/3/1\n";
 
+/// A Mitsuba XML scene the `mitsuba_xml` inputs can include: a shared
+/// material and a shape, with a default.
+pub const FIXTURE_XML: &str = "<scene version=\"3.0.0\">\n\
+<default name=\"r\" value=\"0.5\"/>\n\
+<bsdf type=\"diffuse\" id=\"fixture_bsdf\"><rgb name=\"reflectance\" value=\"$r\"/></bsdf>\n\
+<shape type=\"sphere\"><ref id=\"fixture_bsdf\"/><float name=\"radius\" value=\"2\"/></shape>\n\
+</scene>\n";
+
 /// The fixture OBJ's material.
 pub const FIXTURE_MTL: &str = "newmtl m\nKd 0.8 0.7 0.6\nmap_Kd fixture.png\nnorm fixture.png\n\
 newmtl lamp\nKe 2 2 2\n";
@@ -155,8 +163,9 @@ pub fn fixture_hdr() -> Vec<u8> {
 }
 
 fn write_fixtures(dir: &Path) {
-    let files: [(&str, Vec<u8>); 6] = [
+    let files: [(&str, Vec<u8>); 7] = [
         ("fixture.obj", FIXTURE_OBJ.into()),
+        ("fixture.xml", FIXTURE_XML.into()),
         ("fixture.mtl", FIXTURE_MTL.into()),
         ("fixture.gltf", FIXTURE_GLTF.into()),
         ("fixture.bin", fixture_bin()),

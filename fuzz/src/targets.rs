@@ -296,6 +296,23 @@ pub fn checkpoint(data: &[u8]) {
     }
 }
 
+/// A Mitsuba 3 XML scene `in.xml` (it may include itself, or `fixture.xml`,
+/// a scene the seeds refer to), read into its tree: an error is one line,
+/// and so are the tree's summary and warnings.
+pub fn mitsuba_xml(data: &[u8]) {
+    let path = put("in.xml", data);
+    match raylab::load::mitsuba::read(&path, &[]) {
+        Err(e) => super::check_message(&e.to_string()),
+        Ok(tree) => {
+            super::check_message(&tree.summary());
+            for w in &tree.warnings {
+                super::check_message(w);
+            }
+            assert!(!tree.objects().is_empty());
+        }
+    }
+}
+
 /// The target of this name (all but `cli`, which needs the binary's argument
 /// parser), for replaying inputs.
 pub fn by_name(name: &str) -> Option<fn(&[u8])> {
@@ -315,6 +332,7 @@ pub fn by_name(name: &str) -> Option<fn(&[u8])> {
         "rays" => rays,
         "bvh" => bvh,
         "checkpoint" => checkpoint,
+        "mitsuba_xml" => mitsuba_xml,
         _ => return None,
     })
 }

@@ -4,6 +4,7 @@
 use thiserror::Error;
 
 use super::gltf::GltfError;
+use super::mitsuba::MitsubaError;
 use super::obj::ObjError;
 use super::shot::error::ShotError;
 use crate::lights::environment::EnvError;
@@ -19,6 +20,9 @@ pub enum LoadError {
     /// A glTF file is unreadable or malformed.
     #[error(transparent)]
     Gltf(#[from] GltfError),
+    /// A Mitsuba XML scene is unreadable or malformed.
+    #[error(transparent)]
+    Mitsuba(#[from] MitsubaError),
     /// The scene's content is invalid.
     #[error("{name}: {cause}")]
     Scene {

@@ -5,7 +5,8 @@
 //!
 //! The loaders sit above the scene model ([`crate::scene`]), which knows
 //! nothing of files: [`cornell`] (the lab's boxes), [`obj`] with its MTL,
-//! [`gltf`], the scene files of [`shot`], and what they share: the default
+//! [`gltf`], the scene files of [`shot`], Mitsuba 3's XML scenes read into
+//! a tree ([`mitsuba`]; not yet turned into a scene), and what they share: the default
 //! view of a mesh ([`framing`]) and the placing of one ([`transform`]); why a
 //! load fails is [`LoadError`] (`error.rs`).
 
@@ -13,6 +14,7 @@ pub mod cornell;
 mod error;
 pub mod framing;
 pub mod gltf;
+pub mod mitsuba;
 pub mod obj;
 pub mod shot;
 pub mod transform;
