@@ -199,8 +199,17 @@ fn run_blocking<T: Send + 'static>(
     let result = loop {
         let (lines, result) = py.detach(|| mailbox.wait(Duration::from_millis(50)));
         for line in lines {
-            // A closed or broken stderr loses the line, not the render.
-            let _ = stderr.call_method1("write", (format!("{line}\n"),));
+            // A closed or broken stderr (an `Exception`) loses the line, not
+            // the render; but a signal's exception raised while Python ran
+            // the write (Ctrl-C's `KeyboardInterrupt`, which is no
+            // `Exception`) stops it, as `check_signals` would have.
+            if let Err(e) = stderr.call_method1("write", (format!("{line}\n"),))
+                && !e.is_instance_of::<PyException>(py)
+                && raised.is_none()
+            {
+                mailbox.stop.store(true, Ordering::Relaxed);
+                raised = Some(e);
+            }
         }
         if let Some(callback) = progress {
             let now = (

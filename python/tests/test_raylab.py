@@ -312,13 +312,18 @@ def test_ctrl_c_stops_a_long_render_within_a_second_with_the_image_so_far():
         os.kill(os.getpid(), signal.SIGINT)
 
     timer = threading.Timer(1.0, interrupt)
+    # Should the first Ctrl-C be lost, a second one 20 s later ends the render
+    # (and the test fails on the wait) rather than a million samples hanging CI.
+    again = threading.Timer(21.0, interrupt)
     timer.start()
+    again.start()
     try:
         with pytest.raises(KeyboardInterrupt) as stop:
             raylab.render("cornell-area", **LONG)
         waited = time.perf_counter() - sent[0]
     finally:
         timer.cancel()
+        again.cancel()
     assert isinstance(stop.value, raylab.RenderInterrupted)
     image = stop.value.image
     print(f"stopped {waited * 1e3:.0f} ms after SIGINT, at {image.info['spp']} spp")
