@@ -311,6 +311,11 @@ def test_ctrl_c_stops_a_long_render_within_a_second_with_the_image_so_far():
         sent.append(time.perf_counter())
         os.kill(os.getpid(), signal.SIGINT)
 
+    # Python's own Ctrl-C handler, whatever the process inherited: a shell
+    # that starts a job in the background without job control (`cmd &` in a
+    # script, as CI may be started) leaves SIGINT ignored, and Python then
+    # keeps it ignored, so the render would never hear of it.
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
     timer = threading.Timer(1.0, interrupt)
     # Should the first Ctrl-C be lost, a second one 20 s later ends the render
     # (and the test fails on the wait) rather than a million samples hanging CI.
@@ -324,6 +329,7 @@ def test_ctrl_c_stops_a_long_render_within_a_second_with_the_image_so_far():
     finally:
         timer.cancel()
         again.cancel()
+        signal.signal(signal.SIGINT, previous)
     assert isinstance(stop.value, raylab.RenderInterrupted)
     image = stop.value.image
     print(f"stopped {waited * 1e3:.0f} ms after SIGINT, at {image.info['spp']} spp")
