@@ -19,7 +19,7 @@
 //!   is the first vector of Mitsuba's `coordinate_system(dir)`; an `up`
 //!   parallel to `dir` (a NaN matrix) is an error.
 
-use glam::{DMat3, DMat4, DVec3, DVec4};
+use glam::{DMat4, DVec3, DVec4};
 
 use super::attrs::Attrs;
 use super::values::{expand_xyz, number, triple};
@@ -112,16 +112,7 @@ fn xyz(attrs: &Attrs, default: f64) -> Result<DVec3, String> {
 /// A counter-clockwise rotation by `degrees` about `axis` (normalized here;
 /// not zero).
 pub(super) fn rotation(axis: DVec3, degrees: f64) -> DMat4 {
-    let k = axis.normalize();
-    let (s, c) = degrees.to_radians().sin_cos();
-    let cross = DMat3::from_cols(
-        DVec3::new(0.0, k.z, -k.y),
-        DVec3::new(-k.z, 0.0, k.x),
-        DVec3::new(k.y, -k.x, 0.0),
-    );
-    let outer = DMat3::from_cols(k * k.x, k * k.y, k * k.z);
-    let r = DMat3::IDENTITY * c + cross * s + outer * (1.0 - c);
-    DMat4::from_mat3(r)
+    DMat4::from_axis_angle(axis.normalize(), degrees.to_radians())
 }
 
 /// A `matrix` of 16 (4×4) or 9 (3×3) numbers, row by row.
@@ -151,12 +142,13 @@ fn matrix(text: &str) -> Result<DMat4, String> {
 
 /// Mitsuba's `look_at`: columns left, up, dir, origin.
 pub(super) fn look_at(origin: DVec3, target: DVec3, up: DVec3) -> DMat4 {
-    let dir = normalize(target - origin);
+    // (A zero vector normalizes to NaN, which the caller's check refuses.)
+    let dir = (target - origin).normalize();
     let up = match up == DVec3::ZERO {
         true => coordinate_system(dir).0,
         false => up,
     };
-    let left = normalize(up.cross(dir));
+    let left = up.cross(dir).normalize();
     let new_up = dir.cross(left);
     DMat4::from_cols(
         left.extend(0.0),
@@ -164,12 +156,6 @@ pub(super) fn look_at(origin: DVec3, target: DVec3, up: DVec3) -> DMat4 {
         dir.extend(0.0),
         DVec4::new(origin.x, origin.y, origin.z, 1.0),
     )
-}
-
-/// `v / |v|`, NaN for a zero vector (as Mitsuba's, so that the caller's NaN
-/// check sees it; glam's `normalize` would do the same, said here).
-fn normalize(v: DVec3) -> DVec3 {
-    v / v.length()
 }
 
 /// Mitsuba's `coordinate_system(n)` (Duff et al. 2017, "Building an
