@@ -361,6 +361,7 @@ fn area_light_direct_light_matches_lamberts_formula() {
         let options = PathOptions {
             max_depth: 2,
             sampler: kind,
+            ..PathOptions::default()
         };
         let n = 40_000u32;
         let mut rays = 0;

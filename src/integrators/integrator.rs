@@ -34,6 +34,7 @@ impl Integrator {
         Integrator::Path(PathOptions {
             max_depth: u32::MAX,
             sampler: path::SamplerKind::DEFAULT,
+            filter: crate::sampling::filter::PixelFilter::Box,
         }),
     ];
 

@@ -51,6 +51,10 @@ pub struct SceneOptions {
     /// models that have a variant of that name show it.
     #[arg(long, value_name = "NAME")]
     pub variant: Option<String>,
+    /// Mitsuba scenes: a value for a `$NAME` in the file (as `mitsuba -D
+    /// NAME=VALUE`), replacing its `<default>`; repeat for more.
+    #[arg(short = 'D', long = "define", value_name = "NAME=VALUE", value_parser = parse_define)]
+    pub define: Vec<(String, String)>,
     /// glTF: when to add raylab's default lighting (a key light and a grey sky):
     /// `auto` (when the file has no punctual light and no emitters strong enough
     /// to light it), `on` or `off`.
@@ -73,6 +77,12 @@ pub struct SceneOptions {
     /// the first two bounces) or `independent` (PCG32 only).
     #[arg(long, default_value = "sobol", value_parser = parse_sampler)]
     pub sampler: crate::integrators::path::SamplerKind,
+    /// Pixel filter of `path`: `box` (each pixel averages its own square),
+    /// `gaussian[:STDDEV]` (Mitsuba's, σ 0.5 by default, out to 4σ) or
+    /// `tent[:RADIUS]` (radius 1 by default); samples are drawn from it, so
+    /// pixels stay plain means [default: the scene file's, else box].
+    #[arg(long, value_name = "FILTER", value_parser = parse_filter)]
+    pub filter: Option<crate::sampling::filter::PixelFilter>,
     /// Materials of the built-in box's parts for `path`, e.g.
     /// `tall=mirror,short=glass,floor=gold:0.2`. Parts: floor, ceiling, back, left,
     /// right, short, tall. Materials: diffuse, mirror, glass[:IOR], gold, copper,
@@ -358,7 +368,7 @@ impl SceneOptions {
     /// `--integrator`, `path` for glTF scenes and `direct` for the others.
     pub fn integrator(&self, kind: SceneKind) -> Integrator {
         let default = match kind {
-            SceneKind::Gltf | SceneKind::Shot => Integrator::path(),
+            SceneKind::Gltf | SceneKind::Shot | SceneKind::Mitsuba => Integrator::path(),
             SceneKind::Lab | SceneKind::Mesh => Integrator::Direct,
         };
         match self.integrator.unwrap_or(default) {
@@ -367,6 +377,9 @@ impl SceneOptions {
                     options.max_depth = d;
                 }
                 options.sampler = self.sampler;
+                if let Some(f) = self.filter {
+                    options.filter = f;
+                }
                 Integrator::Path(options)
             }
             other => other,
@@ -407,7 +420,7 @@ impl SceneOptions {
     /// the aspect ratio.
     pub fn size(&self, kind: SceneKind, aspect_ratio: Option<f32>) -> Result<(u32, u32), String> {
         let (default, aspect) = match kind {
-            SceneKind::Gltf | SceneKind::Shot => match aspect_ratio {
+            SceneKind::Gltf | SceneKind::Shot | SceneKind::Mitsuba => match aspect_ratio {
                 Some(a) => (
                     ((600.0 * a).round().clamp(1.0, MAX_SIDE as f32) as u32, 600),
                     a,
@@ -453,6 +466,7 @@ impl SceneOptions {
             default_light: self.default_light,
             light_selection: self.light_selection,
             variant: self.variant.clone(),
+            defines: self.define.clone(),
             environment: crate::load::EnvironmentOptions {
                 source: match (&self.env, self.env_color) {
                     (Some(path), _) => Some(crate::load::EnvSource::File(path.clone())),
@@ -496,18 +510,47 @@ fn is_gltf(scene: &str) -> bool {
         .extension()
         .and_then(|e| e.to_str())
         .is_some_and(|e| {
-            ["gltf", "glb", "toml"]
+            ["gltf", "glb", "toml", "xml"]
                 .iter()
                 .any(|x| e.eq_ignore_ascii_case(x))
         })
 }
 
-/// Whether a scene name is a scene file.
+/// Whether a scene name is a scene file (raylab's `.toml` or a Mitsuba
+/// `.xml`), which may carry render settings.
 pub fn is_scene_file(scene: &str) -> bool {
     std::path::Path::new(scene)
         .extension()
         .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("toml"))
+        .is_some_and(|e| e.eq_ignore_ascii_case("toml") || e.eq_ignore_ascii_case("xml"))
+}
+
+/// A scene file's render settings: a `.toml`'s `[render]`, a Mitsuba
+/// file's film, sampler and integrator (with `defines`).
+pub fn read_file_settings(
+    scene: &str,
+    defines: &[(String, String)],
+) -> anyhow::Result<crate::load::shot::ShotSettings> {
+    let path = std::path::Path::new(scene);
+    let is_xml = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("xml"));
+    Ok(match is_xml {
+        true => crate::load::mitsuba::read_settings(path, defines)?,
+        false => crate::load::shot::read_settings(path)?,
+    })
+}
+
+/// `NAME=VALUE` of `-D`.
+fn parse_define(s: &str) -> Result<(String, String), String> {
+    match s.split_once('=') {
+        Some((name, value)) if !name.is_empty() => Ok((name.to_string(), value.to_string())),
+        _ => Err(format!(
+            "expected NAME=VALUE, got '{}'",
+            crate::guard::quote(s)
+        )),
+    }
 }
 
 impl SceneOptions {
@@ -532,6 +575,7 @@ impl SceneOptions {
             height,
             integrator: self.integrator.or(s.integrator),
             max_depth: self.max_depth.or(s.max_depth),
+            filter: self.filter.or(s.filter),
             tonemap: self.tonemap.or(s.tonemap),
             exposure: self.exposure.or(s.exposure),
             denoise: self.denoise.or(s.denoise),
@@ -572,7 +616,7 @@ impl JobOptions {
         if !is_scene_file(&self.scene.scene) {
             return Ok(self.clone());
         }
-        let s = crate::load::shot::read_settings(std::path::Path::new(&self.scene.scene))?;
+        let s = read_file_settings(&self.scene.scene, &self.scene.define)?;
         Ok(Self {
             scene: self.scene.with_file_settings(&s),
             spp: self.spp.or(s.spp),
@@ -704,6 +748,37 @@ fn parse_sampler(s: &str) -> Result<crate::integrators::path::SamplerKind, Strin
         .into_iter()
         .find(|k| k.name() == s)
         .ok_or_else(|| format!("unknown sampler '{s}' (expected sobol or independent)"))
+}
+
+/// `box`, `gaussian[:STDDEV]` or `tent[:RADIUS]`.
+pub fn parse_filter(s: &str) -> Result<crate::sampling::filter::PixelFilter, String> {
+    use crate::sampling::filter::PixelFilter;
+    let (name, width) = match s.split_once(':') {
+        Some((n, w)) => (n, Some(w)),
+        None => (s, None),
+    };
+    let given = width;
+    let width = |default: f32| -> Result<f32, String> {
+        match given {
+            None => Ok(default),
+            Some(w) => match w.parse::<f32>() {
+                Ok(v) if v.is_finite() && v > 0.0 && v <= 64.0 => Ok(v),
+                _ => Err(format!(
+                    "filter width '{}' must be a number in (0, 64]",
+                    crate::guard::quote(w)
+                )),
+            },
+        }
+    };
+    match name {
+        "box" if given.is_none() => Ok(PixelFilter::Box),
+        "gaussian" => Ok(PixelFilter::gaussian(width(0.5)?)),
+        "tent" => Ok(PixelFilter::tent(width(1.0)?)),
+        _ => Err(format!(
+            "unknown filter '{}' (expected box, gaussian[:STDDEV] or tent[:RADIUS])",
+            crate::guard::quote(s)
+        )),
+    }
 }
 
 fn parse_max_depth(s: &str) -> Result<u32, String> {

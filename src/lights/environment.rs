@@ -102,6 +102,10 @@ pub struct EnvMap {
     distribution: Distribution2D,
     /// `∫ L dω` over the sphere of the channels' mean (in every lane).
     radiance_integral: Vec3A,
+    /// Rows placed from pole to pole (row `j` at `v = j/(H − 1)`) instead of
+    /// at texel centres: Mitsuba 3's `envmap` lookup (see
+    /// [`EnvMap::with_pole_rows`]).
+    pole_rows: bool,
 }
 
 /// Rec. 709 luminance.
@@ -129,6 +133,7 @@ impl EnvMap {
             texels: pixels,
             distribution: Distribution2D::default(),
             radiance_integral: Vec3A::ZERO,
+            pole_rows: false,
         };
         if width == 0 || height == 0 {
             return map;
@@ -172,6 +177,18 @@ impl EnvMap {
             .sum();
         map.radiance_integral = Vec3A::splat(integral as f32);
         map
+    }
+
+    /// The same map looked up as Mitsuba 3's `envmap` does (the version its
+    /// render tests' references were made with): columns at texel centres
+    /// as here, but row `j` at `v = j/(H − 1)`, the first row at the `+y`
+    /// pole and the last at the `−y` pole. Only the lookup changes; the
+    /// sampling tables stay those of the texel-centred map, which keeps the
+    /// estimates unbiased (the density of the directions they give is
+    /// exact) at a little more variance.
+    pub fn with_pole_rows(mut self) -> Self {
+        self.pole_rows = true;
+        self
     }
 
     /// Reads a Radiance `.hdr` or OpenEXR `.exr` file (by extension).
@@ -236,7 +253,10 @@ impl EnvMap {
             return Vec3A::ZERO;
         }
         let x = uv.x * w as f32 - 0.5;
-        let y = uv.y * h as f32 - 0.5;
+        let y = match self.pole_rows {
+            false => uv.y * h as f32 - 0.5,
+            true => uv.y * (h - 1) as f32,
+        };
         let (x0, y0) = (x.floor(), y.floor());
         let (fx, fy) = (x - x0, y - y0);
         // (Inside the map no remainder, a 64-bit division, is needed.)
@@ -433,6 +453,9 @@ impl Environment {
             Source::Map(m) => {
                 f.words32([m.width as u32, m.height as u32]);
                 f.floats(m.texels.iter().flatten().copied());
+                if m.pole_rows {
+                    f.update(b"pole rows");
+                }
             }
         }
         f.floats([self.strength, self.rotation_degrees]);

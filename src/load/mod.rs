@@ -49,6 +49,8 @@ pub enum SceneKind {
     Gltf,
     /// A scene file (`.toml`) composing models, lights and a camera.
     Shot,
+    /// A Mitsuba 3 scene (`.xml`).
+    Mitsuba,
 }
 
 impl SceneKind {
@@ -56,7 +58,7 @@ impl SceneKind {
     /// and scene files: `path`, tone mapping, 600-pixel-high images), rather
     /// than one of the lab's scenes.
     pub fn is_physical(self) -> bool {
-        matches!(self, SceneKind::Gltf | SceneKind::Shot)
+        matches!(self, SceneKind::Gltf | SceneKind::Shot | SceneKind::Mitsuba)
     }
 }
 
@@ -95,6 +97,8 @@ pub struct LoadOptions {
     /// A glTF file's animation and the moment to pose it at (default: the
     /// file as written).
     pub animation: AnimationOptions,
+    /// A Mitsuba scene's `$NAME` values (`-D NAME=VALUE`).
+    pub defines: Vec<(String, String)>,
 }
 
 /// Where an environment's radiance comes from.
@@ -304,6 +308,7 @@ fn file_kind(name: &str) -> Option<SceneKind> {
         "obj" => Some(SceneKind::Mesh),
         "gltf" | "glb" => Some(SceneKind::Gltf),
         "toml" => Some(SceneKind::Shot),
+        "xml" => Some(SceneKind::Mitsuba),
         _ => None,
     }
 }
@@ -478,6 +483,25 @@ pub fn load(name: &str, options: &LoadOptions) -> Result<Loaded, LoadError> {
                 options.default_light,
                 loaded.has_punctual_lights || environment.is_some(),
             );
+            if let Some(p) = options.light_power {
+                scene.light.power = Vec3A::splat(p);
+            }
+            (scene, view)
+        }
+        SceneKind::Mitsuba => {
+            let m = mitsuba::load_mitsuba(Path::new(name), &options.defines, &ledger)?;
+            warnings.extend(m.warnings);
+            settings = m.settings;
+            let mut parts = m.parts;
+            parts.ambient = Vec3A::splat(options.ambient.unwrap_or(0.0));
+            charge_geometry(&ledger, name, parts.triangles.len())?;
+            let mut scene = Scene::from_parts(parts).map_err(scene_err)?;
+            if environment.is_none() {
+                scene.set_environment(m.environment);
+            }
+            let (lo, hi) = scene.bounds();
+            let framing = framing::frame(lo, hi);
+            let view = view_through(m.camera.as_ref(), &framing);
             if let Some(p) = options.light_power {
                 scene.light.power = Vec3A::splat(p);
             }

@@ -10,7 +10,7 @@ use glam::{Vec2, Vec3A, Vec4, Vec4Swizzles};
 
 use super::material::Material;
 use super::pbr::PbrBsdf;
-use crate::textures::{ColorSpace, TextureRef, TextureStore};
+use crate::textures::{ColorSpace, Pattern, TextureRef, TextureStore};
 
 /// How a material's alpha (base colour alpha × texture alpha × `COLOR_0` alpha)
 /// makes holes.
@@ -434,6 +434,44 @@ pub enum MaterialKind {
     /// material are read (its other parameters are the fallback for viewers
     /// without the extension).
     Unlit(Box<GltfMaterial>),
+    /// One BSDF whose reflectance and opacity may vary over the surface, and
+    /// whose sides are its own (Mitsuba's materials).
+    Textured(Box<TexturedBsdf>),
+}
+
+/// A BSDF of one kind whose reflectance and opacity may vary over the
+/// surface ([`Pattern`]s), reflecting on one side or both: what a Mitsuba
+/// scene's `diffuse` with a `bitmap` reflectance, `twosided` or `mask` is.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TexturedBsdf {
+    /// The BSDF where nothing varies.
+    pub bsdf: Material,
+    /// Replaces the BSDF's reflectance at each hit ([`with_reflectance`]).
+    pub reflectance: Option<Pattern>,
+    /// The probability that a ray meets the surface at a hit (Mitsuba's
+    /// `mask`: its red channel; the material's alpha mode is then
+    /// [`AlphaMode::Blend`]).
+    pub opacity: Option<Pattern>,
+    /// Whether a one-sided BSDF reflects on both sides (Mitsuba's
+    /// `twosided`): its shading normal is turned towards the viewer even in
+    /// a scene whose surfaces are one-sided.
+    pub two_sided: bool,
+}
+
+impl TexturedBsdf {
+    /// The reflectance at `attrs` (the pattern's, or the BSDF's own `fixed`).
+    #[inline]
+    fn reflectance_at(
+        &self,
+        fixed: Vec3A,
+        attrs: &HitAttributes,
+        textures: &TextureStore,
+    ) -> Vec3A {
+        match &self.reflectance {
+            Some(p) => Vec3A::from(p.eval(attrs.uv[0], textures).xyz()),
+            None => fixed,
+        }
+    }
 }
 
 /// One entry of a scene's material table.
@@ -485,7 +523,7 @@ impl SurfaceMaterial {
     pub fn normal_texture(&self) -> Option<(&TextureRef, f32)> {
         match &self.kind {
             MaterialKind::Gltf(g) => g.normal_texture.as_ref().map(|t| (t, g.normal_scale)),
-            MaterialKind::Fixed(_) | MaterialKind::Unlit(_) => None,
+            MaterialKind::Fixed(_) | MaterialKind::Unlit(_) | MaterialKind::Textured(_) => None,
         }
     }
 
@@ -495,6 +533,14 @@ impl SurfaceMaterial {
     pub fn base_color(&self, attrs: &HitAttributes, textures: &TextureStore) -> Vec4 {
         match &self.kind {
             MaterialKind::Fixed(_) => self.reflectance.extend(1.0),
+            MaterialKind::Textured(t) => {
+                let alpha = t
+                    .opacity
+                    .as_ref()
+                    .map_or(1.0, |p| p.eval(attrs.uv[0], textures).x);
+                t.reflectance_at(self.reflectance, attrs, textures)
+                    .extend(alpha)
+            }
             MaterialKind::Gltf(g) | MaterialKind::Unlit(g) => {
                 let mut c = g.base_color * attrs.color;
                 if let Some(t) = &g.base_color_texture {
@@ -538,7 +584,16 @@ impl SurfaceMaterial {
             MaterialKind::Unlit(_) => Material::Diffuse {
                 reflectance: self.unlit_color(attrs, textures),
             },
+            MaterialKind::Textured(t) => textured_bsdf(t, attrs, textures),
         }
+    }
+
+    /// Whether the material turns its shading normal towards the viewer in
+    /// a scene of one-sided surfaces (a [`TexturedBsdf`] that is
+    /// `two_sided`).
+    #[inline]
+    pub fn two_sided(&self) -> bool {
+        matches!(&self.kind, MaterialKind::Textured(t) if t.two_sided)
     }
 
     /// What an unlit material shows at a hit: its base colour (RGB), clamped
@@ -757,11 +812,47 @@ pub fn lookup(
     textures.lookup(t, attrs.uv[(t.tex_coord as usize).min(1)], space)
 }
 
+/// [`SurfaceMaterial::bsdf`] of a [`TexturedBsdf`] (out of line).
+#[inline(never)]
+fn textured_bsdf(t: &TexturedBsdf, attrs: &HitAttributes, textures: &TextureStore) -> Material {
+    match &t.reflectance {
+        Some(p) => with_reflectance(t.bsdf, Vec3A::from(p.eval(attrs.uv[0], textures).xyz())),
+        None => t.bsdf,
+    }
+}
+
+/// `bsdf` with its reflectance replaced by `rho` (the diffuse reflectance
+/// of a Lambertian surface, the specular one of a mirror); other BSDFs are
+/// returned unchanged.
+#[inline]
+pub fn with_reflectance(bsdf: Material, rho: Vec3A) -> Material {
+    match bsdf {
+        Material::Diffuse { .. } => Material::Diffuse { reflectance: rho },
+        Material::Mirror { .. } => Material::Mirror { reflectance: rho },
+        other => other,
+    }
+}
+
+/// The images a material's [`Pattern`]s read, for changing them (when the
+/// material's images move to another store).
+pub fn pattern_images_mut(m: &mut SurfaceMaterial) -> impl Iterator<Item = &mut u32> {
+    let textured = match &mut m.kind {
+        MaterialKind::Textured(t) => Some(t.as_mut()),
+        _ => None,
+    };
+    textured.into_iter().flat_map(|t| {
+        [t.reflectance.as_mut(), t.opacity.as_mut()]
+            .into_iter()
+            .flatten()
+            .filter_map(Pattern::image_mut)
+    })
+}
+
 /// Every texture a material refers to.
 pub fn texture_refs(m: &SurfaceMaterial) -> impl Iterator<Item = &TextureRef> {
     let gltf = match &m.kind {
         MaterialKind::Gltf(g) | MaterialKind::Unlit(g) => Some(g.as_ref()),
-        MaterialKind::Fixed(_) => None,
+        MaterialKind::Fixed(_) | MaterialKind::Textured(_) => None,
     };
     let textures = gltf.into_iter().flat_map(|g| {
         let specular_glossiness = g.specular_glossiness.as_ref().map(|s| &s.texture);
@@ -797,7 +888,7 @@ pub fn texture_refs(m: &SurfaceMaterial) -> impl Iterator<Item = &TextureRef> {
 pub fn texture_refs_mut(m: &mut SurfaceMaterial) -> impl Iterator<Item = &mut TextureRef> {
     let gltf = match &mut m.kind {
         MaterialKind::Gltf(g) | MaterialKind::Unlit(g) => Some(g.as_mut()),
-        MaterialKind::Fixed(_) => None,
+        MaterialKind::Fixed(_) | MaterialKind::Textured(_) => None,
     };
     let textures = gltf.into_iter().flat_map(|g| {
         let specular_glossiness = g.specular_glossiness.as_mut().map(|s| &mut s.texture);

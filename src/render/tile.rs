@@ -358,6 +358,7 @@ impl Tile<'_> {
         if !AOVS
             && self.active.is_none()
             && options.sampler == SamplerKind::Sobol
+            && options.filter == crate::sampling::filter::PixelFilter::Box
             && std::arch::is_x86_feature_detected!("avx2")
             && self.scene.path_lanes_apply()
         {
@@ -778,6 +779,7 @@ impl PathStart {
             AnySampler::Sobol(smp) => smp.next_2d(),
             AnySampler::Independent(rng) => rng.next_2d(),
         };
+        let d = options.filter.offset(d);
         let ray = if camera.thin_lens.is_none() {
             camera.ray(x + d.x, y + d.y)
         } else {

@@ -2,5 +2,6 @@
 //! Owen-scrambled Sobol' points.
 
 pub mod distribution;
+pub mod filter;
 pub mod sampler;
 pub mod sobol;

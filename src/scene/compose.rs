@@ -6,7 +6,7 @@ use glam::{Affine3A, Mat3A, Vec3A};
 use super::mesh::Instance;
 use super::parts::{NO_INSTANCE, SceneParts};
 use crate::lights::Light;
-use crate::materials::surface::texture_refs_mut;
+use crate::materials::surface::{pattern_images_mut, texture_refs_mut};
 
 impl SceneParts {
     /// Moves everything by `to_world`: triangles, their front normals,
@@ -105,6 +105,9 @@ impl SceneParts {
             .extend(other.materials.into_iter().map(|mut m| {
                 for t in texture_refs_mut(&mut m) {
                     t.image += image_offset;
+                }
+                for image in pattern_images_mut(&mut m) {
+                    *image += image_offset;
                 }
                 m
             }));

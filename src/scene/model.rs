@@ -196,7 +196,14 @@ impl Scene {
                     ),
                 });
             }
-            if crate::materials::surface::texture_refs(m).any(|t| t.image as usize >= image_count) {
+            let mut patterns = m.clone();
+            let missing_pattern_image =
+                crate::materials::surface::pattern_images_mut(&mut patterns)
+                    .any(|i| *i as usize >= image_count);
+            if missing_pattern_image
+                || crate::materials::surface::texture_refs(m)
+                    .any(|t| t.image as usize >= image_count)
+            {
                 return Err(SceneError::BadReference {
                     what: format!("material '{}' refers to a missing image", m.name),
                 });
@@ -428,6 +435,16 @@ impl Scene {
     /// The material table.
     pub fn materials(&self) -> &[SurfaceMaterial] {
         &self.materials
+    }
+
+    /// Whether material `index` turns a one-sided BSDF's shading normal
+    /// towards the viewer although the scene's surfaces are one-sided
+    /// ([`SurfaceMaterial::two_sided`]: Mitsuba's `twosided`).
+    #[inline]
+    pub fn material_turns(&self, index: u32) -> bool {
+        self.materials
+            .get(index as usize)
+            .is_some_and(SurfaceMaterial::two_sided)
     }
 
     /// Whether any material is `KHR_materials_unlit`.

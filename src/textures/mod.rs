@@ -32,6 +32,7 @@
 mod decode;
 mod error;
 mod ktx2;
+mod pattern;
 mod srgb;
 mod store;
 mod texel;
@@ -41,6 +42,7 @@ mod transform;
 mod tests;
 
 pub use error::{MAX_SIDE, MAX_TEXELS, TextureError};
+pub use pattern::Pattern;
 pub use srgb::srgb_to_linear;
 pub use store::{TextureRef, TextureStore};
 pub use texel::{ColorSpace, Image, Wrap};

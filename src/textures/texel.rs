@@ -270,6 +270,27 @@ impl Image {
         row(y0) * (1.0 - fy) + row(y1) * fy
     }
 
+    /// The texel nearest to `uv` (the one whose square holds it), its indices
+    /// wrapped as in [`Image::lookup`]: Mitsuba's `filter_type = "nearest"`.
+    /// A NaN or infinite coordinate reads texel 0.
+    #[inline]
+    pub fn nearest(&self, uv: Vec2, wrap_s: Wrap, wrap_t: Wrap, space: ColorSpace) -> Vec4 {
+        let index = |c: f32, size: u32, wrap: Wrap| {
+            let k = (c * size as f32).floor();
+            let k = if k.is_finite() {
+                k.clamp(-1e15, 1e15) as i64
+            } else {
+                0
+            };
+            wrap_index(k, size, wrap)
+        };
+        self.texel(
+            index(uv.x, self.width, wrap_s),
+            index(uv.y, self.height, wrap_t),
+            space,
+        )
+    }
+
     /// The mean of all texels, decoded as by [`Image::texel`] (e.g. to estimate
     /// the power an emissive texture radiates). Summed in `f64`, row by row in
     /// parallel and then in row order: the same result on every run.

@@ -115,7 +115,7 @@ fn merge_command(args: &args::MergeArgs) -> anyhow::Result<()> {
 /// arguments leave them out.
 fn view_command(args: &SceneOptions) -> anyhow::Result<()> {
     if is_scene_file(&args.scene) {
-        let settings = raylab::load::shot::read_settings(std::path::Path::new(&args.scene))?;
+        let settings = raylab::job::options::read_file_settings(&args.scene, &args.define)?;
         return viewer::run(&args.with_file_settings(&settings));
     }
     viewer::run(args)

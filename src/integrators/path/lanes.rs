@@ -740,6 +740,7 @@ mod tests {
                 let options = PathOptions {
                     max_depth,
                     sampler: SamplerKind::Sobol,
+                    filter: crate::sampling::filter::PixelFilter::Box,
                 };
                 let mut want_rays = 0;
                 for (start, (got_tag, v)) in starts.iter().zip(&got) {

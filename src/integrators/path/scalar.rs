@@ -52,6 +52,9 @@ pub struct PathOptions {
     pub max_depth: u32,
     /// Sample points.
     pub sampler: SamplerKind,
+    /// How each pixel weighs the image around it (its samples' image points
+    /// are drawn from it; the box by default).
+    pub filter: crate::sampling::filter::PixelFilter,
 }
 
 impl Default for PathOptions {
@@ -59,6 +62,7 @@ impl Default for PathOptions {
         Self {
             max_depth: u32::MAX,
             sampler: SamplerKind::DEFAULT,
+            filter: crate::sampling::filter::PixelFilter::Box,
         }
     }
 }
@@ -413,8 +417,11 @@ pub fn radiance_traced(
         let wo = frame.to_local(wo_world);
         let bsdf_at = bsdf.at(wo);
         // With shading normals, a direction must be on the same side of the
-        // geometric and the shading surface, or light leaks through it.
-        let same_side = |w: Vec3A| !shading || (w.dot(ng) > 0.0) == (w.dot(n) > 0.0);
+        // geometric and the shading surface, or light leaks through it. (The
+        // geometric normal taken on the shading normal's side: a one-sided
+        // BSDF seen from behind has had its shading normal turned there.)
+        let ng_n = if n.dot(ng) < 0.0 { -ng } else { ng };
+        let same_side = |w: Vec3A| !shading || (w.dot(ng_n) > 0.0) == (w.dot(n) > 0.0);
 
         // Choices and the roulette's number are drawn only where they are
         // used: each independent number costs about a dozen instructions, and
@@ -617,7 +624,8 @@ pub(crate) fn shading_normal(
     } else {
         ng
     };
-    if scene.two_sided && !two_sided(bsdf) && ng.dot(wo) < 0.0 {
+    let turns = scene.two_sided || scene.material_turns(surface.material);
+    if turns && !two_sided(bsdf) && ng.dot(wo) < 0.0 {
         -n
     } else {
         n

@@ -71,6 +71,7 @@
 mod attrs;
 mod build;
 mod error;
+mod scene;
 mod table;
 mod transform;
 mod tree;
@@ -84,6 +85,7 @@ mod tests;
 use std::path::Path;
 
 pub use error::MitsubaError;
+pub use scene::{MitsubaScene, load_mitsuba, read_settings};
 pub use tree::{
     Child, Location, MAX_ATTRIBUTE_BYTES, MAX_INCLUDE_DEPTH, MAX_NESTING, MAX_SUBSTITUTION_BYTES,
     Object, Property, SceneTree, Spectrum, Tag, Value, Version,

@@ -29,6 +29,8 @@ pub struct ShotSettings {
     pub integrator: Option<Integrator>,
     /// Longest path.
     pub max_depth: Option<u32>,
+    /// Pixel filter (Mitsuba scenes' `rfilter`).
+    pub filter: Option<crate::sampling::filter::PixelFilter>,
     /// Tone mapping.
     pub tonemap: Option<ToneMap>,
     /// Exposure in stops.
@@ -140,6 +142,7 @@ pub(super) fn settings(path: &Path, r: &RenderSection) -> Result<ShotSettings, S
         seed: r.seed,
         integrator,
         max_depth: r.max_depth,
+        filter: None,
         tonemap,
         exposure: r.exposure,
         denoise: r.denoise,

@@ -1,0 +1,324 @@
+//! Mitsuba's BSDFs and textures as raylab materials. What has an exact
+//! twin here is translated; what has none yet is refused with a clear line
+//! (docs/mitsuba-scenes.md lists both).
+
+use std::collections::HashMap;
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use glam::{Affine2, Mat2, Mat4, Vec3A, Vec4};
+
+use super::super::error::MitsubaError;
+use super::super::tree::{Object, Tag};
+use super::color::Role;
+use super::props::{ColorProp, Props};
+use crate::materials::Material;
+use crate::materials::surface::{AlphaMode, MaterialKind, SurfaceMaterial, TexturedBsdf};
+use crate::memory::Ledger;
+use crate::textures::{ColorSpace, Pattern, TextureStore, Wrap};
+
+/// Mitsuba's named indices of refraction (`include/mitsuba/render/ior.h`:
+/// Hecht's values at about 589 nm).
+const IOR_TABLE: [(&str, f32); 23] = [
+    ("vacuum", 1.0),
+    ("helium", 1.000036),
+    ("hydrogen", 1.000132),
+    ("air", 1.000277),
+    ("carbon dioxide", 1.00045),
+    ("water", 1.3330),
+    ("acetone", 1.36),
+    ("ethanol", 1.361),
+    ("carbon tetrachloride", 1.461),
+    ("glycerol", 1.4729),
+    ("benzene", 1.501),
+    ("silicone oil", 1.52045),
+    ("bromine", 1.661),
+    ("water ice", 1.31),
+    ("fused quartz", 1.458),
+    ("pyrex", 1.470),
+    ("acrylic glass", 1.49),
+    ("polypropylene", 1.49),
+    ("bk7", 1.5046),
+    ("sodium chloride", 1.544),
+    ("amber", 1.55),
+    ("pet", 1.5750),
+    ("diamond", 2.419),
+];
+
+/// An index of refraction given as a float or one of Mitsuba's names.
+pub(super) fn ior(p: &Props, name: &str, default: f32) -> Result<f32, MitsubaError> {
+    if let Ok(Some(v)) = p.float_opt(name) {
+        return Ok(v);
+    }
+    match p.string_opt(name)? {
+        None => Ok(default),
+        Some(s) => {
+            let lower = s.to_ascii_lowercase();
+            IOR_TABLE
+                .iter()
+                .find(|(n, _)| *n == lower)
+                .map(|(_, v)| *v)
+                .ok_or_else(|| {
+                    p.error(format!(
+                        "unknown index of refraction '{}' for '{name}' (Mitsuba's names: {})",
+                        crate::guard::quote(s),
+                        IOR_TABLE.map(|(n, _)| n).join(", ")
+                    ))
+                })
+        }
+    }
+}
+
+/// Mitsuba's `to_uv` (a 4 × 4 transform) as the 2-D affine map its
+/// textures apply: the x and y rows and columns and the translation.
+fn to_uv(m: Mat4) -> Affine2 {
+    Affine2 {
+        matrix2: Mat2::from_cols(
+            m.x_axis.truncate().truncate(),
+            m.y_axis.truncate().truncate(),
+        ),
+        translation: m.w_axis.truncate().truncate(),
+    }
+}
+
+/// Builds materials and their textures, each object once.
+pub(super) struct Materials<'l> {
+    /// The images the patterns read.
+    pub textures: TextureStore,
+    images: HashMap<(PathBuf, bool), u32>,
+    ledger: &'l Ledger,
+    scene: String,
+    /// What was approximated.
+    pub warnings: Vec<String>,
+}
+
+impl<'l> Materials<'l> {
+    /// No materials yet.
+    pub fn new(ledger: &'l Ledger, scene: String) -> Self {
+        Self {
+            textures: TextureStore::new(),
+            images: HashMap::new(),
+            ledger,
+            scene,
+            warnings: Vec::new(),
+        }
+    }
+
+    /// The image at `path` (decoded once).
+    fn image(&mut self, path: PathBuf, t: &Props) -> Result<u32, MitsubaError> {
+        if let Some(&id) = self.images.get(&(path.clone(), false)) {
+            return Ok(id);
+        }
+        let bytes = std::fs::read(&path).map_err(|cause| MitsubaError::Io {
+            path: path.clone(),
+            cause,
+        })?;
+        let store = TextureStore::decode_all_within(
+            vec![(path.display().to_string(), bytes)],
+            self.ledger,
+            &self.scene,
+        )
+        .map_err(|e| t.error(format!("{}: {e}", path.display())))?;
+        let id = self.textures.append(store);
+        self.images.insert((path, false), id);
+        Ok(id)
+    }
+
+    /// A texture object as a [`Pattern`].
+    pub fn pattern(
+        &mut self,
+        tex: &Object,
+        resolve: &dyn Fn(&str) -> Option<PathBuf>,
+    ) -> Result<Pattern, MitsubaError> {
+        let t = Props::new(tex);
+        let pattern = match (tex.tag, tex.plugin.as_str()) {
+            (Tag::Texture, "bitmap") => {
+                let name = t
+                    .string_opt("filename")?
+                    .ok_or_else(|| t.error("needs a 'filename'"))?;
+                let path = resolve(name).ok_or_else(|| {
+                    t.error(format!("cannot find '{}'", crate::guard::quote(name)))
+                })?;
+                let nearest =
+                    t.choice("filter_type", "bilinear", &["bilinear", "nearest"])? == "nearest";
+                let wrap = match t.choice("wrap_mode", "repeat", &["repeat", "mirror", "clamp"])? {
+                    "mirror" => Wrap::MirroredRepeat,
+                    "clamp" => Wrap::ClampToEdge,
+                    _ => Wrap::Repeat,
+                };
+                let raw = t.boolean("raw", false)?;
+                let to_uv = to_uv(t.transform("to_uv")?);
+                t.ignore(&["format", "accel"]);
+                let image = self.image(path, &t)?;
+                Pattern::Image {
+                    image,
+                    wrap,
+                    nearest,
+                    space: if raw {
+                        ColorSpace::Linear
+                    } else {
+                        ColorSpace::Srgb
+                    },
+                    to_uv,
+                }
+            }
+            (Tag::Texture, "checkerboard") => {
+                let c0 = t.constant_color("color0", Role::Reflectance, Vec3A::splat(0.4))?;
+                let c1 = t.constant_color("color1", Role::Reflectance, Vec3A::splat(0.2))?;
+                Pattern::Checkerboard {
+                    color0: c0.extend(1.0).into(),
+                    color1: c1.extend(1.0).into(),
+                    to_uv: to_uv(t.transform("to_uv")?),
+                }
+            }
+            _ => {
+                return Err(
+                    t.error("this texture is not supported yet (bitmap and checkerboard are)")
+                );
+            }
+        };
+        t.finish()?;
+        Ok(pattern)
+    }
+
+    /// A colour-or-texture property as a constant or a pattern.
+    fn color(
+        &mut self,
+        p: &Props,
+        name: &str,
+        default: Vec3A,
+        resolve: &dyn Fn(&str) -> Option<PathBuf>,
+    ) -> Result<(Vec3A, Option<Pattern>), MitsubaError> {
+        match p.color_opt(name, Role::Reflectance)? {
+            None => Ok((default, None)),
+            Some(ColorProp::Value(c)) => Ok((c, None)),
+            Some(ColorProp::Texture(t)) => {
+                let pattern = self.pattern(&t, resolve)?;
+                // flat and direct show the texture's mean: take the centre's.
+                Ok((Vec3A::splat(0.5), Some(pattern)))
+            }
+        }
+    }
+
+    /// A `<bsdf>` as a material (no emission yet).
+    pub fn material(
+        &mut self,
+        bsdf: &Arc<Object>,
+        resolve: &dyn Fn(&str) -> Option<PathBuf>,
+    ) -> Result<SurfaceMaterial, MitsubaError> {
+        let p = Props::new(bsdf);
+        let mut textured = TexturedBsdf {
+            bsdf: Material::Diffuse {
+                reflectance: Vec3A::splat(0.5),
+            },
+            reflectance: None,
+            opacity: None,
+            two_sided: false,
+        };
+        let rho;
+        match bsdf.plugin.as_str() {
+            "diffuse" => {
+                let (c, pattern) = self.color(&p, "reflectance", Vec3A::splat(0.5), resolve)?;
+                rho = c;
+                textured.bsdf = Material::Diffuse { reflectance: c };
+                textured.reflectance = pattern;
+            }
+            "twosided" => {
+                let inner = p.children_of(Tag::Bsdf);
+                let [one] = inner.as_slice() else {
+                    return Err(p.error(
+                        "raylab's twosided takes one BSDF (the same on both sides); different front and back BSDFs are not supported yet",
+                    ));
+                };
+                let mut m = self.material(one, resolve)?;
+                if let MaterialKind::Textured(t) = &mut m.kind {
+                    t.two_sided = true;
+                }
+                p.finish()?;
+                return Ok(m);
+            }
+            "mask" => {
+                let inner = p.children_of(Tag::Bsdf);
+                let [one] = inner.as_slice() else {
+                    return Err(p.error("needs exactly one nested BSDF"));
+                };
+                let mut m = self.material(one, resolve)?;
+                let opacity = match p.color_opt("opacity", Role::Reflectance)? {
+                    None => Pattern::Checkerboard {
+                        color0: Vec4::splat(0.5),
+                        color1: Vec4::splat(0.5),
+                        to_uv: Affine2::IDENTITY,
+                    },
+                    Some(ColorProp::Value(c)) => Pattern::Checkerboard {
+                        color0: c.extend(1.0).into(),
+                        color1: c.extend(1.0).into(),
+                        to_uv: Affine2::IDENTITY,
+                    },
+                    Some(ColorProp::Texture(t)) => self.pattern(&t, resolve)?,
+                };
+                if let MaterialKind::Textured(t) = &mut m.kind {
+                    t.opacity = Some(opacity);
+                } else {
+                    return Err(p.error("the nested BSDF cannot be masked"));
+                }
+                m.alpha = AlphaMode::Blend;
+                p.finish()?;
+                return Ok(m);
+            }
+            "conductor" => {
+                let material = p.string("material", "none")?;
+                let specular =
+                    p.constant_color("specular_reflectance", Role::Reflectance, Vec3A::ONE)?;
+                let has_eta = p.has("eta") || p.has("k");
+                textured.bsdf = if material == "none" && !has_eta {
+                    Material::Mirror {
+                        reflectance: specular,
+                    }
+                } else if has_eta {
+                    let eta = p.constant_color("eta", Role::Unbounded, Vec3A::ZERO)?;
+                    let k = p.constant_color("k", Role::Unbounded, Vec3A::ONE)?;
+                    if specular != Vec3A::ONE {
+                        return Err(p.error("a specular_reflectance other than 1 with eta and k is not supported yet"));
+                    }
+                    Material::RoughConductor { alpha: 0.0, eta, k }
+                } else {
+                    return Err(p.error(format!(
+                        "conductor presets ('{}') need Mitsuba's measured spectra, not built in yet; give eta and k",
+                        crate::guard::quote(material)
+                    )));
+                };
+                rho = specular;
+            }
+            "dielectric" => {
+                let int = ior(&p, "int_ior", 1.5046)?;
+                let ext = ior(&p, "ext_ior", 1.000277)?;
+                for name in ["specular_reflectance", "specular_transmittance"] {
+                    if p.constant_color(name, Role::Reflectance, Vec3A::ONE)? != Vec3A::ONE {
+                        return Err(p.error(format!("a {name} other than 1 is not supported yet")));
+                    }
+                }
+                if !(int > 0.0 && ext > 0.0) {
+                    return Err(p.error("indices of refraction must be positive"));
+                }
+                textured.bsdf = Material::Dielectric { ior: int / ext };
+                rho = Vec3A::ONE;
+            }
+            "null" => {
+                textured.bsdf = Material::Dielectric { ior: 1.0 };
+                rho = Vec3A::ZERO;
+            }
+            other => {
+                return Err(p.error(format!(
+                    "the BSDF '{}' is not supported yet (see docs/mitsuba-scenes.md)",
+                    crate::guard::quote(other)
+                )));
+            }
+        }
+        p.finish()?;
+        // Textured even where nothing varies: the kind carries the sides.
+        let mut m = SurfaceMaterial::fixed(rho, textured.bsdf);
+        m.name = bsdf.id.clone().unwrap_or_default();
+        m.kind = MaterialKind::Textured(Box::new(textured));
+        Ok(m)
+    }
+}

@@ -1,0 +1,685 @@
+//! A Mitsuba 3 scene tree ([`SceneTree`]) turned into raylab's scene parts,
+//! camera, environment and render settings ([`MitsubaScene`]), following
+//! each plugin's definition in Mitsuba 3's source and documentation. What
+//! raylab reads, approximates and refuses is listed in
+//! `docs/mitsuba-scenes.md`; a property nothing reads is an error, as in
+//! Mitsuba.
+//!
+//! `color.rs` turns spectra into RGB (over the CIE tables of `cie.rs`),
+//! `props.rs` reads properties by type, `shapes.rs` makes meshes,
+//! `bsdfs.rs` materials and textures; this file walks the scene: sensor,
+//! film, sampler and integrator into settings and a camera, shapes (with
+//! shape groups and instances sharing their meshes) and emitters.
+
+mod bsdfs;
+mod cie;
+mod color;
+mod props;
+mod shapes;
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use glam::{Affine3A, Mat3A, Mat4, Vec3, Vec3A};
+
+use super::error::MitsubaError;
+use super::tree::{Object, SceneTree, Tag};
+use crate::camera::{DepthOfField, Lens, SceneCamera};
+use crate::geometry::triangle::Triangle;
+use crate::integrators::Integrator;
+use crate::integrators::path::PathOptions;
+use crate::lights::Light;
+use crate::lights::environment::{EnvMap, Environment};
+use crate::load::shot::ShotSettings;
+use crate::materials::surface::SurfaceMaterial;
+use crate::memory::Ledger;
+use crate::sampling::filter::PixelFilter;
+use crate::scene::SceneParts;
+use crate::scene::mesh::{Instance, MeshData};
+use bsdfs::Materials;
+use color::Role;
+use props::Props;
+
+/// A Mitsuba scene as raylab's parts.
+#[derive(Debug)]
+pub struct MitsubaScene {
+    /// Geometry, materials, textures and punctual lights (one-sided).
+    pub parts: SceneParts,
+    /// The `constant` or `envmap` emitter (black without one).
+    pub environment: Environment,
+    /// The first sensor.
+    pub camera: Option<SceneCamera>,
+    /// The film's size, the sampler's count and the integrator.
+    pub settings: ShotSettings,
+    /// What was approximated or ignored.
+    pub warnings: Vec<String>,
+}
+
+/// The 3 × 3 part and translation of a transform.
+fn affine(m: Mat4) -> Affine3A {
+    Affine3A::from_mat4(m)
+}
+
+/// Reads the scene at `path` (with `defines` as `mitsuba -D`) into raylab's
+/// parts, charging textures to `ledger`.
+pub fn load_mitsuba(
+    path: &Path,
+    defines: &[(String, String)],
+    ledger: &Ledger,
+) -> Result<MitsubaScene, MitsubaError> {
+    let tree = super::read(path, defines)?;
+    build(&tree, ledger)
+}
+
+/// A shape's mesh before it is placed.
+struct Placed {
+    mesh: u32,
+    to_world: Mat4,
+    material: u32,
+}
+
+struct Builder<'t, 'l> {
+    tree: &'t SceneTree,
+    materials: Materials<'l>,
+    parts: SceneParts,
+    /// Material table index by (BSDF object, emitter object) pointers.
+    material_of: HashMap<(usize, usize), u32>,
+    /// Meshes of shape groups, by the group object's pointer.
+    groups: HashMap<usize, Vec<(u32, Mat4, u32)>>,
+    approximated: Vec<String>,
+}
+
+impl Builder<'_, '_> {
+    /// The material of a shape's BSDF (default: Mitsuba's diffuse 0.5) and
+    /// area emitter.
+    fn material(
+        &mut self,
+        bsdf: Option<&Arc<Object>>,
+        emitter: Option<&Arc<Object>>,
+    ) -> Result<u32, MitsubaError> {
+        let key = (
+            bsdf.map_or(0, |b| Arc::as_ptr(b) as usize),
+            emitter.map_or(0, |e| Arc::as_ptr(e) as usize),
+        );
+        if let Some(&m) = self.material_of.get(&key) {
+            return Ok(m);
+        }
+        let tree = self.tree;
+        let resolve = move |name: &str| tree.resolve(name);
+        let mut m = match bsdf {
+            Some(b) => self.materials.material(b, &resolve)?,
+            None => {
+                let mut m = SurfaceMaterial::diffuse(Vec3A::splat(0.5));
+                m.kind = crate::materials::surface::MaterialKind::Textured(Box::new(
+                    crate::materials::surface::TexturedBsdf {
+                        bsdf: crate::materials::Material::Diffuse {
+                            reflectance: Vec3A::splat(0.5),
+                        },
+                        reflectance: None,
+                        opacity: None,
+                        two_sided: false,
+                    },
+                ));
+                m
+            }
+        };
+        if let Some(e) = emitter {
+            let p = Props::new(e);
+            if e.plugin != "area" {
+                return Err(p.error("only 'area' emitters can be attached to a shape"));
+            }
+            m.emission = p.constant_color("radiance", Role::Emission, Vec3A::ONE)?;
+            m.emits_both_sides = false;
+            p.finish()?;
+        }
+        let index = self.parts.materials.len() as u32;
+        self.parts.materials.push(m);
+        self.material_of.insert(key, index);
+        Ok(index)
+    }
+
+    /// A shape object's mesh in its own space, and its `to_world`.
+    fn mesh(&mut self, shape: &Object, p: &Props) -> Result<(MeshData, Mat4), MitsubaError> {
+        let to_world = p.transform("to_world")?;
+        let resolve = |p: &Props, name: &str| -> Result<PathBuf, MitsubaError> {
+            self.tree
+                .resolve(name)
+                .ok_or_else(|| p.error(format!("cannot find '{}'", crate::guard::quote(name))))
+        };
+        let mut mesh = match shape.plugin.as_str() {
+            "obj" => {
+                let file = p
+                    .string_opt("filename")?
+                    .ok_or_else(|| p.error("needs a 'filename'"))?;
+                let file = resolve(p, file)?;
+                let flip_uv = p.boolean("flip_tex_coords", true)?;
+                let face_normals = p.boolean("face_normals", false)?;
+                shapes::obj_mesh(&file, flip_uv, face_normals)?
+            }
+            "rectangle" => shapes::rectangle(),
+            "cube" => shapes::cube(),
+            "sphere" | "disk" | "cylinder" => {
+                self.approximated.push(format!(
+                    "{} (tessellated: {} segments around)",
+                    shape.describe(),
+                    shapes::SEGMENTS
+                ));
+                match shape.plugin.as_str() {
+                    "sphere" => shapes::sphere(),
+                    "disk" => shapes::disk(),
+                    _ => shapes::cylinder(),
+                }
+            }
+            other => {
+                return Err(p.error(format!(
+                    "the shape '{}' is not supported yet (see docs/mitsuba-scenes.md)",
+                    crate::guard::quote(other)
+                )));
+            }
+        };
+        // The analytic shapes' own placement parameters.
+        let mut to_world = to_world;
+        match shape.plugin.as_str() {
+            "sphere" => {
+                let c = p.vector_opt("center")?.unwrap_or(Vec3::ZERO);
+                let r = p.float("radius", 1.0)?;
+                to_world = to_world * Mat4::from_translation(c) * Mat4::from_scale(Vec3::splat(r));
+            }
+            "cylinder" => {
+                let p0 = p.vector_opt("p0")?.unwrap_or(Vec3::ZERO);
+                let p1 = p.vector_opt("p1")?.unwrap_or(Vec3::Z);
+                let r = p.float("radius", 1.0)?;
+                let axis = p1 - p0;
+                let len = axis.length();
+                if len <= 0.0 {
+                    return Err(p.error("p0 and p1 are the same point"));
+                }
+                let z = axis / len;
+                let x = z.any_orthonormal_vector();
+                let y = z.cross(x);
+                let frame = Mat4::from_cols(
+                    (x * r).extend(0.0),
+                    (y * r).extend(0.0),
+                    (z * len).extend(0.0),
+                    p0.extend(1.0),
+                );
+                to_world = to_world * frame;
+            }
+            _ => {}
+        }
+        if p.boolean("flip_normals", false)? {
+            shapes::flip(&mut mesh);
+        }
+        Ok((mesh, to_world))
+    }
+
+    /// Adds a shape (and what it holds) to the scene; shape groups are
+    /// remembered, instances placed.
+    fn shape(
+        &mut self,
+        shape: &Arc<Object>,
+        within: Option<&mut Vec<(u32, Mat4, u32)>>,
+    ) -> Result<(), MitsubaError> {
+        let p = Props::new(shape);
+        match shape.plugin.as_str() {
+            "shapegroup" => {
+                if self.groups.contains_key(&(Arc::as_ptr(shape) as usize)) {
+                    // Built already, for an instance that came first.
+                    return Ok(());
+                }
+                let mut members = Vec::new();
+                for s in p.children_of(Tag::Shape) {
+                    self.shape(&s, Some(&mut members))?;
+                }
+                p.finish()?;
+                self.groups.insert(Arc::as_ptr(shape) as usize, members);
+                return Ok(());
+            }
+            "instance" => {
+                let to_world = p.transform("to_world")?;
+                let groups = p.children_of(Tag::Shape);
+                let [group] = groups.as_slice() else {
+                    return Err(p.error("needs exactly one shapegroup"));
+                };
+                if group.plugin != "shapegroup" {
+                    return Err(p.error("instances place a shapegroup"));
+                }
+                if !self.groups.contains_key(&(Arc::as_ptr(group) as usize)) {
+                    self.shape(group, None)?;
+                }
+                p.finish()?;
+                let members = self.groups[&(Arc::as_ptr(group) as usize)].clone();
+                for (mesh, m, material) in members {
+                    self.place(Placed {
+                        mesh,
+                        to_world: to_world * m,
+                        material,
+                    });
+                }
+                return Ok(());
+            }
+            _ => {}
+        }
+        let (mut mesh, to_world) = self.mesh(shape, &p)?;
+        let bsdfs = p.children_of(Tag::Bsdf);
+        let emitters = p.children_of(Tag::Emitter);
+        if bsdfs.len() > 1 || emitters.len() > 1 {
+            return Err(p.error("a shape holds at most one BSDF and one emitter"));
+        }
+        for tag in [Tag::Medium, Tag::Sensor] {
+            if let Some(o) = p.children_of(tag).first() {
+                return Err(p.error(format!(
+                    "{} inside a shape is not supported yet",
+                    o.describe()
+                )));
+            }
+        }
+        p.ignore(&["id"]);
+        p.finish()?;
+        let material = self.material(bsdfs.first(), emitters.first())?;
+        mesh.material = material;
+        let mesh_index = self.parts.meshes.len() as u32;
+        self.parts.meshes.push(mesh);
+        match within {
+            Some(members) => members.push((mesh_index, to_world, material)),
+            None => self.place(Placed {
+                mesh: mesh_index,
+                to_world,
+                material,
+            }),
+        }
+        Ok(())
+    }
+
+    /// World triangles and an instance of a mesh.
+    fn place(&mut self, placed: Placed) {
+        let mesh = &self.parts.meshes[placed.mesh as usize];
+        let to_world = affine(placed.to_world);
+        let first = self.parts.triangles.len() as u32;
+        let instance = self.parts.instances.len() as u32;
+        for tri in &mesh.indices {
+            let v = tri.map(|i| to_world.transform_point3a(mesh.positions[i as usize].into()));
+            let n = (v[1] - v[0]).cross(v[2] - v[0]).normalize_or_zero();
+            self.parts.triangles.push(Triangle::new(v[0], v[1], v[2]));
+            self.parts.normals.push(n);
+            self.parts.material_of.push(placed.material);
+            self.parts.instance_of.push(instance);
+        }
+        self.parts
+            .instances
+            .push(Instance::new(placed.mesh, first, to_world));
+    }
+}
+
+/// Mitsuba's sensor frame as raylab's camera rotation: Mitsuba looks along
+/// local +z with +y up and the image's left at local +x.
+fn camera_frame(m: Mat4) -> (Vec3A, Mat3A, f32, f32) {
+    let x = m.x_axis.truncate();
+    let y = m.y_axis.truncate();
+    let z = m.z_axis.truncate();
+    let right = Vec3A::from(-x).normalize_or_zero();
+    let down = Vec3A::from(-y).normalize_or_zero();
+    let forward = Vec3A::from(z).normalize_or_zero();
+    (
+        Vec3A::from(m.w_axis.truncate()),
+        Mat3A::from_cols(right, down, forward),
+        x.length(),
+        y.length(),
+    )
+}
+
+/// A reconstruction filter.
+fn rfilter(rf: &Object) -> Result<PixelFilter, MitsubaError> {
+    let p = Props::new(rf);
+    let filter = match rf.plugin.as_str() {
+        "box" => PixelFilter::Box,
+        "gaussian" => {
+            let s = p.float("stddev", 0.5)?;
+            if !(s > 0.0 && s <= 16.0) {
+                return Err(p.error("stddev must be in (0, 16]"));
+            }
+            PixelFilter::gaussian(s)
+        }
+        "tent" => {
+            let r = p.float("radius", 1.0)?;
+            if !(r > 0.0 && r <= 64.0) {
+                return Err(p.error("radius must be in (0, 64]"));
+            }
+            PixelFilter::tent(r)
+        }
+        other => {
+            return Err(p.error(format!(
+                "the '{}' filter is not supported (box, gaussian and tent are)",
+                crate::guard::quote(other)
+            )));
+        }
+    };
+    p.finish()?;
+    Ok(filter)
+}
+
+/// The sensor's camera and the film's settings.
+fn sensor(sensor: &Object, settings: &mut ShotSettings) -> Result<SceneCamera, MitsubaError> {
+    let p = Props::new(sensor);
+    let to_world = p.transform("to_world")?;
+    let (mut width, mut height) = (768u32, 576u32);
+    if let Some(film) = p.children_of(Tag::Film).first() {
+        let f = Props::new(film);
+        if film.plugin != "hdrfilm" {
+            return Err(f.error("only 'hdrfilm' is supported"));
+        }
+        let w = f.integer("width", 768)?;
+        let h = f.integer("height", 576)?;
+        if !(1..=65536).contains(&w) || !(1..=65536).contains(&h) {
+            return Err(f.error("width and height must be 1 to 65536"));
+        }
+        (width, height) = (w as u32, h as u32);
+        if f.has("crop_width")
+            || f.has("crop_height")
+            || f.has("crop_offset_x")
+            || f.has("crop_offset_y")
+        {
+            return Err(f.error("crop windows are not supported yet"));
+        }
+        let filters = f.children_of(Tag::Rfilter);
+        settings.filter = Some(match filters.first() {
+            // Mitsuba's default.
+            None => PixelFilter::gaussian(0.5),
+            Some(rf) => rfilter(rf)?,
+        });
+        f.ignore(&[
+            "pixel_format",
+            "component_format",
+            "file_format",
+            "sample_border",
+            "compensate",
+            "banner",
+            "high_quality_edges",
+        ]);
+        f.finish()?;
+    }
+    settings.width = Some(width);
+    settings.height = Some(height);
+    if let Some(sampler) = p.children_of(Tag::Sampler).first() {
+        let s = Props::new(sampler);
+        let n = s.integer("sample_count", 4)?;
+        if !(1..=i64::from(u32::MAX)).contains(&n) {
+            return Err(s.error("sample_count must be positive"));
+        }
+        settings.spp = Some(n as u32);
+        s.ignore(&["seed", "jitter", "scramble_seed"]);
+        s.finish()?;
+    }
+    let aspect = width as f32 / height as f32;
+    let (position, rotation, sx, sy) = camera_frame(to_world);
+    let lens = match sensor.plugin.as_str() {
+        "perspective" | "thinlens" => {
+            if sensor.plugin == "thinlens" {
+                return Err(p.error("the thin lens camera is not supported yet"));
+            }
+            if p.has("fov") && p.has("focal_length") {
+                return Err(p.error("give either 'fov' or 'focal_length', not both"));
+            }
+            let axis = p.choice(
+                "fov_axis",
+                "x",
+                &["x", "y", "diagonal", "smaller", "larger"],
+            )?;
+            let (fov, axis) = match p.float_opt("fov")? {
+                Some(f) => (f, axis),
+                None => {
+                    let fl = p.string("focal_length", "50mm")?;
+                    let mm: f32 = fl
+                        .trim_end_matches("mm")
+                        .parse()
+                        .map_err(|_| p.error("focal_length must be like '50mm'"))?;
+                    // Mitsuba: the diagonal field of view of a 35 mm film.
+                    let d = (36.0f32 * 36.0 + 24.0 * 24.0).sqrt();
+                    ((2.0 * (d / (2.0 * mm)).atan()).to_degrees(), "diagonal")
+                }
+            };
+            if !(fov > 0.0 && fov < 180.0) {
+                return Err(p.error("fov must be between 0 and 180 degrees"));
+            }
+            let half = (fov.to_radians() * 0.5).tan();
+            // tan of half the vertical field of view.
+            let tan_y = match axis {
+                "x" => half / aspect,
+                "y" => half,
+                "diagonal" => half / (aspect * aspect + 1.0).sqrt(),
+                "smaller" => {
+                    if aspect > 1.0 {
+                        half
+                    } else {
+                        half / aspect
+                    }
+                }
+                _ => {
+                    if aspect > 1.0 {
+                        half / aspect
+                    } else {
+                        half
+                    }
+                }
+            };
+            Lens::Perspective {
+                focal_scale: 0.5 / tan_y,
+            }
+        }
+        "orthographic" => Lens::Orthographic {
+            half_height: sy / aspect,
+        },
+        other => {
+            return Err(p.error(format!(
+                "the sensor '{}' is not supported yet",
+                crate::guard::quote(other)
+            )));
+        }
+    };
+    let _ = sx;
+    p.ignore(&[
+        "near_clip",
+        "far_clip",
+        "shutter_open",
+        "shutter_close",
+        "srf",
+    ]);
+    p.finish()?;
+    Ok(SceneCamera {
+        name: sensor.id.clone().unwrap_or_default(),
+        position,
+        rotation,
+        lens,
+        aspect_ratio: Some(aspect),
+        depth_of_field: DepthOfField::default(),
+    })
+}
+
+/// The integrator as raylab's `path` with its depth.
+fn integrator(obj: &Object, settings: &mut ShotSettings) -> Result<(), MitsubaError> {
+    let p = Props::new(obj);
+    match obj.plugin.as_str() {
+        "moment" => {
+            for inner in p.children_of(Tag::Integrator) {
+                integrator(&inner, settings)?;
+            }
+        }
+        "path" | "ptracer" | "direct" => {
+            let depth = match obj.plugin.as_str() {
+                "direct" => {
+                    p.ignore(&["emitter_samples", "bsdf_samples", "shading_samples"]);
+                    2
+                }
+                _ => {
+                    p.ignore(&["rr_depth", "samples_per_pass"]);
+                    p.integer("max_depth", -1)?
+                }
+            };
+            if p.boolean("hide_emitters", false)? {
+                return Err(p.error("hide_emitters is not supported yet"));
+            }
+            let max_depth = match depth {
+                -1 => u32::MAX,
+                d if d >= 0 => u32::try_from(d).unwrap_or(u32::MAX),
+                _ => return Err(p.error("max_depth must be -1 (unlimited) or at least 0")),
+            };
+            settings.max_depth = Some(max_depth);
+            settings.integrator = Some(Integrator::Path(PathOptions {
+                max_depth,
+                ..PathOptions::default()
+            }));
+        }
+        "volpath" | "volpathmis" => {
+            return Err(p.error("participating media are not supported yet (volpath)"));
+        }
+        other => {
+            return Err(p.error(format!(
+                "the integrator '{}' is not supported (path, direct, ptracer and moment are)",
+                crate::guard::quote(other)
+            )));
+        }
+    }
+    p.finish()
+}
+
+/// Turns the tree into parts.
+fn build(tree: &SceneTree, ledger: &Ledger) -> Result<MitsubaScene, MitsubaError> {
+    let root = &tree.root;
+    let scene_name = tree
+        .files
+        .first()
+        .map(|f| f.display().to_string())
+        .unwrap_or_default();
+    let mut b = Builder {
+        tree,
+        materials: Materials::new(ledger, scene_name),
+        parts: SceneParts::default(),
+        material_of: HashMap::new(),
+        groups: HashMap::new(),
+        approximated: Vec::new(),
+    };
+    let mut settings = ShotSettings::default();
+    let mut warnings = tree.warnings.clone();
+    let mut camera = None;
+    let mut environment = Environment::none();
+    let rp = Props::new(root);
+    for child in &root.children {
+        let o = &child.object;
+        match o.tag {
+            Tag::Shape => b.shape(o, None)?,
+            Tag::Bsdf | Tag::Texture => {} // used through references
+            Tag::Sensor => {
+                if camera.is_none() {
+                    camera = Some(sensor(o, &mut settings)?);
+                }
+            }
+            Tag::Integrator => integrator(o, &mut settings)?,
+            Tag::Emitter => {
+                let p = Props::new(o);
+                match o.plugin.as_str() {
+                    "point" => {
+                        let m = p.transform("to_world")?;
+                        let pos = p
+                            .vector_opt("position")?
+                            .unwrap_or_else(|| m.w_axis.truncate());
+                        let intensity =
+                            p.constant_color("intensity", Role::Emission, Vec3A::ONE)?;
+                        b.parts.lights.push(Light::Point {
+                            position: pos.into(),
+                            intensity,
+                        });
+                    }
+                    "directional" => {
+                        let m = p.transform("to_world")?;
+                        let d = p
+                            .vector_opt("direction")?
+                            .unwrap_or_else(|| m.z_axis.truncate());
+                        let irradiance =
+                            p.constant_color("irradiance", Role::Emission, Vec3A::ONE)?;
+                        let d = Vec3A::from(d).normalize_or_zero();
+                        if d == Vec3A::ZERO {
+                            return Err(p.error("direction is zero"));
+                        }
+                        b.parts.lights.push(Light::Directional {
+                            direction: d,
+                            irradiance,
+                        });
+                    }
+                    "constant" => {
+                        let radiance = p.constant_color("radiance", Role::Emission, Vec3A::ONE)?;
+                        environment = Environment::constant(radiance);
+                    }
+                    "envmap" => {
+                        let name = p
+                            .string_opt("filename")?
+                            .ok_or_else(|| p.error("needs a 'filename'"))?;
+                        let file = tree.resolve(name).ok_or_else(|| {
+                            p.error(format!("cannot find '{}'", crate::guard::quote(name)))
+                        })?;
+                        let scale = p.float("scale", 1.0)?;
+                        let m = p.transform("to_world")?;
+                        if m != Mat4::IDENTITY {
+                            return Err(p.error("a to_world on an envmap is not supported yet"));
+                        }
+                        // Mitsuba's u is raylab's shifted by half a turn.
+                        let map = EnvMap::load_with(&file, ledger)
+                            .map_err(|e| p.error(e.to_string()))?
+                            .with_pole_rows();
+                        environment = Environment::map(map)
+                            .with_strength(scale)
+                            .with_rotation(180.0);
+                    }
+                    other => {
+                        return Err(p.error(format!(
+                            "the emitter '{}' is not supported yet",
+                            crate::guard::quote(other)
+                        )));
+                    }
+                }
+                p.finish()?;
+            }
+            Tag::Medium | Tag::Phase | Tag::Volume => {
+                return Err(rp.error(format!(
+                    "{} is not supported yet (participating media)",
+                    o.describe()
+                )));
+            }
+            _ => {}
+        }
+    }
+    warnings.append(&mut b.materials.warnings);
+    if !b.approximated.is_empty() {
+        warnings.push(format!(
+            "approximated as triangles: {}",
+            b.approximated.join(", ")
+        ));
+    }
+    let mut parts = b.parts;
+    parts.textures = b.materials.textures;
+    parts.two_sided = false;
+    Ok(MitsubaScene {
+        parts,
+        environment,
+        camera,
+        settings,
+        warnings,
+    })
+}
+
+/// A Mitsuba scene's render settings alone (film size, sample count,
+/// integrator), without loading its meshes or textures.
+pub fn read_settings(
+    path: &Path,
+    defines: &[(String, String)],
+) -> Result<ShotSettings, MitsubaError> {
+    let tree = super::read(path, defines)?;
+    let mut settings = ShotSettings::default();
+    for o in tree.root.children_of(Tag::Sensor).take(1) {
+        sensor(o, &mut settings)?;
+    }
+    for o in tree.root.children_of(Tag::Integrator) {
+        integrator(o, &mut settings)?;
+    }
+    Ok(settings)
+}

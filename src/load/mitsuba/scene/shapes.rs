@@ -1,0 +1,300 @@
+//! Mitsuba's shapes as triangle meshes in their own space: `obj` (Mitsuba's
+//! vertex merging, `flip_tex_coords`, `face_normals`, and its angle-weighted
+//! normals where the file has none), `rectangle`, `cube` (Mitsuba's vertex
+//! order and texture coordinates), and `sphere`, `disk` and `cylinder`
+//! tessellated finely with their exact normals and Mitsuba's
+//! parametrisation (an approximation: raylab's BVH holds triangles only,
+//! so their silhouettes are polygons; the load says so).
+
+use std::collections::HashMap;
+use std::f32::consts::PI;
+use std::path::Path;
+
+use glam::{Vec2, Vec3};
+
+use super::super::error::MitsubaError;
+use crate::load::obj::parse_obj_file;
+use crate::scene::MeshData;
+
+/// Segments around a tessellated sphere, disk or cylinder (rings: half).
+pub(super) const SEGMENTS: u32 = 512;
+
+/// Mitsuba's vertex normals of a mesh without them: each face's unit normal
+/// added to its corners' positions weighted by the corner's angle
+/// (Thürmer and Wüthrich 1998), normalised; per position (vertices that
+/// share a position share the normal).
+fn angle_weighted_normals(mesh: &mut MeshData, position_of: &[u32], positions: usize) {
+    let mut acc = vec![Vec3::ZERO; positions];
+    for tri in &mesh.indices {
+        let p = tri.map(|i| mesh.positions[i as usize]);
+        let n = (p[1] - p[0]).cross(p[2] - p[0]);
+        if n.length_squared() <= 0.0 {
+            continue;
+        }
+        let n = n.normalize();
+        for k in 0..3 {
+            let a = (p[(k + 1) % 3] - p[k]).normalize_or_zero();
+            let b = (p[(k + 2) % 3] - p[k]).normalize_or_zero();
+            let angle = a.dot(b).clamp(-1.0, 1.0).acos();
+            acc[position_of[tri[k] as usize] as usize] += n * angle;
+        }
+    }
+    mesh.normals = position_of
+        .iter()
+        .map(|&p| {
+            let n = acc[p as usize];
+            if n.length_squared() > 0.0 {
+                n.normalize()
+            } else {
+                Vec3::X
+            }
+        })
+        .collect();
+}
+
+/// An OBJ file as Mitsuba's `obj` reads it: one vertex per distinct
+/// (position, texture coordinate, normal) corner, `v` flipped to `1 − v`
+/// if `flip_tex_coords`, no normals if `face_normals`, else the file's or
+/// Mitsuba's angle-weighted ones.
+pub(super) fn obj_mesh(
+    path: &Path,
+    flip_tex_coords: bool,
+    face_normals: bool,
+) -> Result<MeshData, MitsubaError> {
+    let text = std::fs::read_to_string(path).map_err(|cause| MitsubaError::Io {
+        path: path.to_owned(),
+        cause,
+    })?;
+    let obj = parse_obj_file(&text, path).map_err(|e| MitsubaError::Scene {
+        path: path.to_owned(),
+        message: e.to_string(),
+    })?;
+    let mut mesh = MeshData::default();
+    let mut vertex_of = HashMap::new();
+    let mut position_of = Vec::new();
+    let has_uv = obj
+        .triangles
+        .iter()
+        .any(|t| t.iter().any(|c| c.uv != u32::MAX));
+    let has_normals = !face_normals
+        && obj
+            .triangles
+            .iter()
+            .all(|t| t.iter().all(|c| c.normal != u32::MAX));
+    for tri in &obj.triangles {
+        let mut idx = [0u32; 3];
+        for (k, c) in tri.iter().enumerate() {
+            let key = (
+                c.position,
+                if has_uv { c.uv } else { 0 },
+                if has_normals { c.normal } else { 0 },
+            );
+            idx[k] = *vertex_of.entry(key).or_insert_with(|| {
+                mesh.positions
+                    .push(obj.positions[c.position as usize].into());
+                position_of.push(c.position);
+                if has_uv {
+                    let uv = obj.uvs.get(c.uv as usize).copied().unwrap_or(Vec2::ZERO);
+                    mesh.uvs[0].push(match flip_tex_coords {
+                        true => Vec2::new(uv.x, 1.0 - uv.y),
+                        false => uv,
+                    });
+                }
+                if has_normals {
+                    mesh.normals.push(obj.normals[c.normal as usize]);
+                }
+                mesh.positions.len() as u32 - 1
+            });
+        }
+        mesh.indices.push(idx);
+    }
+    if !face_normals && !has_normals {
+        angle_weighted_normals(&mut mesh, &position_of, obj.positions.len());
+    }
+    Ok(mesh)
+}
+
+/// Mitsuba's `rectangle`: `[−1, 1]²` at z = 0 facing +z, (u, v) = ((x + 1)/2,
+/// (y + 1)/2).
+pub(super) fn rectangle() -> MeshData {
+    let p = [(-1.0, -1.0), (1.0, -1.0), (-1.0, 1.0), (1.0, 1.0)];
+    MeshData {
+        positions: p.iter().map(|&(x, y)| Vec3::new(x, y, 0.0)).collect(),
+        indices: vec![[1, 2, 0], [1, 3, 2]],
+        normals: vec![Vec3::Z; 4],
+        uvs: [
+            p.iter()
+                .map(|&(x, y)| Vec2::new((x + 1.0) / 2.0, (y + 1.0) / 2.0))
+                .collect(),
+            Vec::new(),
+        ],
+        ..MeshData::default()
+    }
+}
+
+/// Mitsuba's `cube`: `[−1, 1]³`, four vertices per side with the side's
+/// normal and texture coordinates, in Mitsuba's order.
+pub(super) fn cube() -> MeshData {
+    const NORMALS: [[f32; 3]; 6] = [
+        [0.0, -1.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [0.0, 0.0, 1.0],
+        [-1.0, 0.0, 0.0],
+        [0.0, 0.0, -1.0],
+    ];
+    const UV: [[f32; 2]; 4] = [[0.0, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]];
+    const CORNER: [u32; 24] = [
+        1, 5, 4, 0, 3, 2, 6, 7, 1, 3, 7, 5, 5, 7, 6, 4, 4, 6, 2, 0, 3, 1, 0, 2,
+    ];
+    let corner = |c: u32| {
+        let s = |bit: u32| if c & bit != 0 { 1.0 } else { -1.0 };
+        Vec3::new(s(1), s(2), s(4))
+    };
+    let mut mesh = MeshData::default();
+    for (side, n) in NORMALS.iter().enumerate() {
+        let v = 4 * side as u32;
+        for (k, uv) in UV.iter().enumerate() {
+            mesh.positions.push(corner(CORNER[4 * side + k]));
+            mesh.normals.push(Vec3::from(*n));
+            mesh.uvs[0].push(Vec2::from(*uv));
+        }
+        mesh.indices.push([v, v + 1, v + 2]);
+        mesh.indices.push([v + 3, v, v + 2]);
+    }
+    mesh
+}
+
+/// A grid of `(cols + 1) × (rows + 1)` vertices over `(s, t) ∈ [0, 1]²`,
+/// placed by `at` (position, normal, uv), two triangles per cell wound so
+/// that the normal `at` gives is their front.
+fn grid(cols: u32, rows: u32, at: impl Fn(f32, f32) -> (Vec3, Vec3, Vec2)) -> MeshData {
+    let mut mesh = MeshData::default();
+    for j in 0..=rows {
+        for i in 0..=cols {
+            let (p, n, uv) = at(i as f32 / cols as f32, j as f32 / rows as f32);
+            mesh.positions.push(p);
+            mesh.normals.push(n);
+            mesh.uvs[0].push(uv);
+        }
+    }
+    let v = |i: u32, j: u32| j * (cols + 1) + i;
+    for j in 0..rows {
+        for i in 0..cols {
+            for tri in [
+                [v(i, j), v(i + 1, j), v(i + 1, j + 1)],
+                [v(i, j), v(i + 1, j + 1), v(i, j + 1)],
+            ] {
+                let p = tri.map(|k| mesh.positions[k as usize]);
+                let face = (p[1] - p[0]).cross(p[2] - p[0]);
+                if face.length_squared() <= 0.0 {
+                    continue;
+                }
+                let n = mesh.normals[tri[0] as usize]
+                    + mesh.normals[tri[1] as usize]
+                    + mesh.normals[tri[2] as usize];
+                mesh.indices.push(match face.dot(n) >= 0.0 {
+                    true => tri,
+                    false => [tri[0], tri[2], tri[1]],
+                });
+            }
+        }
+    }
+    mesh
+}
+
+/// Mitsuba's unit `sphere` tessellated: (u, v) = (φ/2π, θ/π) of
+/// `(sin θ cos φ, sin θ sin φ, cos θ)`, normals outwards.
+pub(super) fn sphere() -> MeshData {
+    grid(SEGMENTS, SEGMENTS / 2, |s, t| {
+        let (phi, theta) = (2.0 * PI * s, PI * t);
+        let p = Vec3::new(
+            theta.sin() * phi.cos(),
+            theta.sin() * phi.sin(),
+            theta.cos(),
+        );
+        (p, p, Vec2::new(s, t))
+    })
+}
+
+/// Mitsuba's unit `disk` at z = 0 facing +z tessellated: (u, v) = (r, φ/2π).
+pub(super) fn disk() -> MeshData {
+    grid(SEGMENTS, SEGMENTS / 8, |s, t| {
+        let phi = 2.0 * PI * s;
+        (
+            Vec3::new(t * phi.cos(), t * phi.sin(), 0.0),
+            Vec3::Z,
+            Vec2::new(t, s),
+        )
+    })
+}
+
+/// Mitsuba's unit `cylinder` (radius 1, z from 0 to 1, open) tessellated:
+/// (u, v) = (φ/2π, z), normals outwards.
+pub(super) fn cylinder() -> MeshData {
+    grid(SEGMENTS, 1, |s, t| {
+        let phi = 2.0 * PI * s;
+        let n = Vec3::new(phi.cos(), phi.sin(), 0.0);
+        (n + Vec3::Z * t, n, Vec2::new(s, t))
+    })
+}
+
+/// Turns the mesh around (Mitsuba's `flip_normals`): reversed windings and
+/// normals.
+pub(super) fn flip(mesh: &mut MeshData) {
+    for t in &mut mesh.indices {
+        t.swap(1, 2);
+    }
+    for n in &mut mesh.normals {
+        *n = -*n;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn front(mesh: &MeshData, t: usize) -> Vec3 {
+        let p = mesh.indices[t].map(|i| mesh.positions[i as usize]);
+        (p[1] - p[0]).cross(p[2] - p[0]).normalize()
+    }
+
+    #[test]
+    fn built_in_shapes_face_their_normals() {
+        for (name, mesh) in [
+            ("rectangle", rectangle()),
+            ("cube", cube()),
+            ("sphere", sphere()),
+            ("disk", disk()),
+            ("cylinder", cylinder()),
+        ] {
+            for t in 0..mesh.indices.len() {
+                let n = mesh.indices[t].map(|i| mesh.normals[i as usize]);
+                let f = front(&mesh, t);
+                assert!(n.iter().all(|n| n.dot(f) > 0.5), "{name} triangle {t}");
+            }
+        }
+    }
+
+    #[test]
+    fn the_sphere_has_area_four_pi_to_tessellation_accuracy() {
+        let m = sphere();
+        let area: f64 = (0..m.indices.len())
+            .map(|t| {
+                let p = m.indices[t].map(|i| m.positions[i as usize].as_dvec3());
+                0.5 * (p[1] - p[0]).cross(p[2] - p[0]).length()
+            })
+            .sum();
+        // An inscribed polyhedron: a little less than 4π.
+        let ratio = area / (4.0 * std::f64::consts::PI);
+        assert!(ratio < 1.0 && ratio > 1.0 - 1e-4, "{area}");
+    }
+
+    #[test]
+    fn rectangle_corners_carry_mitsubas_coordinates() {
+        let m = rectangle();
+        assert_eq!(m.positions[1], Vec3::new(1.0, -1.0, 0.0));
+        assert_eq!(m.uvs[0][1], Vec2::new(1.0, 0.0));
+        assert_eq!(m.uvs[0][2], Vec2::new(0.0, 1.0));
+    }
+}

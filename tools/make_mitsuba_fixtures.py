@@ -1,0 +1,59 @@
+#!/usr/bin/env python3
+"""Writes the small images of raylab's own Mitsuba test scenes
+(tests/data/mitsuba/suite/textures/): a colour test pattern and a grey
+leaf-like mask, as 8-bit PNGs made here (no third-party data), with the
+standard library only. Run again to recreate them; the output is
+deterministic."""
+
+import math
+import os
+import struct
+import zlib
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+OUT = os.path.join(HERE, "..", "tests", "data", "mitsuba", "suite", "textures")
+
+
+def png(path, width, height, channels, pixel):
+    """Writes an 8-bit PNG whose pixel (x, y) is pixel(x, y) (a tuple)."""
+    kind = {1: 0, 3: 2}[channels]
+    raw = b"".join(
+        b"\x00" + bytes(v for x in range(width) for v in pixel(x, y)) for y in range(height)
+    )
+
+    def chunk(tag, data):
+        return struct.pack(">I", len(data)) + tag + data + struct.pack(">I", zlib.crc32(tag + data))
+
+    header = struct.pack(">IIBBBBB", width, height, 8, kind, 0, 0, 0)
+    with open(path, "wb") as f:
+        f.write(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header) + chunk(b"IDAT", zlib.compress(raw, 9)) + chunk(b"IEND", b""))
+
+
+def pattern(x, y):
+    # Smooth colour gradients with a few hard stripes: bilinear and nearest
+    # lookups differ visibly, and every channel varies.
+    r = int(255 * (0.5 + 0.5 * math.sin(x / 5.0)))
+    g = int(255 * y / 63)
+    b = 230 if (x // 8 + y // 8) % 2 == 0 else 40
+    return (r, g, b)
+
+
+def mask(x, y):
+    # An ellipse with a notch: opaque inside (255), clear outside (0), a
+    # soft rim between.
+    u, v = (x - 31.5) / 28.0, (y - 31.5) / 20.0
+    d = math.hypot(u, v)
+    if abs(x - 40) < 4 and y < 32:
+        d = 2.0
+    return (max(0, min(255, int(255 * (1.2 - d) / 0.2))),)
+
+
+def main():
+    os.makedirs(OUT, exist_ok=True)
+    png(os.path.join(OUT, "pattern.png"), 64, 64, 3, pattern)
+    png(os.path.join(OUT, "mask.png"), 64, 64, 1, mask)
+    print("wrote", OUT)
+
+
+if __name__ == "__main__":
+    main()
