@@ -4,6 +4,7 @@
 use super::super::bsdf::{BsdfSample, GuideLobes};
 use super::super::frame::reflect_z;
 use super::super::fresnel::fresnel_mitsuba;
+use super::positive;
 use glam::Vec3A;
 
 /// Mitsuba's `dielectric`: reflection with probability `F`, refraction
@@ -37,7 +38,7 @@ impl SmoothDielectric {
     /// Reflects (`u_lobe ≤ F`) or refracts `wo`.
     #[inline]
     pub fn sample(&self, wo: Vec3A, u_lobe: f32) -> Option<BsdfSample> {
-        if wo.z == 0.0 || !wo.is_finite() || !(self.eta > 0.0) {
+        if wo.z == 0.0 || !wo.is_finite() || !positive(self.eta) {
             return None;
         }
         let (r, cos_t, _, eta_ti) = fresnel_mitsuba(wo.z, self.eta);
@@ -61,7 +62,7 @@ impl SmoothDielectric {
     /// The denoiser's guides: the reflection and the refraction, with their
     /// tinted Fresnel terms.
     pub fn guide_lobes(&self, wo: Vec3A) -> GuideLobes {
-        if wo.z == 0.0 || !wo.is_finite() || !(self.eta > 0.0) {
+        if wo.z == 0.0 || !wo.is_finite() || !positive(self.eta) {
             return GuideLobes::NONE;
         }
         let (r, cos_t, _, eta_ti) = fresnel_mitsuba(wo.z, self.eta);

@@ -107,3 +107,9 @@ impl Tangent {
         Vec3A::new(c * v.x - s * v.y, s * v.x + c * v.y, v.z)
     }
 }
+
+/// Whether `x > 0` (false for NaN).
+#[inline]
+fn positive(x: f32) -> bool {
+    x > 0.0
+}

@@ -5,6 +5,7 @@ use super::super::bsdf::{BsdfSample, GuideLobes, finite_or_zero};
 use super::super::disk::concentric_disk;
 use super::super::frame::{above, reflect_z};
 use super::super::fresnel::{fresnel_diffuse_reflectance, fresnel_mitsuba};
+use super::positive;
 use glam::{Vec2, Vec3A};
 use std::f32::consts::FRAC_1_PI;
 
@@ -146,7 +147,7 @@ impl Plastic {
         let wi = Vec3A::new(p.x, p.y, (1.0 - p.length_squared()).max(0.0).sqrt());
         let p_diff = 1.0 - p_spec;
         let pdf = p_diff * wi.z * FRAC_1_PI;
-        if !(pdf > 0.0) {
+        if !positive(pdf) {
             return None;
         }
         let f_i = fresnel_mitsuba(wi.z, self.eta).0;

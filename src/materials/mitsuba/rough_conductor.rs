@@ -7,6 +7,7 @@ use super::super::frame::{Frame, above, reflect_z};
 use super::super::fresnel::fresnel_conductor;
 use super::super::microfacet::{MicrofacetDistribution, MicrofacetKind};
 use super::Tangent;
+use super::positive;
 use glam::{Vec2, Vec3A};
 
 /// Mitsuba's `roughconductor`:
@@ -103,7 +104,7 @@ impl RoughConductor {
         let distr = &self.distribution;
         let wo_l = self.tangent.to_local(wo);
         let (m, pdf_m) = distr.sample(wo_l, u);
-        if !(pdf_m > 0.0) {
+        if !positive(pdf_m) {
             return None;
         }
         let wi_l = (2.0 * wo_l.dot(m)) * m - wo_l;
@@ -120,7 +121,7 @@ impl RoughConductor {
         let weight = fresnel_conductor(wo_l.dot(h), self.eta, self.k)
             * self.specular_reflectance
             * distr.g1(wi_l, h);
-        if !(pdf > 0.0) || !pdf.is_finite() || !weight.is_finite() {
+        if !positive(pdf) || !pdf.is_finite() || !weight.is_finite() {
             return None;
         }
         Some(BsdfSample {

@@ -7,6 +7,7 @@ use super::super::frame::{Frame, reflect_z};
 use super::super::fresnel::fresnel_mitsuba;
 use super::super::microfacet::{MicrofacetDistribution, MicrofacetKind};
 use super::Tangent;
+use super::positive;
 use glam::{Vec2, Vec3A};
 
 /// Mitsuba's `roughdielectric`. With `η` the relative index seen from `wo`'s
@@ -83,7 +84,7 @@ impl RoughDielectric {
     /// The half vector of `wo` and `wi` (BSDF frame).
     #[inline]
     fn half(&self, wo: Vec3A, wi: Vec3A) -> Option<Half> {
-        if wo.z == 0.0 || !(self.eta > 0.0) {
+        if wo.z == 0.0 || !positive(self.eta) {
             return None;
         }
         let reflect = wo.z * wi.z > 0.0;
@@ -148,14 +149,14 @@ impl RoughDielectric {
     /// refracts about it.
     #[inline]
     pub fn sample(&self, wo_s: Vec3A, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
-        if wo_s.z == 0.0 || !wo_s.is_finite() || !(self.eta > 0.0) {
+        if wo_s.z == 0.0 || !wo_s.is_finite() || !positive(self.eta) {
             return None;
         }
         let wo = self.tangent.to_local(wo_s);
         let wo_top = if wo.z < 0.0 { -wo } else { wo };
         let distr = &self.distribution;
         let (m, pdf_m) = distr.sample(wo_top, u);
-        if !(pdf_m > 0.0) {
+        if !positive(pdf_m) {
             return None;
         }
         let om = wo.dot(m);
@@ -181,7 +182,7 @@ impl RoughDielectric {
         } else {
             self.specular_transmittance * (g1 / (eta * eta))
         };
-        if !(pdf > 0.0) || !weight.is_finite() || g1 <= 0.0 {
+        if !positive(pdf) || !weight.is_finite() || g1 <= 0.0 {
             return None;
         }
         Some(BsdfSample {
@@ -196,7 +197,7 @@ impl RoughDielectric {
     /// the smooth interface when both widths are at most [`GUIDE_ALPHA`],
     /// else one rough lobe of the tinted `F R + (1 − F) T`.
     pub fn guide_lobes(&self, wo: Vec3A) -> GuideLobes {
-        if wo.z == 0.0 || !wo.is_finite() || !(self.eta > 0.0) {
+        if wo.z == 0.0 || !wo.is_finite() || !positive(self.eta) {
             return GuideLobes::NONE;
         }
         let d = &self.distribution;

@@ -8,6 +8,7 @@ use super::super::frame::{above, reflect_z};
 use super::super::fresnel::{fresnel_diffuse_reflectance, fresnel_mitsuba};
 use super::super::microfacet::{MicrofacetDistribution, MicrofacetKind, gauss_legendre};
 use super::plastic::{base_reflectance, mean, specular_sampling_weight};
+use super::positive;
 use glam::{Vec2, Vec3A};
 use std::f32::consts::FRAC_1_PI;
 use std::sync::Mutex;
@@ -236,7 +237,7 @@ impl RoughPlastic {
             Vec3A::new(p.x, p.y, (1.0 - p.length_squared()).max(0.0).sqrt())
         };
         let pdf = self.pdf(wo, wi);
-        if !(pdf > 0.0) {
+        if !positive(pdf) {
             return None;
         }
         let weight = self.eval(wo, wi) / pdf;

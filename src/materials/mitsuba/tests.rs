@@ -2,6 +2,8 @@
 //! (`reference.rs`), χ² of the sampling against the pdf, weight = eval / pdf,
 //! energy, reciprocity and guards.
 
+// Mitsuba's f32 values as printed, to 9 digits.
+#[allow(clippy::excessive_precision, clippy::approx_constant)]
 #[path = "reference.rs"]
 mod reference;
 
@@ -18,12 +20,15 @@ const TINT: Vec3A = Vec3A::new(0.9, 0.8, 0.7);
 
 /// The BSDFs of `tools/mitsuba_bsdf_reference.py`, by its names, with their
 /// eval and sample tables.
-fn referenced() -> Vec<(
+/// A referenced BSDF: its name, the material, its eval and sample rows.
+type Referenced = (
     &'static str,
     Material,
     &'static [[f32; 10]],
     &'static [[f32; 13]],
-)> {
+);
+
+fn referenced() -> Vec<Referenced> {
     use MicrofacetKind::{Beckmann, Ggx};
     vec![
         (

@@ -3,6 +3,7 @@
 use super::super::bsdf::{BsdfSample, GuideLobes};
 use super::super::frame::reflect_z;
 use super::super::fresnel::fresnel_mitsuba;
+use super::positive;
 use glam::Vec3A;
 
 /// Mitsuba's `thindielectric`: a sheet whose two faces reflect back and
@@ -41,7 +42,7 @@ impl ThinDielectric {
     /// Reflects (`u_lobe ≤ R`) or passes straight through.
     #[inline]
     pub fn sample(&self, wo: Vec3A, u_lobe: f32) -> Option<BsdfSample> {
-        if wo.z == 0.0 || !wo.is_finite() || !(self.eta > 0.0) {
+        if wo.z == 0.0 || !wo.is_finite() || !positive(self.eta) {
             return None;
         }
         let r = self.reflectance(wo);
@@ -64,7 +65,7 @@ impl ThinDielectric {
 
     /// The denoiser's guides: the reflection and the straight transmission.
     pub fn guide_lobes(&self, wo: Vec3A) -> GuideLobes {
-        if wo.z == 0.0 || !wo.is_finite() || !(self.eta > 0.0) {
+        if wo.z == 0.0 || !wo.is_finite() || !positive(self.eta) {
             return GuideLobes::NONE;
         }
         let r = self.reflectance(wo);
