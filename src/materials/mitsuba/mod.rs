@@ -39,8 +39,14 @@
 //! the textures at the hit and builds (or updates) the BSDF there, which is
 //! cheap for all of them; the plastics' specular sampling weight, which
 //! Mitsuba computes from the textures' *means*, is a parameter of its own
-//! for that reason. The rough plastic's table depends only on the
-//! distribution, alpha and the index, which Mitsuba does not let vary.
+//! for that reason ([`specular_sampling_weight`]). The rough plastic's table
+//! depends only on the distribution, alpha and the index, which Mitsuba
+//! does not let vary.
+//!
+//! Every `eta` here is Mitsuba's relative index `int_ior / ext_ior`; note
+//! that Mitsuba's default `ext_ior` is air, 1.000277, not 1. Anisotropic
+//! BSDFs turn with [`Material::orient_anisotropy`](super::Material::orient_anisotropy):
+//! Mitsuba's `alpha_u` lies along its shading frame's first axis, `dp/du`.
 
 mod conductor;
 mod dielectric;
@@ -54,7 +60,7 @@ mod thin_dielectric;
 
 pub use conductor::Conductor;
 pub use dielectric::SmoothDielectric;
-pub use plastic::Plastic;
+pub use plastic::{Plastic, specular_sampling_weight};
 pub use rough_conductor::RoughConductor;
 pub use rough_dielectric::RoughDielectric;
 pub use rough_plastic::{RoughPlastic, RoughPlasticTable};
