@@ -1,6 +1,12 @@
 //! The exact Fresnel reflectance of a smooth dielectric interface
 //! ([`fresnel_dielectric`]) and of a conductor with a complex index of
-//! refraction, per RGB channel ([`fresnel_conductor`]).
+//! refraction, per RGB channel ([`fresnel_conductor`]), which is also
+//! Mitsuba 3's `fresnel_conductor` (the same closed form; this one also
+//! clamps `cos_i` and the result to `[0, 1]`, which Mitsuba's callers never
+//! leave). Mitsuba's dielectric Fresnel with the refracted cosine
+//! ([`fresnel_mitsuba`]) and its diffuse Fresnel reflectance
+//! ([`fresnel_diffuse_reflectance`]) are here for the BSDFs that reproduce
+//! Mitsuba's.
 
 use glam::Vec3A;
 
@@ -65,6 +71,55 @@ pub fn fresnel_conductor(cos_i: f32, eta: Vec3A, k: Vec3A) -> Vec3A {
     Vec3A::new(f(eta.x, k.x), f(eta.y, k.y), f(eta.z, k.z))
 }
 
+/// The Fresnel term of a dielectric interface as Mitsuba 3 computes it
+/// (`fresnel` in its `fresnel.h`), with what refraction needs: returns
+/// `(F, cos θt, η_it, η_ti)`.
+///
+/// `eta` is the relative index inside over outside (the normal points
+/// outside); `cos_i` the cosine of the direction light leaves along (either
+/// side). `cos θt` is the refracted direction's cosine, of the sign opposite
+/// to `cos_i` (0 under total internal reflection, where `F = 1`); `η_it` is
+/// the relative index across the interface in the direction of travel and
+/// `η_ti = 1/η_it` scales the tangential part of the refracted direction.
+/// `eta = 1` gives `F = 0`; `cos_i = 0` gives `F = 1`.
+#[inline]
+pub fn fresnel_mitsuba(cos_i: f32, eta: f32) -> (f32, f32, f32, f32) {
+    let (eta_it, eta_ti) = if cos_i >= 0.0 {
+        (eta, 1.0 / eta)
+    } else {
+        (1.0 / eta, eta)
+    };
+    let cos_t2 = 1.0 - (1.0 - cos_i * cos_i) * (eta_ti * eta_ti);
+    let ci = cos_i.abs();
+    let ct = cos_t2.max(0.0).sqrt();
+    let r = if eta == 1.0 {
+        0.0
+    } else if ci == 0.0 {
+        1.0
+    } else {
+        let a_s = (ci - eta_it * ct) / (ci + eta_it * ct);
+        let a_p = (eta_it * ci - ct) / (eta_it * ci + ct);
+        0.5 * (a_s * a_s + a_p * a_p)
+    };
+    (r, -ct.copysign(cos_i), eta_it, eta_ti)
+}
+
+/// Mitsuba 3's diffuse Fresnel reflectance `F_dr(η)`: the fraction of
+/// uniformly diffuse light reflected by a dielectric interface of relative
+/// index `eta`, by its fits (Egan and Hilgeman 1973 for `η < 1`, d'Eon and
+/// Irving 2011 otherwise).
+pub fn fresnel_diffuse_reflectance(eta: f32) -> f32 {
+    let inv = 1.0 / eta;
+    if eta < 1.0 {
+        0.0636 * inv + (eta * (eta * -1.4399 + 0.7099) + 0.6681)
+    } else {
+        0.919_317
+            + inv
+                * (-3.4793
+                    + inv * (6.753_35 + inv * (-7.809_89 + inv * (4.985_54 + inv * -1.368_81))))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -95,6 +150,41 @@ mod tests {
         assert!((fresnel_dielectric(1.0, 1.5) - 0.04).abs() < 1e-6);
         assert!((fresnel_dielectric(0.5, 1.5) - 0.089_6).abs() < 5e-4);
         assert!((fresnel_dielectric(0.0, 1.5) - 1.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn mitsuba_fresnel_matches_the_exact_one_and_fdr_its_average() {
+        for eta in [1.5f32, 1.0 / 1.33, 2.4] {
+            for c in [1.0f32, 0.7, 0.3, 0.01, -0.2, -0.9, -1.0] {
+                let (f, ct, eta_it, eta_ti) = fresnel_mitsuba(c, eta);
+                assert!((f - fresnel_dielectric(c, eta)).abs() < 1e-6, "{eta} {c}");
+                assert_eq!(eta_it * eta_ti, eta_it * (1.0 / eta_it));
+                if f < 1.0 {
+                    // Snell: η_it sin θt = sin θi, and the sides swap.
+                    let st = (1.0 - ct * ct).sqrt();
+                    let si = (1.0 - c * c).sqrt();
+                    assert!((eta_it * st - si).abs() < 1e-5 && ct * c <= 0.0);
+                }
+            }
+        }
+        assert_eq!(fresnel_mitsuba(0.5, 1.0).0, 0.0);
+        assert_eq!(fresnel_mitsuba(0.0, 1.5).0, 1.0);
+        // F_dr(η) = 2 ∫ F(μ, η) μ dμ over the incident hemisphere: the fits
+        // are within 0.6 % of the integral for 1.33 and 1.5, from both sides.
+        for eta in [1.33f32, 1.5, 1.0 / 1.5] {
+            let n = 20_000;
+            let fdr: f64 = (0..n)
+                .map(|i| {
+                    let mu = (i as f64 + 0.5) / n as f64;
+                    2.0 * fresnel_dielectric(mu as f32, eta) as f64 * mu / n as f64
+                })
+                .sum();
+            let fit = fresnel_diffuse_reflectance(eta) as f64;
+            assert!(
+                (fit - fdr).abs() < 6e-3 * fdr.max(0.1),
+                "η {eta}: {fit} vs {fdr}"
+            );
+        }
     }
 
     #[test]

@@ -1,5 +1,6 @@
 //! A surface's scattering model, [`Material`]: the lab's diffuse, mirror,
-//! glass and rough conductor and the glTF BSDF, with their evaluation,
+//! glass and rough conductor, the glTF BSDF and Mitsuba 3's BSDFs
+//! ([`mitsuba`]), with their evaluation,
 //! density and sampling, and [`BsdfAt`], a material seen from one direction.
 //! The frame, side and estimator conventions are the module's
 //! ([`crate::materials`]).
@@ -10,6 +11,7 @@ use super::disk::concentric_disk;
 use super::frame::{Frame, above, reflect_z};
 use super::fresnel::fresnel_conductor;
 use super::microfacet::{ggx_d, ggx_lambda, ggx_sample_visible_normal, is_smooth};
+use super::mitsuba;
 use super::pbr::{self, PbrBsdf};
 use glam::{Vec2, Vec3A};
 use std::f32::consts::FRAC_1_PI;
@@ -51,6 +53,21 @@ pub enum Material {
     /// The glTF 2.0 metallic–roughness BSDF (with the specular, ior, transmission
     /// and volume extensions); see [`pbr`]. Two-sided: never flip its normal.
     Pbr(PbrBsdf),
+    /// Mitsuba 3's `conductor` (smooth, one-sided); see [`mitsuba`].
+    MiConductor(mitsuba::Conductor),
+    /// Mitsuba 3's `roughconductor` (one-sided).
+    MiRoughConductor(mitsuba::RoughConductor),
+    /// Mitsuba 3's `dielectric` (smooth interface, two-sided: never flip
+    /// its normal).
+    MiDielectric(mitsuba::SmoothDielectric),
+    /// Mitsuba 3's `thindielectric` (two-sided).
+    MiThinDielectric(mitsuba::ThinDielectric),
+    /// Mitsuba 3's `roughdielectric` (rough interface, two-sided).
+    MiRoughDielectric(mitsuba::RoughDielectric),
+    /// Mitsuba 3's `plastic` (smooth coating on a diffuse base, one-sided).
+    MiPlastic(mitsuba::Plastic),
+    /// Mitsuba 3's `roughplastic` (one-sided).
+    MiRoughPlastic(mitsuba::RoughPlastic),
 }
 
 /// A material seen from one direction `wo` ([`Material::at`]): its
@@ -146,8 +163,11 @@ impl Material {
     /// for other materials or without anisotropy.
     #[inline]
     pub fn orient_anisotropy(&mut self, frame: &Frame, t: Vec3A, b: Vec3A) {
-        if let Material::Pbr(p) = self {
-            p.orient_anisotropy(frame, t, b);
+        match self {
+            Material::Pbr(p) => p.orient_anisotropy(frame, t, b),
+            Material::MiRoughConductor(c) => c.orient_anisotropy(frame, t),
+            Material::MiRoughDielectric(d) => d.orient_anisotropy(frame, t),
+            _ => {}
         }
     }
 
@@ -199,11 +219,20 @@ impl Material {
         }
     }
 
-    /// Whether [`Material::sample`] reads `u_lobe` (glass and the glTF
-    /// material choose between lobes).
+    /// Whether [`Material::sample`] reads `u_lobe` (glass, plastics and the
+    /// glTF material choose between lobes).
     #[inline]
     pub fn chooses_lobe(&self) -> bool {
-        matches!(self, Material::Dielectric { .. } | Material::Pbr(_))
+        matches!(
+            self,
+            Material::Dielectric { .. }
+                | Material::Pbr(_)
+                | Material::MiDielectric(_)
+                | Material::MiThinDielectric(_)
+                | Material::MiRoughDielectric(_)
+                | Material::MiPlastic(_)
+                | Material::MiRoughPlastic(_)
+        )
     }
 
     /// Whether the material has only delta lobes (mirror, glass, smooth
@@ -216,6 +245,13 @@ impl Material {
             Material::Mirror { .. } | Material::Dielectric { .. } => true,
             Material::RoughConductor { alpha, .. } => is_smooth(alpha),
             Material::Pbr(ref p) => p.is_specular(),
+            Material::MiConductor(_)
+            | Material::MiDielectric(_)
+            | Material::MiThinDielectric(_) => true,
+            Material::MiRoughConductor(_)
+            | Material::MiRoughDielectric(_)
+            | Material::MiPlastic(_)
+            | Material::MiRoughPlastic(_) => false,
         }
     }
 
@@ -234,6 +270,13 @@ impl Material {
             Material::Dielectric { .. } => Vec3A::ONE,
             Material::RoughConductor { eta, k, .. } => fresnel_conductor(cos, eta, k),
             Material::Pbr(ref p) => p.albedo(cos),
+            Material::MiConductor(ref c) => c.reflectance(cos),
+            Material::MiRoughConductor(ref c) => c.reflectance(cos),
+            Material::MiDielectric(ref d) => d.albedo(cos),
+            Material::MiThinDielectric(ref d) => d.albedo(cos),
+            Material::MiRoughDielectric(ref d) => d.albedo(cos),
+            Material::MiPlastic(ref p) => p.albedo(cos),
+            Material::MiRoughPlastic(ref p) => p.albedo(cos),
         };
         finite_or_zero(a).clamp(Vec3A::ZERO, Vec3A::ONE)
     }
@@ -243,7 +286,10 @@ impl Material {
     #[inline]
     pub fn transmits(&self) -> bool {
         match *self {
-            Material::Dielectric { .. } => true,
+            Material::Dielectric { .. }
+            | Material::MiDielectric(_)
+            | Material::MiThinDielectric(_)
+            | Material::MiRoughDielectric(_) => true,
             Material::Pbr(ref p) => {
                 (p.transmission > 0.0 && p.metallic < 1.0) || p.transmits_diffusely()
             }
@@ -300,6 +346,13 @@ impl Material {
                 }
             }
             Material::Pbr(ref p) => p.guide_lobes(wo),
+            Material::MiConductor(ref c) => c.guide_lobes(wo),
+            Material::MiRoughConductor(ref c) => c.guide_lobes(wo),
+            Material::MiDielectric(ref d) => d.guide_lobes(wo),
+            Material::MiThinDielectric(ref d) => d.guide_lobes(wo),
+            Material::MiRoughDielectric(ref d) => d.guide_lobes(wo),
+            Material::MiPlastic(ref p) => p.guide_lobes(wo),
+            Material::MiRoughPlastic(ref p) => p.guide_lobes(wo),
         }
     }
 
@@ -331,6 +384,13 @@ impl Material {
                 finite_or_zero(f * (d * g2) / (4.0 * wo.z))
             }
             Material::Pbr(ref p) => p.eval(wo, wi),
+            Material::MiConductor(_)
+            | Material::MiDielectric(_)
+            | Material::MiThinDielectric(_) => Vec3A::ZERO,
+            Material::MiRoughConductor(ref c) => c.eval(wo, wi),
+            Material::MiRoughDielectric(ref d) => d.eval(wo, wi),
+            Material::MiPlastic(ref p) => p.eval(wo, wi),
+            Material::MiRoughPlastic(ref p) => p.eval(wo, wi),
         }
     }
 
@@ -374,6 +434,13 @@ impl Material {
                 if p.is_finite() { p } else { 0.0 }
             }
             Material::Pbr(ref p) => p.pdf(wo, wi),
+            Material::MiConductor(_)
+            | Material::MiDielectric(_)
+            | Material::MiThinDielectric(_) => 0.0,
+            Material::MiRoughConductor(ref c) => c.pdf(wo, wi),
+            Material::MiRoughDielectric(ref d) => d.pdf(wo, wi),
+            Material::MiPlastic(ref p) => p.pdf(wo, wi),
+            Material::MiRoughPlastic(ref p) => p.pdf(wo, wi),
         }
     }
 
@@ -459,6 +526,13 @@ impl Material {
                 })
             }
             Material::Pbr(ref p) => p.sample(wo, u_lobe, u),
+            Material::MiConductor(ref c) => c.sample(wo),
+            Material::MiRoughConductor(ref c) => c.sample(wo, u),
+            Material::MiDielectric(ref d) => d.sample(wo, u_lobe),
+            Material::MiThinDielectric(ref d) => d.sample(wo, u_lobe),
+            Material::MiRoughDielectric(ref d) => d.sample(wo, u_lobe, u),
+            Material::MiPlastic(ref p) => p.sample(wo, u_lobe, u),
+            Material::MiRoughPlastic(ref p) => p.sample(wo, u_lobe, u),
         }
     }
 }

@@ -2,10 +2,16 @@
 //! Smith's `Λ` for height-correlated masking–shadowing, the sampling of the
 //! visible normals (Heitz 2018), and the width below which a lobe is smooth
 //! (a delta). The glTF BSDF's anisotropic GGX builds on these
-//! (`pbr/ggx.rs`).
+//! (`pbr/ggx.rs`). Mitsuba 3's Beckmann and GGX, with separable masking,
+//! are in the submodule `mitsuba` ([`MicrofacetDistribution`]).
 
 use glam::{Vec2, Vec3A};
 use std::f32::consts::PI;
+
+mod mitsuba;
+
+pub(crate) use mitsuba::gauss_legendre;
+pub use mitsuba::{MicrofacetDistribution, MicrofacetKind};
 
 /// Conductors with `alpha` below this are treated as perfectly smooth (a delta
 /// lobe): GGX at such roughness is numerically a spike that f32 cannot resolve.

@@ -20,6 +20,13 @@
 //!   sides itself and must **not** have its normal flipped either: without a
 //!   refracting volume it is two-sided (mirrored to `+z` for `wo.z < 0`), with
 //!   one it is an interface like [`Material::Dielectric`].
+//! * Mitsuba 3's BSDFs ([`mitsuba`]) have Mitsuba's sides:
+//!   [`Material::MiConductor`], [`Material::MiRoughConductor`],
+//!   [`Material::MiPlastic`] and [`Material::MiRoughPlastic`] are one-sided
+//!   like [`Material::Diffuse`] (zero unless `wo.z > 0` and `wi.z > 0`);
+//!   [`Material::MiDielectric`], [`Material::MiThinDielectric`] and
+//!   [`Material::MiRoughDielectric`] are interfaces (`+z` outside) and must
+//!   not have their normal flipped.
 //!
 //! # Estimator
 //!
@@ -43,6 +50,7 @@
 //! leaving them out is exact for the closed glass objects of a scene in air and
 //! keeps every glass weight at exactly 1 (energy conservation is then a plain
 //! `R + T = 1`). It would be wrong only for a light or camera *inside* glass.
+//! Mitsuba's dielectrics ([`mitsuba`]) do scale by `1/η²`, as Mitsuba does.
 //!
 //! # Rough conductors
 //!
@@ -66,8 +74,16 @@
 //! * `bsdf.rs`: what a BSDF gives back, [`BsdfSample`] and [`GuideLobes`];
 //! * `frame.rs`: the local shading [`Frame`];
 //! * `microfacet.rs`: GGX's distribution, masking and visible-normal sampling;
+//!   its submodule `microfacet/mitsuba.rs` Mitsuba 3's Beckmann and GGX
+//!   ([`MicrofacetDistribution`]: anisotropic, separable masking, Mitsuba's
+//!   visible-normal sampling);
+//! * [`mitsuba`] (`mitsuba/`): Mitsuba 3's `conductor`, `roughconductor`,
+//!   `dielectric`, `thindielectric`, `roughdielectric`, `plastic` and
+//!   `roughplastic`, a file each (Mitsuba's `diffuse` is
+//!   [`Material::Diffuse`]);
 //! * `fresnel.rs`: the exact Fresnel terms, [`fresnel_dielectric`] and
-//!   [`fresnel_conductor`];
+//!   [`fresnel_conductor`], and Mitsuba's [`fresnel_mitsuba`] and
+//!   [`fresnel_diffuse_reflectance`];
 //! * `disk.rs`: the concentric mapping of the square onto the disk;
 //! * [`sheen`], [`thin_film`] and [`spectrum`]: the sheen's microfibre BRDF,
 //!   the iridescent film's Fresnel term and single wavelengths for dispersion;
@@ -81,6 +97,7 @@ mod frame;
 mod fresnel;
 mod material;
 mod microfacet;
+pub mod mitsuba;
 pub mod pbr;
 pub mod sheen;
 pub mod sheen_table;
@@ -93,7 +110,9 @@ pub mod thin_film;
 pub use bsdf::{BsdfSample, GUIDE_ALPHA, GuideLobes};
 pub(crate) use disk::concentric_disk;
 pub use frame::Frame;
-pub use fresnel::{fresnel_conductor, fresnel_dielectric};
+pub use fresnel::{
+    fresnel_conductor, fresnel_dielectric, fresnel_diffuse_reflectance, fresnel_mitsuba,
+};
 pub use material::{BsdfAt, Material};
-pub use microfacet::ALPHA_SMOOTH;
+pub use microfacet::{ALPHA_SMOOTH, MicrofacetDistribution, MicrofacetKind};
 pub use pbr::PbrBsdf;

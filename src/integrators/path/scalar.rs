@@ -684,10 +684,18 @@ pub fn power_heuristic(a: f32, b: f32) -> f32 {
     }
 }
 
-/// Whether a BSDF tells the two sides of a surface apart itself (glass, the glTF
-/// material, whose transmission refracts into the inside); the others are
-/// one-sided and face the side their normal points to.
+/// Whether a BSDF tells the two sides of a surface apart itself (glass,
+/// Mitsuba's dielectrics, the glTF material, whose transmission refracts into
+/// the inside); the others are one-sided and face the side their normal
+/// points to.
 #[inline]
 fn two_sided(material: &Material) -> bool {
-    matches!(material, Material::Dielectric { .. } | Material::Pbr(_))
+    matches!(
+        material,
+        Material::Dielectric { .. }
+            | Material::Pbr(_)
+            | Material::MiDielectric(_)
+            | Material::MiThinDielectric(_)
+            | Material::MiRoughDielectric(_)
+    )
 }

@@ -1,0 +1,121 @@
+//! Mitsuba 3's BSDFs, with its exact definitions (its RGB variant,
+//! `scalar_rgb`), so that raylab renders a Mitsuba scene as Mitsuba does:
+//! one file per Mitsuba plugin.
+//!
+//! * `conductor.rs`: `conductor`, [`Conductor`] (smooth metal);
+//! * `rough_conductor.rs`: `roughconductor`, [`RoughConductor`];
+//! * `dielectric.rs`: `dielectric`, [`SmoothDielectric`];
+//! * `thin_dielectric.rs`: `thindielectric`, [`ThinDielectric`];
+//! * `rough_dielectric.rs`: `roughdielectric`, [`RoughDielectric`];
+//! * `plastic.rs`: `plastic`, [`Plastic`];
+//! * `rough_plastic.rs`: `roughplastic`, [`RoughPlastic`], with its table of
+//!   the rough interface's transmittance ([`RoughPlasticTable`]).
+//!
+//! Mitsuba's `diffuse` is [`Material::Diffuse`](super::Material::Diffuse)
+//! (the same one-sided Lambertian). The microfacet model they share is
+//! [`MicrofacetDistribution`](super::MicrofacetDistribution).
+//!
+//! # Conventions
+//!
+//! raylab's `wo` (towards the viewer) is Mitsuba's `si.wi` and raylab's `wi`
+//! Mitsuba's `wo`; Mitsuba's `eval` already includes the cosine, as raylab's
+//! does. Mitsuba's conductors and plastics are one-sided (zero unless both
+//! directions are above the surface); its dielectrics are interfaces whose
+//! `+z` side is the outside (`ext_ior`), seen from either side.
+//!
+//! Radiance mode: Mitsuba scales light *transmitted* through a dielectric by
+//! `1/η²`, `η` the relative index across the interface in the direction the
+//! path travels (Mitsuba's `eta_ti²` in `sample`, `inv_eta²` in `eval`), so a
+//! sample that enters glass of index 1.5 weighs `1/2.25` and one that leaves
+//! it `2.25`. raylab's own [`Material::Dielectric`](super::Material::Dielectric)
+//! leaves that out (the factors telescope along a path whose ends are in
+//! the same medium); these BSDFs keep it, as Mitsuba does, so that every
+//! path's weight is Mitsuba's.
+//!
+//! # Parameters
+//!
+//! Mitsuba lets reflectances (and alpha, except `roughplastic`'s) be
+//! textures. These types take plain values: whoever builds them evaluates
+//! the textures at the hit and builds (or updates) the BSDF there, which is
+//! cheap for all of them; the plastics' specular sampling weight, which
+//! Mitsuba computes from the textures' *means*, is a parameter of its own
+//! for that reason ([`specular_sampling_weight`]). The rough plastic's table
+//! depends only on the distribution, alpha and the index, which Mitsuba
+//! does not let vary.
+//!
+//! Every `eta` here is Mitsuba's relative index `int_ior / ext_ior`; note
+//! that Mitsuba's default `ext_ior` is air, 1.000277, not 1. Anisotropic
+//! BSDFs turn with [`Material::orient_anisotropy`](super::Material::orient_anisotropy):
+//! Mitsuba's `alpha_u` lies along its shading frame's first axis, `dp/du`.
+
+mod conductor;
+mod dielectric;
+mod plastic;
+mod rough_conductor;
+mod rough_dielectric;
+mod rough_plastic;
+#[cfg(test)]
+mod tests;
+mod thin_dielectric;
+
+pub use conductor::Conductor;
+pub use dielectric::SmoothDielectric;
+pub use plastic::{Plastic, specular_sampling_weight};
+pub use rough_conductor::RoughConductor;
+pub use rough_dielectric::RoughDielectric;
+pub use rough_plastic::{RoughPlastic, RoughPlasticTable};
+pub use thin_dielectric::ThinDielectric;
+
+use super::frame::Frame;
+use glam::{Vec2, Vec3A};
+
+/// Where an anisotropic BSDF's first axis (Mitsuba's `u`, along which the
+/// width is `alpha_u`) lies in raylab's shading frame: `(cos φ, sin φ)` of
+/// its angle from the frame's `x`. Mitsuba's shading frame has `dp/du` as
+/// its `x`; raylab's ([`Frame::from_normal`]) has whatever the normal gives,
+/// so an anisotropic BSDF turns its directions by `φ` first.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Tangent(pub Vec2);
+
+impl Tangent {
+    /// The frame's own `x` axis (no turn).
+    pub const X: Tangent = Tangent(Vec2::X);
+
+    /// The tangent along the world direction `t` projected onto the
+    /// shading plane of `frame`; the frame's `x` if `t` has no such part.
+    pub fn orient(frame: &Frame, t: Vec3A) -> Tangent {
+        let l = frame.to_local(t);
+        let d = Vec2::new(l.x, l.y).normalize_or_zero();
+        if d != Vec2::ZERO && d.is_finite() {
+            Tangent(d)
+        } else {
+            Tangent::X
+        }
+    }
+
+    /// Shading-frame `v` in the BSDF's frame (`x` along the tangent).
+    #[inline]
+    pub fn to_local(self, v: Vec3A) -> Vec3A {
+        if self == Tangent::X {
+            return v;
+        }
+        let Vec2 { x: c, y: s } = self.0;
+        Vec3A::new(c * v.x + s * v.y, c * v.y - s * v.x, v.z)
+    }
+
+    /// The BSDF frame's `v` in the shading frame.
+    #[inline]
+    pub fn to_shading(self, v: Vec3A) -> Vec3A {
+        if self == Tangent::X {
+            return v;
+        }
+        let Vec2 { x: c, y: s } = self.0;
+        Vec3A::new(c * v.x - s * v.y, s * v.x + c * v.y, v.z)
+    }
+}
+
+/// Whether `x > 0` (false for NaN).
+#[inline]
+fn positive(x: f32) -> bool {
+    x > 0.0
+}
