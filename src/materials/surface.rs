@@ -822,13 +822,21 @@ fn textured_bsdf(t: &TexturedBsdf, attrs: &HitAttributes, textures: &TextureStor
 }
 
 /// `bsdf` with its reflectance replaced by `rho` (the diffuse reflectance
-/// of a Lambertian surface, the specular one of a mirror); other BSDFs are
-/// returned unchanged.
+/// of a Lambertian surface or a plastic, the specular one of a mirror);
+/// other BSDFs are returned unchanged.
 #[inline]
 pub fn with_reflectance(bsdf: Material, rho: Vec3A) -> Material {
     match bsdf {
         Material::Diffuse { .. } => Material::Diffuse { reflectance: rho },
         Material::Mirror { .. } => Material::Mirror { reflectance: rho },
+        Material::MiPlastic(mut m) => {
+            m.diffuse_reflectance = rho;
+            Material::MiPlastic(m)
+        }
+        Material::MiRoughPlastic(mut m) => {
+            m.diffuse_reflectance = rho;
+            Material::MiRoughPlastic(m)
+        }
         other => other,
     }
 }

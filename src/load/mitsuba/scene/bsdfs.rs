@@ -13,6 +13,11 @@ use super::super::tree::{Object, Tag};
 use super::color::Role;
 use super::props::{ColorProp, Props};
 use crate::materials::Material;
+use crate::materials::MicrofacetKind;
+use crate::materials::mitsuba::{
+    Conductor, Plastic, RoughConductor, RoughDielectric, RoughPlastic, SmoothDielectric,
+    ThinDielectric,
+};
 use crate::materials::surface::{AlphaMode, MaterialKind, SurfaceMaterial, TexturedBsdf};
 use crate::memory::Ledger;
 use crate::textures::{ColorSpace, Pattern, TextureStore, Wrap};
@@ -66,6 +71,74 @@ pub(super) fn ior(p: &Props, name: &str, default: f32) -> Result<f32, MitsubaErr
                     ))
                 })
         }
+    }
+}
+
+/// A microfacet `distribution` (Mitsuba's default: Beckmann).
+fn distribution(p: &Props) -> Result<MicrofacetKind, MitsubaError> {
+    Ok(
+        match p.choice("distribution", "beckmann", &["beckmann", "ggx"])? {
+            "ggx" => MicrofacetKind::Ggx,
+            _ => MicrofacetKind::Beckmann,
+        },
+    )
+}
+
+/// `alpha`, or `alpha_u` and `alpha_v` (Mitsuba's default 0.1), constants.
+fn alphas(p: &Props) -> Result<(f32, f32), MitsubaError> {
+    let check = |a: f32| match a.is_finite() && a >= 0.0 {
+        true => Ok(a),
+        false => Err(p.error("alpha must be a non-negative number")),
+    };
+    let constant = |name: &str| -> Result<Option<f32>, MitsubaError> {
+        match p.color_opt(name, Role::Unbounded)? {
+            None => Ok(None),
+            Some(ColorProp::Value(c)) => Ok(Some(check(c.x)?)),
+            Some(ColorProp::Texture(t)) => Err(p.error(format!(
+                "a textured '{name}' ({}) is not supported yet",
+                t.describe()
+            ))),
+        }
+    };
+    if p.has("alpha") && (p.has("alpha_u") || p.has("alpha_v")) {
+        return Err(p.error("give either alpha or alpha_u and alpha_v"));
+    }
+    if let Some(a) = constant("alpha")? {
+        return Ok((a, a));
+    }
+    let u = constant("alpha_u")?;
+    let v = constant("alpha_v")?;
+    match (u, v) {
+        (None, None) => Ok((0.1, 0.1)),
+        (Some(u), Some(v)) => Ok((u, v)),
+        _ => Err(p.error("alpha_u and alpha_v go together")),
+    }
+}
+
+/// A conductor's complex index: `eta` and `k`, or a `material` preset
+/// (Mitsuba's default `none`: a perfect mirror, η = 0, k = 1).
+fn conductor_ior(p: &Props) -> Result<(Vec3A, Vec3A), MitsubaError> {
+    let given = p.has("eta") || p.has("k");
+    let material = p.string_opt("material")?;
+    if given && material.is_some() {
+        return Err(p.error("give either a material or eta and k"));
+    }
+    if given {
+        let eta = p.constant_color("eta", Role::Unbounded, Vec3A::ZERO)?;
+        let k = p.constant_color("k", Role::Unbounded, Vec3A::ONE)?;
+        return Ok((eta, k));
+    }
+    match material.unwrap_or("none") {
+        "none" => Ok((Vec3A::ZERO, Vec3A::ONE)),
+        name => super::conductors::preset(name)
+            .map(|(eta, k)| (Vec3A::from(eta), Vec3A::from(k)))
+            .ok_or_else(|| {
+                p.error(format!(
+                    "unknown conductor '{}' (Mitsuba's names: {})",
+                    crate::guard::quote(name),
+                    super::conductors::names().join(", ")
+                ))
+            }),
     }
 }
 
@@ -181,6 +254,20 @@ impl<'l> Materials<'l> {
         Ok(pattern)
     }
 
+    /// The mean of a pattern's values (channels and texels), as Mitsuba's
+    /// `Texture::mean` weighs plastic's lobes.
+    fn mean(&self, pattern: &Pattern) -> f32 {
+        match *pattern {
+            Pattern::Image { image, space, .. } => {
+                let m = self.textures.get(image).average(space);
+                (m.x + m.y + m.z) / 3.0
+            }
+            Pattern::Checkerboard { color0, color1, .. } => {
+                ((color0 + color1) * 0.5).truncate().element_sum() / 3.0
+            }
+        }
+    }
+
     /// A colour-or-texture property as a constant or a pattern.
     fn color(
         &mut self,
@@ -265,43 +352,81 @@ impl<'l> Materials<'l> {
                 p.finish()?;
                 return Ok(m);
             }
-            "conductor" => {
-                let material = p.string("material", "none")?;
+            "conductor" | "roughconductor" => {
                 let specular =
                     p.constant_color("specular_reflectance", Role::Reflectance, Vec3A::ONE)?;
-                let has_eta = p.has("eta") || p.has("k");
-                textured.bsdf = if material == "none" && !has_eta {
-                    Material::Mirror {
-                        reflectance: specular,
-                    }
-                } else if has_eta {
-                    let eta = p.constant_color("eta", Role::Unbounded, Vec3A::ZERO)?;
-                    let k = p.constant_color("k", Role::Unbounded, Vec3A::ONE)?;
-                    if specular != Vec3A::ONE {
-                        return Err(p.error("a specular_reflectance other than 1 with eta and k is not supported yet"));
-                    }
-                    Material::RoughConductor { alpha: 0.0, eta, k }
+                let (eta, k) = conductor_ior(&p)?;
+                textured.bsdf = if bsdf.plugin == "conductor" {
+                    Material::MiConductor(Conductor::new(eta, k, specular))
                 } else {
-                    return Err(p.error(format!(
-                        "conductor presets ('{}') need Mitsuba's measured spectra, not built in yet; give eta and k",
-                        crate::guard::quote(material)
-                    )));
+                    let kind = distribution(&p)?;
+                    let (au, av) = alphas(&p)?;
+                    Material::MiRoughConductor(RoughConductor::new(kind, au, av, eta, k, specular))
                 };
+                p.ignore(&["sample_visible"]);
                 rho = specular;
             }
-            "dielectric" => {
+            "dielectric" | "thindielectric" | "roughdielectric" => {
                 let int = ior(&p, "int_ior", 1.5046)?;
                 let ext = ior(&p, "ext_ior", 1.000277)?;
-                for name in ["specular_reflectance", "specular_transmittance"] {
-                    if p.constant_color(name, Role::Reflectance, Vec3A::ONE)? != Vec3A::ONE {
-                        return Err(p.error(format!("a {name} other than 1 is not supported yet")));
-                    }
-                }
                 if !(int > 0.0 && ext > 0.0) {
                     return Err(p.error("indices of refraction must be positive"));
                 }
-                textured.bsdf = Material::Dielectric { ior: int / ext };
+                let r = p.constant_color("specular_reflectance", Role::Reflectance, Vec3A::ONE)?;
+                let t =
+                    p.constant_color("specular_transmittance", Role::Reflectance, Vec3A::ONE)?;
+                let eta = int / ext;
+                textured.bsdf = match bsdf.plugin.as_str() {
+                    "dielectric" => Material::MiDielectric(SmoothDielectric::new(eta, r, t)),
+                    "thindielectric" => Material::MiThinDielectric(ThinDielectric::new(eta, r, t)),
+                    _ => {
+                        let kind = distribution(&p)?;
+                        let (au, av) = alphas(&p)?;
+                        p.ignore(&["sample_visible"]);
+                        Material::MiRoughDielectric(RoughDielectric::new(kind, au, av, eta, r, t))
+                    }
+                };
                 rho = Vec3A::ONE;
+            }
+            "plastic" | "roughplastic" => {
+                let int = ior(&p, "int_ior", 1.49)?;
+                let ext = ior(&p, "ext_ior", 1.000277)?;
+                if !(int > 0.0 && ext > 0.0) {
+                    return Err(p.error("indices of refraction must be positive"));
+                }
+                let (diffuse, pattern) =
+                    self.color(&p, "diffuse_reflectance", Vec3A::splat(0.5), resolve)?;
+                let specular =
+                    p.constant_color("specular_reflectance", Role::Reflectance, Vec3A::ONE)?;
+                let nonlinear = p.boolean("nonlinear", false)?;
+                let eta = int / ext;
+                // Mitsuba weighs its lobes by the reflectances' means (a
+                // texture's mean over its texels).
+                let diffuse_mean = match &pattern {
+                    Some(pat) => self.mean(pat),
+                    None => (diffuse.x + diffuse.y + diffuse.z) / 3.0,
+                };
+                let weight = crate::materials::mitsuba::specular_sampling_weight(
+                    diffuse_mean,
+                    (specular.x + specular.y + specular.z) / 3.0,
+                );
+                textured.bsdf = if bsdf.plugin == "plastic" {
+                    let mut m = Plastic::new(eta, diffuse, specular, nonlinear);
+                    m.specular_sampling_weight = weight;
+                    Material::MiPlastic(m)
+                } else {
+                    let kind = distribution(&p)?;
+                    let alpha = p.float("alpha", 0.1)?;
+                    if !(alpha.is_finite() && alpha >= 0.0) {
+                        return Err(p.error("alpha must be a non-negative number"));
+                    }
+                    p.ignore(&["sample_visible"]);
+                    let mut m = RoughPlastic::new(kind, alpha, eta, diffuse, specular, nonlinear);
+                    m.specular_sampling_weight = weight;
+                    Material::MiRoughPlastic(m)
+                };
+                textured.reflectance = pattern;
+                rho = diffuse;
             }
             "null" => {
                 textured.bsdf = Material::Dielectric { ior: 1.0 };

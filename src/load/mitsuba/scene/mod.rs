@@ -14,6 +14,7 @@
 mod bsdfs;
 mod cie;
 mod color;
+mod conductors;
 mod props;
 mod shapes;
 
