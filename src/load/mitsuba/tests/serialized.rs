@@ -172,7 +172,7 @@ fn every_layout_round_trips_in_both_versions() {
         for with in ["", "n", "u", "c", "nu", "nc", "uc", "nuc"] {
             for double in [false, true] {
                 let s = shape(5, 2.0, with, double);
-                let m = read(&write(version, &[s.clone()]), 0);
+                let m = read(&write(version, std::slice::from_ref(&s)), 0);
                 check(&m, &s, version);
             }
         }
