@@ -830,6 +830,115 @@ def mitsuba_seeds():
     put("mitsuba_xml", "dtd.xml", '<?xml version="1.0"?>\n<!DOCTYPE scene [<!ENTITY v "3.0.0">]>\n<scene version="&v;"><float name="x" value="1e39"/></scene>\n')
 
 
+def ply_file(fmt, header, records):
+    """A PLY file: `records` are lists of (struct code, value) pairs."""
+    out = ("ply\nformat %s 1.0\ncomment raylab fuzz seed\n%send_header\n" % (fmt, header)).encode()
+    for r in records:
+        if fmt == "ascii":
+            out += (" ".join(str(v) for _, v in r) + "\n").encode()
+        else:
+            end = ">" if fmt == "binary_big_endian" else "<"
+            out += b"".join(struct.pack(end + c, v) for c, v in r)
+    return out
+
+
+PLY_FULL_HEADER = """element vertex 4
+property float x
+property float y
+property float z
+property float nx
+property float ny
+property float nz
+property float u
+property float v
+property uchar red
+property uchar green
+property uchar blue
+property float temp_0
+property double dir_x
+property double dir_y
+property double dir_z
+element face 2
+property list uchar int vertex_indices
+property float weight_0
+property float c_r
+property float c_g
+property float c_b
+"""
+
+
+def ply_full_records():
+    r = []
+    for i in range(4):
+        r.append([("f", i), ("f", i * 2 - 1), ("f", -i), ("f", 0), ("f", 1), ("f", i / 4), ("f", i / 3), ("f", 0.25 + i / 8),
+                  ("B", 255), ("B", 128), ("B", i * 10), ("f", 100 + i), ("d", 0.5 * i), ("d", -1.5), ("d", 1e-3)])
+    r.append([("B", 3), ("i", 0), ("i", 1), ("i", 2), ("f", 0.5), ("f", 0.1), ("f", 0.2), ("f", 0.3)])
+    r.append([("B", 3), ("i", 0), ("i", 2), ("i", 3), ("f", 2.5), ("f", 0.4), ("f", 0.5), ("f", 0.6)])
+    return r
+
+
+def serialized_shape(version, n, normals, uvs, colors, double, name=b"shape"):
+    """One compressed shape stream of n vertices in a fan of n - 2 triangles."""
+    flags = (1 if normals else 0) | (2 if uvs else 0) | (8 if colors else 0) | (0x2000 if double else 0x1000)
+    raw = struct.pack("<I", flags)
+    if version == 4:
+        raw += name + b"\0"
+    raw += struct.pack("<QQ", n, n - 2)
+    fmt = "<d" if double else "<f"
+    def floats(values):
+        return b"".join(struct.pack(fmt, v) for v in values)
+    raw += floats(v for i in range(n) for v in (i, i * 0.5, -i))
+    if normals:
+        raw += floats(v for i in range(n) for v in (0, 1, i / 8))
+    if uvs:
+        raw += floats(v for i in range(n) for v in (i / 4, 0.5))
+    if colors:
+        raw += floats(v for i in range(n) for v in (0.5, i / 10, 1))
+    raw += b"".join(struct.pack("<III", 0, i, i + 1) for i in range(1, n - 1))
+    return zlib.compress(raw)
+
+
+def serialized_file(version, streams):
+    out, offsets = b"", []
+    for s in streams:
+        offsets.append(len(out))
+        out += struct.pack("<HH", 0x041C, version) + s
+    out += b"".join(struct.pack("<I" if version == 3 else "<Q", o) for o in offsets)
+    return out + struct.pack("<I", len(streams))
+
+
+def mitsuba_mesh_seeds():
+    tri = "element vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+    tri_records = [[("f", 0), ("f", 0), ("f", 0)], [("f", 1), ("f", 0), ("f", 0)], [("f", 0), ("f", 1), ("f", 0)]]
+    face = "element face 1\nproperty list uchar int vertex_indices\n"
+    for fmt, name in [("ascii", "full-ascii.ply"), ("binary_little_endian", "full-le.ply"), ("binary_big_endian", "full-be.ply")]:
+        put("mitsuba_ply", name, ply_file(fmt, PLY_FULL_HEADER, ply_full_records()))
+    put("mitsuba_ply", "triangle.ply", ply_file("ascii", tri + face, tri_records + [[("B", 3), ("i", 0), ("i", 1), ("i", 2)]]))
+    put("mitsuba_ply", "quad.ply", ply_file("binary_little_endian", tri + face, tri_records + [[("B", 4), ("i", 0), ("i", 1), ("i", 2), ("i", 0)]]))
+    put("mitsuba_ply", "skipped-edge.ply", ply_file(
+        "binary_little_endian",
+        tri + "element edge 1\nproperty list uchar int vertices\nproperty uchar flag\n" + face,
+        tri_records + [[("B", 2), ("i", 0), ("i", 1), ("B", 7)], [("B", 3), ("i", 2), ("i", 1), ("i", 0)]]))
+    put("mitsuba_ply", "types.ply", ply_file(
+        "binary_little_endian",
+        "element vertex 3\nproperty short x\nproperty ushort y\nproperty half z\nproperty texture_u int\n"
+        .replace("property texture_u int", "property int texture_u") +
+        "property uint texture_v\nproperty char r\nproperty int8 g\nproperty uint8 b\nproperty uint16 a\n"
+        "property long k_1\nproperty ulong k_2\nproperty float64 k_3\nproperty float32 k_4\n"
+        "element face 1\nproperty list ushort uint vertex_index\nproperty uint32 id_0\n",
+        [[("h", i), ("H", i), ("e", 0.5), ("i", i), ("I", i), ("b", -i), ("b", i), ("B", i), ("H", i),
+          ("q", i), ("Q", i), ("d", i), ("f", i)] for i in range(3)] + [[("H", 3), ("I", 0), ("I", 1), ("I", 2), ("I", 7)]]))
+    put("mitsuba_serialized", "v4-full.serialized", serialized_file(4, [serialized_shape(4, 5, True, True, True, False)]))
+    put("mitsuba_serialized", "v4-double.serialized", serialized_file(4, [serialized_shape(4, 4, True, False, False, True)]))
+    put("mitsuba_serialized", "v3-three-shapes.serialized", serialized_file(3, [
+        serialized_shape(3, 3, False, False, False, False),
+        serialized_shape(3, 4, True, True, False, False),
+        serialized_shape(3, 5, False, True, True, True)]))
+    put("mitsuba_serialized", "v4-two-shapes.serialized", serialized_file(4, [
+        serialized_shape(4, 3, False, True, False, False, b"a"),
+        serialized_shape(4, 6, True, False, True, False, b"second")]))
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--shared", default=os.path.join(HERE, "..", "..", "shared"))
@@ -847,6 +956,7 @@ def main():
     ktx2_seeds()
     draco_seeds()
     mitsuba_seeds()
+    mitsuba_mesh_seeds()
     for t in sorted(os.listdir(os.path.join(HERE, "corpus"))):
         files = os.listdir(os.path.join(HERE, "corpus", t))
         size = sum(os.path.getsize(os.path.join(HERE, "corpus", t, f)) for f in files)

@@ -313,6 +313,56 @@ pub fn mitsuba_xml(data: &[u8]) {
     }
 }
 
+/// The memory budget of the mesh targets: a header asking for more is an
+/// error, as `--max-memory` makes it (and the fuzzer's 4 GiB limit is
+/// never reached).
+fn mesh_ledger() -> raylab::memory::Ledger {
+    raylab::memory::Ledger::new(raylab::memory::MemoryBudget::bytes(1 << 30))
+}
+
+/// What every mesh a reader returns must be: arrays of the vertex count,
+/// indices in range, attributes of their element's count, one-line warnings.
+fn check_mesh(m: &raylab::load::mitsuba::MitsubaMesh) {
+    let n = m.positions.len();
+    assert!(m.normals.as_ref().is_none_or(|v| v.len() == n));
+    assert!(m.uvs.as_ref().is_none_or(|v| v.len() == n));
+    assert!(m.colors.as_ref().is_none_or(|v| v.len() == n));
+    assert!(m.indices.iter().flatten().all(|&i| (i as usize) < n));
+    for a in &m.vertex_attributes {
+        assert!(a.name.starts_with("vertex_") && (1..=4).contains(&a.channels));
+        assert_eq!(a.values.len(), n * a.channels);
+    }
+    for a in &m.face_attributes {
+        assert!(a.name.starts_with("face_") && (1..=4).contains(&a.channels));
+        assert_eq!(a.values.len(), m.indices.len() * a.channels);
+    }
+    for w in &m.warnings {
+        super::check_message(w);
+    }
+}
+
+/// A PLY file `in.ply`, read as Mitsuba's `ply` shape (with
+/// `flip_tex_coords`).
+pub fn mitsuba_ply(data: &[u8]) {
+    let path = put("in.ply", data);
+    match raylab::load::mitsuba::read_ply(&path, true, &mesh_ledger()) {
+        Err(e) => super::check_message(&e.to_string()),
+        Ok(m) => check_mesh(&m),
+    }
+}
+
+/// A `.serialized` file `in.serialized`, its shapes 0 to 3 read as
+/// Mitsuba's `serialized` shape.
+pub fn mitsuba_serialized(data: &[u8]) {
+    let path = put("in.serialized", data);
+    for index in 0..4 {
+        match raylab::load::mitsuba::read_serialized(&path, index, &mesh_ledger()) {
+            Err(e) => super::check_message(&e.to_string()),
+            Ok(m) => check_mesh(&m),
+        }
+    }
+}
+
 /// The target of this name (all but `cli`, which needs the binary's argument
 /// parser), for replaying inputs.
 pub fn by_name(name: &str) -> Option<fn(&[u8])> {
@@ -333,6 +383,8 @@ pub fn by_name(name: &str) -> Option<fn(&[u8])> {
         "bvh" => bvh,
         "checkpoint" => checkpoint,
         "mitsuba_xml" => mitsuba_xml,
+        "mitsuba_ply" => mitsuba_ply,
+        "mitsuba_serialized" => mitsuba_serialized,
         _ => return None,
     })
 }

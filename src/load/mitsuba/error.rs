@@ -32,6 +32,19 @@ pub enum MitsubaError {
         /// What is wrong (one line; names quoted from the file are escaped).
         message: String,
     },
+    /// A mesh file (`ply`, `serialized`) cannot be read: malformed,
+    /// truncated, or beyond a limit. The message names the element or shape
+    /// (`bunny.ply: face 12: vertex index 900 out of range (453 vertices)`).
+    #[error("{}: {message}", one_line(&path.display().to_string()))]
+    Mesh {
+        /// The mesh file.
+        path: PathBuf,
+        /// What is wrong (one line).
+        message: String,
+    },
+    /// A mesh file's header asks for more memory than the budget allows.
+    #[error(transparent)]
+    Memory(#[from] crate::memory::MemoryError),
     /// Something about the whole scene is wrong (a `-D` definition that no
     /// attribute uses).
     #[error("{}: {message}", one_line(&path.display().to_string()))]
@@ -49,6 +62,14 @@ impl MitsubaError {
         MitsubaError::At {
             path: path.to_owned(),
             line,
+            message: one_line(message.as_ref()).into_owned(),
+        }
+    }
+
+    /// An error reading the mesh file `path`; `message` is made one line.
+    pub(super) fn mesh(path: &Path, message: impl AsRef<str>) -> Self {
+        MitsubaError::Mesh {
+            path: path.to_owned(),
             message: one_line(message.as_ref()).into_owned(),
         }
     }

@@ -71,7 +71,10 @@
 mod attrs;
 mod build;
 mod error;
+mod mesh;
+mod ply;
 mod scene;
+mod serialized;
 mod table;
 mod transform;
 mod tree;
@@ -85,7 +88,10 @@ mod tests;
 use std::path::Path;
 
 pub use error::MitsubaError;
+pub use mesh::{MAX_MESH_FACES, MAX_MESH_VERTICES, MeshAttribute, MitsubaMesh};
+pub use ply::{parse_ply, read_ply};
 pub use scene::{MitsubaScene, load_mitsuba, read_settings};
+pub use serialized::{parse_serialized, read_serialized};
 pub use tree::{
     Child, Location, MAX_ATTRIBUTE_BYTES, MAX_INCLUDE_DEPTH, MAX_NESTING, MAX_SUBSTITUTION_BYTES,
     Object, Property, SceneTree, Spectrum, Tag, Value, Version,

@@ -5,6 +5,9 @@
 
 mod errors;
 mod files;
+mod meshes;
+mod ply;
+mod serialized;
 mod transforms;
 
 use std::path::Path;
