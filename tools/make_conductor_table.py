@@ -61,6 +61,7 @@ def main():
         "",
         "/// (name, eta RGB, k RGB).",
         "#[rustfmt::skip]",
+        "#[allow(clippy::excessive_precision)]",
         f"const PRESETS: [(&str, [f32; 3], [f32; 3]); {len(table)}] = [",
     ]
     for name, (eta, k) in sorted(table.items()):

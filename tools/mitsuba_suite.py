@@ -205,6 +205,15 @@ def main():
             cmd += ["-D", f"spp={spp}"]
         if "$integrator" in text:
             cmd += ["-D", f"integrator={integrator}"]
+        # A scene of ours may ask for raylab options in a comment line
+        # `raylab-suite-args: NAME=VALUE ...` (each becomes `--NAME VALUE`;
+        # say, Mitsuba's uniform choice among lights, where the z-test's
+        # premise, raylab's variance no larger than Mitsuba's, needs it).
+        for line in text.splitlines():
+            if "raylab-suite-args:" in line:
+                for arg in line.split("raylab-suite-args:", 1)[1].replace("-->", "").split():
+                    option, _, value = arg.partition("=")
+                    cmd += [f"--{option}", value]
         start = time.time()
         run = subprocess.run(cmd, capture_output=True, text=True)
         seconds = time.time() - start

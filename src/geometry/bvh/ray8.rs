@@ -108,6 +108,21 @@ impl Query8 {
         same.bitmask() == 0xff
     }
 
+    /// Whether the rays' directions share their signs on every axis (one
+    /// octant): only then does the interval test of a packet from one point
+    /// bound anything on an axis. Across a sign change its inverse
+    /// directions span both infinities, the axis culls nothing, and a packet
+    /// straddling two axes visits nearly every node it can see (measured: a
+    /// row of three tessellated spheres seen side on, 71 % of a render in
+    /// that test at 0.3 Mrays/s).
+    #[inline(always)]
+    fn one_octant(&self) -> bool {
+        (0..3).all(|a| {
+            let inv = &self.inv_dir[a];
+            inv.min_element().is_sign_negative() == inv.max_element().is_sign_negative()
+        })
+    }
+
     /// Entry and exit distances of the slab of axis `a` of child `c`.
     #[inline(always)]
     fn slab(&self, bounds: &[[f32; WIDTH]; 6], c: usize, a: usize) -> (F8, F8) {
@@ -419,8 +434,8 @@ impl Bvh {
         unsafe { self.intersect8_either_avx2(rays, root, t_max) }
     }
 
-    /// Packets from one point take the interval test, the others the eight
-    /// slab tests.
+    /// Packets from one point into one octant take the interval test, the
+    /// others the eight slab tests.
     #[target_feature(enable = "avx2")]
     fn intersect8_either_avx2(
         &self,
@@ -432,12 +447,12 @@ impl Bvh {
         Some(self.intersect8_query(q, root, t_max).hits())
     }
 
-    /// The closest hits of a packet: packets from one point take the interval
-    /// test, the others the eight slab tests.
+    /// The closest hits of a packet: packets from one point into one octant
+    /// take the interval test, the others the eight slab tests.
     #[target_feature(enable = "avx2")]
     #[inline]
     fn intersect8_query(&self, q: &Query8, root: ChildRef, t_max: f32) -> Closest8 {
-        if q.one_origin() {
+        if q.one_origin() && q.one_octant() {
             self.intersect8_from_one_point_avx2(q, root, t_max)
         } else {
             self.intersect8_avx2(q, root, t_max)

@@ -21,13 +21,16 @@ use glam::DMat4;
 use roxmltree::{Document, ParsingOptions};
 
 use super::attrs::Attrs;
+use super::build;
 use super::error::MitsubaError;
 use super::table::{Edge, Node, Target};
+use super::transform;
 use super::tree::{
     Location, MAX_ATTRIBUTE_BYTES, MAX_NESTING, MAX_SUBSTITUTION_BYTES, Property, SceneTree,
     Spectrum, Tag, Value, Version, resolve_in,
 };
-use super::{build, transform, upgrade, values};
+use super::upgrade;
+use super::values;
 use crate::guard::quote;
 
 /// A `$name` definition: from `-D` or a `<default>`.
@@ -93,7 +96,7 @@ fn dir_of(path: &Path) -> PathBuf {
 }
 
 /// Reads the scene file `path`.
-pub(super) fn read_file(
+pub(crate) fn read_file(
     path: &Path,
     defines: &[(String, String)],
 ) -> Result<SceneTree, MitsubaError> {

@@ -19,7 +19,7 @@ pub(super) mod error;
 mod materials;
 mod model;
 mod schema;
-mod settings;
+pub(crate) mod settings;
 
 pub use camera::ShotCamera;
 pub use compose::{

@@ -5,7 +5,7 @@ use super::super::bsdf::{BsdfSample, GuideLobes, finite_or_zero};
 use super::super::disk::concentric_disk;
 use super::super::frame::{above, reflect_z};
 use super::super::fresnel::{fresnel_diffuse_reflectance, fresnel_mitsuba};
-use super::positive;
+use super::common::positive;
 use glam::{Vec2, Vec3A};
 use std::f32::consts::FRAC_1_PI;
 
@@ -39,7 +39,7 @@ pub(super) fn base_reflectance(rho: Vec3A, fdr: f32, nonlinear: bool) -> Vec3A {
 /// specular_reflectance` over a Lambertian base seen through the interface,
 /// `f cos θi = ρ' cos θi / π · (1 − F(cos θo))(1 − F(cos θi)) / η²` with `ρ'`
 /// the base's reflectance after its internal reflections
-/// ([`base_reflectance`] with `F_dr(1/η)`). The specular lobe is chosen
+/// (`base_reflectance` with `F_dr(1/η)`). The specular lobe is chosen
 /// with probability `F(cos θo) w / (F w + (1 − F)(1 − w))`, `w` the specular
 /// sampling weight. One-sided.
 #[derive(Clone, Copy, Debug, PartialEq)]

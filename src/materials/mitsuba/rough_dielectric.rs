@@ -6,8 +6,8 @@ use super::super::bsdf::{BsdfSample, GUIDE_ALPHA, GuideLobes, finite_or_zero};
 use super::super::frame::{Frame, reflect_z};
 use super::super::fresnel::fresnel_mitsuba;
 use super::super::microfacet::{MicrofacetDistribution, MicrofacetKind};
-use super::Tangent;
-use super::positive;
+use super::common::Tangent;
+use super::common::positive;
 use glam::{Vec2, Vec3A};
 
 /// Mitsuba's `roughdielectric`. With `η` the relative index seen from `wo`'s

@@ -3,7 +3,7 @@
 use super::super::bsdf::{BsdfSample, GuideLobes};
 use super::super::frame::reflect_z;
 use super::super::fresnel::fresnel_mitsuba;
-use super::positive;
+use super::common::positive;
 use glam::Vec3A;
 
 /// Mitsuba's `thindielectric`: a sheet whose two faces reflect back and

@@ -177,6 +177,11 @@ impl<'l> Materials<'l> {
         }
     }
 
+    /// The memory budget textures and meshes are charged to.
+    pub fn ledger(&self) -> &'l Ledger {
+        self.ledger
+    }
+
     /// The image at `path` (decoded once).
     fn image(&mut self, path: PathBuf, t: &Props) -> Result<u32, MitsubaError> {
         if let Some(&id) = self.images.get(&(path.clone(), false)) {
@@ -239,8 +244,8 @@ impl<'l> Materials<'l> {
                 let c0 = t.constant_color("color0", Role::Reflectance, Vec3A::splat(0.4))?;
                 let c1 = t.constant_color("color1", Role::Reflectance, Vec3A::splat(0.2))?;
                 Pattern::Checkerboard {
-                    color0: c0.extend(1.0).into(),
-                    color1: c1.extend(1.0).into(),
+                    color0: c0.extend(1.0),
+                    color1: c1.extend(1.0),
                     to_uv: to_uv(t.transform("to_uv")?),
                 }
             }
@@ -337,8 +342,8 @@ impl<'l> Materials<'l> {
                         to_uv: Affine2::IDENTITY,
                     },
                     Some(ColorProp::Value(c)) => Pattern::Checkerboard {
-                        color0: c.extend(1.0).into(),
-                        color1: c.extend(1.0).into(),
+                        color0: c.extend(1.0),
+                        color1: c.extend(1.0),
                         to_uv: Affine2::IDENTITY,
                     },
                     Some(ColorProp::Texture(t)) => self.pattern(&t, resolve)?,

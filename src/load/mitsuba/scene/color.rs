@@ -24,7 +24,8 @@ pub(super) enum Role {
 }
 
 /// CIE XYZ to linear sRGB (Rec. 709 primaries, D65 white), the matrix
-/// Mitsuba uses (`xyz_to_srgb`).
+/// Mitsuba uses (`xyz_to_srgb`), digits as Mitsuba writes them.
+#[allow(clippy::excessive_precision)]
 pub(super) fn xyz_to_srgb(xyz: Vec3) -> Vec3 {
     let m = Mat3::from_cols(
         Vec3::new(3.240479, -0.969256, 0.055648),

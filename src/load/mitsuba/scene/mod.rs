@@ -32,7 +32,7 @@ use crate::integrators::Integrator;
 use crate::integrators::path::PathOptions;
 use crate::lights::Light;
 use crate::lights::environment::{EnvMap, Environment};
-use crate::load::shot::ShotSettings;
+use crate::load::shot::settings::ShotSettings;
 use crate::materials::surface::SurfaceMaterial;
 use crate::memory::Ledger;
 use crate::sampling::filter::PixelFilter;
@@ -69,7 +69,7 @@ pub fn load_mitsuba(
     defines: &[(String, String)],
     ledger: &Ledger,
 ) -> Result<MitsubaScene, MitsubaError> {
-    let tree = super::read(path, defines)?;
+    let tree = super::xml::read_file(path, defines)?;
     build(&tree, ledger)
 }
 
@@ -158,6 +158,26 @@ impl Builder<'_, '_> {
                 let face_normals = p.boolean("face_normals", false)?;
                 shapes::obj_mesh(&file, flip_uv, face_normals)?
             }
+            "ply" => {
+                let file = p
+                    .string_opt("filename")?
+                    .ok_or_else(|| p.error("needs a 'filename'"))?;
+                let file = resolve(p, file)?;
+                let flip_uv = p.boolean("flip_tex_coords", false)?;
+                let face_normals = p.boolean("face_normals", false)?;
+                let m = super::ply::read_ply(&file, flip_uv, self.materials.ledger())?;
+                shapes::from_mitsuba_mesh(m, face_normals)
+            }
+            "serialized" => {
+                let file = p
+                    .string_opt("filename")?
+                    .ok_or_else(|| p.error("needs a 'filename'"))?;
+                let file = resolve(p, file)?;
+                let index = p.integer("shape_index", 0)?;
+                let face_normals = p.boolean("face_normals", false)?;
+                let m = super::serialized::read_serialized(&file, index, self.materials.ledger())?;
+                shapes::from_mitsuba_mesh(m, face_normals)
+            }
             "rectangle" => shapes::rectangle(),
             "cube" => shapes::cube(),
             "sphere" | "disk" | "cylinder" => {
@@ -205,7 +225,7 @@ impl Builder<'_, '_> {
                     (z * len).extend(0.0),
                     p0.extend(1.0),
                 );
-                to_world = to_world * frame;
+                to_world *= frame;
             }
             _ => {}
         }
@@ -570,11 +590,7 @@ fn build(tree: &SceneTree, ledger: &Ledger) -> Result<MitsubaScene, MitsubaError
         match o.tag {
             Tag::Shape => b.shape(o, None)?,
             Tag::Bsdf | Tag::Texture => {} // used through references
-            Tag::Sensor => {
-                if camera.is_none() {
-                    camera = Some(sensor(o, &mut settings)?);
-                }
-            }
+            Tag::Sensor if camera.is_none() => camera = Some(sensor(o, &mut settings)?),
             Tag::Integrator => integrator(o, &mut settings)?,
             Tag::Emitter => {
                 let p = Props::new(o);
@@ -674,7 +690,7 @@ pub fn read_settings(
     path: &Path,
     defines: &[(String, String)],
 ) -> Result<ShotSettings, MitsubaError> {
-    let tree = super::read(path, defines)?;
+    let tree = super::xml::read_file(path, defines)?;
     let mut settings = ShotSettings::default();
     for o in tree.root.children_of(Tag::Sensor).take(1) {
         sensor(o, &mut settings)?;

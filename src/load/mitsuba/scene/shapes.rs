@@ -13,11 +13,12 @@ use std::path::Path;
 use glam::{Vec2, Vec3};
 
 use super::super::error::MitsubaError;
+use super::super::mesh::MitsubaMesh;
 use crate::load::obj::parse_obj_file;
 use crate::scene::MeshData;
 
 /// Segments around a tessellated sphere, disk or cylinder (rings: half).
-pub(super) const SEGMENTS: u32 = 512;
+pub(super) const SEGMENTS: u32 = 256;
 
 /// Mitsuba's vertex normals of a mesh without them: each face's unit normal
 /// added to its corners' positions weighted by the corner's angle
@@ -112,6 +113,39 @@ pub(super) fn obj_mesh(
         angle_weighted_normals(&mut mesh, &position_of, obj.positions.len());
     }
     Ok(mesh)
+}
+
+/// A mesh read by the `ply` or `serialized` reader as raylab's, with
+/// Mitsuba's normals: none if `face_normals`, else the file's (normalised)
+/// or, without them, the angle-weighted ones.
+pub(super) fn from_mitsuba_mesh(m: MitsubaMesh, face_normals: bool) -> MeshData {
+    let mut mesh = MeshData {
+        positions: m.positions.iter().map(|p| Vec3::from(*p)).collect(),
+        indices: m.indices,
+        ..MeshData::default()
+    };
+    if let Some(uvs) = m.uvs {
+        mesh.uvs[0] = uvs.iter().map(|uv| Vec2::from(*uv)).collect();
+    }
+    if let Some(colors) = m.colors {
+        mesh.colors = colors.iter().map(|c| Vec3::from(*c).extend(1.0)).collect();
+    }
+    if !face_normals {
+        match m.normals {
+            Some(n) => {
+                mesh.normals = n
+                    .iter()
+                    .map(|n| Vec3::from(*n).normalize_or(Vec3::X))
+                    .collect()
+            }
+            None => {
+                let identity: Vec<u32> = (0..mesh.positions.len() as u32).collect();
+                let count = mesh.positions.len();
+                angle_weighted_normals(&mut mesh, &identity, count);
+            }
+        }
+    }
+    mesh
 }
 
 /// Mitsuba's `rectangle`: `[−1, 1]²` at z = 0 facing +z, (u, v) = ((x + 1)/2,
