@@ -127,7 +127,7 @@ fn spot_light_samples_follow_the_cone_falloff() {
         let rho = 2.0 * theta.tan();
         let p = Vec3A::new(rho * 1f32.cos(), 0.0, rho * 1f32.sin());
         let sample = scene.sample_light(p, Facing::Any, Vec2::new(0.5, 0.5), Vec2::new(0.25, 0.75));
-        let incident = scene.lights()[0].incident(p);
+        let incident = scene.lights()[0].incident(p, scene.textures());
         if factor == 0.0 {
             assert_eq!(sample, None, "θ = {theta}");
             assert_eq!(incident, None, "θ = {theta}");

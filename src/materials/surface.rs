@@ -456,6 +456,11 @@ pub struct TexturedBsdf {
     /// `twosided`): its shading normal is turned towards the viewer even in
     /// a scene whose surfaces are one-sided.
     pub two_sided: bool,
+    /// Two reflectances the `reflectance` pattern's first channel blends
+    /// between (`(1 − w)·ρ₀ + w·ρ₁`): Mitsuba's `blendbsdf` of two Lambertian
+    /// BSDFs, which is exactly the Lambertian BSDF of the blended
+    /// reflectance. `None`: the pattern is the reflectance itself.
+    pub blend: Option<[Vec3A; 2]>,
 }
 
 impl TexturedBsdf {
@@ -467,9 +472,13 @@ impl TexturedBsdf {
         attrs: &HitAttributes,
         textures: &TextureStore,
     ) -> Vec3A {
-        match &self.reflectance {
-            Some(p) => Vec3A::from(p.eval(attrs.uv[0], textures).xyz()),
-            None => fixed,
+        let Some(p) = &self.reflectance else {
+            return fixed;
+        };
+        let value = p.eval(attrs.uv[0], attrs.color, textures);
+        match self.blend {
+            Some([a, b]) => a * (1.0 - value.x) + b * value.x,
+            None => Vec3A::from(value.xyz()),
         }
     }
 }
@@ -537,7 +546,7 @@ impl SurfaceMaterial {
                 let alpha = t
                     .opacity
                     .as_ref()
-                    .map_or(1.0, |p| p.eval(attrs.uv[0], textures).x);
+                    .map_or(1.0, |p| p.eval(attrs.uv[0], attrs.color, textures).x);
                 t.reflectance_at(self.reflectance, attrs, textures)
                     .extend(alpha)
             }
@@ -816,7 +825,7 @@ pub fn lookup(
 #[inline(never)]
 fn textured_bsdf(t: &TexturedBsdf, attrs: &HitAttributes, textures: &TextureStore) -> Material {
     match &t.reflectance {
-        Some(p) => with_reflectance(t.bsdf, Vec3A::from(p.eval(attrs.uv[0], textures).xyz())),
+        Some(_) => with_reflectance(t.bsdf, t.reflectance_at(Vec3A::ZERO, attrs, textures)),
         None => t.bsdf,
     }
 }

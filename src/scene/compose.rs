@@ -38,6 +38,14 @@ impl SceneParts {
                     *position = to_world.transform_point3a(*position);
                     *axis = direction(*axis);
                 }
+                Light::Beam(b) => {
+                    b.position = to_world.transform_point3a(b.position);
+                    b.axis = direction(b.axis);
+                    b.to_local *= linear.inverse();
+                    if let crate::lights::BeamShape::Projector { normal, .. } = &mut b.shape {
+                        *normal = linear * *normal;
+                    }
+                }
                 Light::Directional {
                     direction: travel, ..
                 } => *travel = direction(*travel),

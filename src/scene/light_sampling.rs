@@ -4,6 +4,7 @@
 //! each can send to the point being lit (a light tree, the default), by
 //! power, or uniformly.
 
+use crate::textures::TextureStore;
 use std::f32::consts::PI;
 
 use glam::{Vec2, Vec3A};
@@ -183,6 +184,10 @@ impl Scene {
                     cos_inner,
                     cos_outer,
                 } => LightBounds::spot(position, direction, mean(intensity), cos_inner, cos_outer),
+                Light::Beam(ref b) => {
+                    let (cos_inner, cos_outer) = b.cones();
+                    LightBounds::spot(b.position, b.axis, mean(b.intensity), cos_inner, cos_outer)
+                }
                 Light::Directional { irradiance, .. } => {
                     if mean(irradiance) > 0.0 {
                         directional.push(i as u32);
@@ -332,7 +337,7 @@ impl Scene {
     #[inline]
     fn punctual_sample(&self, i: u32, p: Vec3A, probability: f32) -> Option<LightSample> {
         let scale = 1.0 / probability;
-        Some(match self.lights[i as usize].incident(p)? {
+        Some(match self.lights[i as usize].incident(p, &self.textures)? {
             Incident::FromPoint {
                 position,
                 intensity,
@@ -483,9 +488,14 @@ impl Scene {
     /// so that a light is never left out unless it sends nothing at all (a
     /// spot's cone, a light at `p`). Zero means nothing arrives.
     #[inline]
-    pub fn punctual_importance(light: &Light, p: Vec3A, facing: Facing) -> f32 {
+    pub fn punctual_importance(
+        light: &Light,
+        p: Vec3A,
+        facing: Facing,
+        textures: &TextureStore,
+    ) -> f32 {
         let mean = |v: Vec3A| (v.x + v.y + v.z) * (1.0 / 3.0);
-        let (to_light, value) = match light.incident(p) {
+        let (to_light, value) = match light.incident(p, textures) {
             None => return 0.0,
             Some(Incident::FromPoint {
                 position,
@@ -515,7 +525,7 @@ impl Scene {
         let mut weights = [0.0f32; MAX_IMPORTANCE_LIGHTS];
         let mut total = 0.0f32;
         for (w, light) in weights.iter_mut().zip(&self.lights) {
-            *w = Self::punctual_importance(light, p, facing);
+            *w = Self::punctual_importance(light, p, facing, &self.textures);
             total += *w;
         }
         if !(total > 0.0 && total.is_finite()) {

@@ -2,7 +2,8 @@
 //! Mitsuba's texture plugins define them ([`Pattern`]): an image looked up
 //! bilinearly or at the nearest texel after a 2-D affine map of the
 //! coordinates (`bitmap` with `to_uv`, `filter_type`, `wrap_mode`, `raw`),
-//! and the two-colour `checkerboard`.
+//! the two-colour `checkerboard`, and a mesh's own per-vertex or per-face
+//! values (`mesh_attribute`, which the loader stores as the mesh's colours).
 
 use glam::{Affine2, Vec2, Vec4};
 
@@ -35,16 +36,21 @@ pub enum Pattern {
         /// Applied to the surface's coordinates first.
         to_uv: Affine2,
     },
+    /// The mesh's own value at the hit, interpolated from its vertices (or
+    /// constant over a face): Mitsuba's `mesh_attribute`, held as the
+    /// mesh's vertex colours.
+    MeshAttribute,
 }
 
 impl Pattern {
-    /// The value at texture coordinates `uv` (linear RGBA).
+    /// The value at a hit of texture coordinates `uv` and interpolated
+    /// vertex colour `color` (linear RGBA).
     ///
     /// # Panics
     ///
     /// If an image pattern names an image `textures` does not hold.
     #[inline]
-    pub fn eval(&self, uv: Vec2, textures: &TextureStore) -> Vec4 {
+    pub fn eval(&self, uv: Vec2, color: Vec4, textures: &TextureStore) -> Vec4 {
         match *self {
             Pattern::Image {
                 image,
@@ -73,6 +79,7 @@ impl Pattern {
                     color1
                 }
             }
+            Pattern::MeshAttribute => color,
         }
     }
 
@@ -80,7 +87,7 @@ impl Pattern {
     pub fn image(&self) -> Option<u32> {
         match self {
             Pattern::Image { image, .. } => Some(*image),
-            Pattern::Checkerboard { .. } => None,
+            Pattern::Checkerboard { .. } | Pattern::MeshAttribute => None,
         }
     }
 
@@ -88,7 +95,7 @@ impl Pattern {
     pub fn image_mut(&mut self) -> Option<&mut u32> {
         match self {
             Pattern::Image { image, .. } => Some(image),
-            Pattern::Checkerboard { .. } => None,
+            Pattern::Checkerboard { .. } | Pattern::MeshAttribute => None,
         }
     }
 }
@@ -96,6 +103,12 @@ impl Pattern {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    impl Pattern {
+        fn eval_uv(&self, uv: Vec2, t: &TextureStore) -> Vec4 {
+            self.eval(uv, Vec4::ONE, t)
+        }
+    }
     use crate::textures::Image;
 
     #[test]
@@ -107,12 +120,12 @@ mod tests {
         };
         let t = TextureStore::new();
         // uv × 5: (0.05, 0.05) → (0.25, 0.25): both low halves → color0.
-        assert_eq!(p.eval(Vec2::new(0.05, 0.05), &t).x, 0.4);
+        assert_eq!(p.eval_uv(Vec2::new(0.05, 0.05), &t).x, 0.4);
         // (0.15, 0.05) → (0.75, 0.25): one high, one low → color1.
-        assert_eq!(p.eval(Vec2::new(0.15, 0.05), &t).x, 0.2);
+        assert_eq!(p.eval_uv(Vec2::new(0.15, 0.05), &t).x, 0.2);
         // (0.15, 0.15) → both high → color0; negative coordinates wrap.
-        assert_eq!(p.eval(Vec2::new(0.15, 0.15), &t).x, 0.4);
-        assert_eq!(p.eval(Vec2::new(-0.05, 0.05), &t).x, 0.2);
+        assert_eq!(p.eval_uv(Vec2::new(0.15, 0.15), &t).x, 0.4);
+        assert_eq!(p.eval_uv(Vec2::new(-0.05, 0.05), &t).x, 0.2);
     }
 
     #[test]
@@ -129,10 +142,10 @@ mod tests {
         };
         // u = 0.2 + 0.5 = 0.7: the second texel (centre 0.75) nearest; bilinear
         // between the centres 0.25 and 0.75 gives 0.9.
-        assert_eq!(image(true).eval(Vec2::new(0.2, 0.5), &t).x, 1.0);
-        let b = image(false).eval(Vec2::new(0.2, 0.5), &t).x;
+        assert_eq!(image(true).eval_uv(Vec2::new(0.2, 0.5), &t).x, 1.0);
+        let b = image(false).eval_uv(Vec2::new(0.2, 0.5), &t).x;
         assert!((b - 0.9).abs() < 1e-4, "{b}");
         // u = 0.9 + 0.5 = 1.4 wraps to 0.4: the first texel.
-        assert_eq!(image(true).eval(Vec2::new(0.9, 0.5), &t).x, 0.0);
+        assert_eq!(image(true).eval_uv(Vec2::new(0.9, 0.5), &t).x, 0.0);
     }
 }

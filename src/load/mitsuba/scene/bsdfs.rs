@@ -163,6 +163,9 @@ pub(super) struct Materials<'l> {
     scene: String,
     /// What was approximated.
     pub warnings: Vec<String>,
+    /// The mesh attribute (`vertex_…` or `face_…`) the last material built
+    /// reads, if any: its shapes hold it as their colours.
+    pub attribute: Option<String>,
 }
 
 impl<'l> Materials<'l> {
@@ -174,6 +177,7 @@ impl<'l> Materials<'l> {
             ledger,
             scene,
             warnings: Vec::new(),
+            attribute: None,
         }
     }
 
@@ -240,6 +244,29 @@ impl<'l> Materials<'l> {
                     to_uv,
                 }
             }
+            (Tag::Texture, "mesh_attribute") => {
+                let name = t
+                    .string_opt("name")?
+                    .ok_or_else(|| t.error("needs a 'name' (vertex_… or face_…)"))?;
+                if !(name.starts_with("vertex_") || name.starts_with("face_")) {
+                    return Err(t.error(format!(
+                        "attribute '{}' must be named vertex_… or face_…",
+                        crate::guard::quote(name)
+                    )));
+                }
+                match &self.attribute {
+                    Some(other) if other != name => {
+                        return Err(t.error(format!(
+                            "a material reads one mesh attribute; it reads '{}' and '{}'",
+                            crate::guard::quote(other),
+                            crate::guard::quote(name)
+                        )));
+                    }
+                    _ => self.attribute = Some(name.to_string()),
+                }
+                t.ignore(&["scale"]);
+                Pattern::MeshAttribute
+            }
             (Tag::Texture, "checkerboard") => {
                 let c0 = t.constant_color("color0", Role::Reflectance, Vec3A::splat(0.4))?;
                 let c1 = t.constant_color("color1", Role::Reflectance, Vec3A::splat(0.2))?;
@@ -270,6 +297,9 @@ impl<'l> Materials<'l> {
             Pattern::Checkerboard { color0, color1, .. } => {
                 ((color0 + color1) * 0.5).truncate().element_sum() / 3.0
             }
+            // (Mitsuba's mean of a mesh attribute is its values' mean; the
+            // mesh is not known here: the middle of the range.)
+            Pattern::MeshAttribute => 0.5,
         }
     }
 
@@ -306,6 +336,7 @@ impl<'l> Materials<'l> {
             reflectance: None,
             opacity: None,
             two_sided: false,
+            blend: None,
         };
         let rho;
         match bsdf.plugin.as_str() {
@@ -314,6 +345,37 @@ impl<'l> Materials<'l> {
                 rho = c;
                 textured.bsdf = Material::Diffuse { reflectance: c };
                 textured.reflectance = pattern;
+            }
+            "blendbsdf" => {
+                let inner = p.children_of(Tag::Bsdf);
+                let [a, b] = inner.as_slice() else {
+                    return Err(p.error("needs exactly two nested BSDFs"));
+                };
+                let rho = |o: &Arc<Object>| -> Result<Vec3A, MitsubaError> {
+                    let q = Props::new(o);
+                    if o.plugin != "diffuse" {
+                        return Err(q.error(
+                            "raylab's blendbsdf blends two diffuse BSDFs (exactly a diffuse BSDF); others are not supported yet",
+                        ));
+                    }
+                    let c =
+                        q.constant_color("reflectance", Role::Reflectance, Vec3A::splat(0.5))?;
+                    q.finish()?;
+                    Ok(c)
+                };
+                let (r0, r1) = (rho(a)?, rho(b)?);
+                let (w, pattern) = self.color(&p, "weight", Vec3A::splat(0.5), resolve)?;
+                let mixed = r0 * (1.0 - w.x) + r1 * w.x;
+                textured.bsdf = Material::Diffuse { reflectance: mixed };
+                if pattern.is_some() {
+                    textured.reflectance = pattern;
+                    textured.blend = Some([r0, r1]);
+                }
+                p.finish()?;
+                let mut m = SurfaceMaterial::fixed(mixed, textured.bsdf);
+                m.name = bsdf.id.clone().unwrap_or_default();
+                m.kind = MaterialKind::Textured(Box::new(textured));
+                return Ok(m);
             }
             "twosided" => {
                 let inner = p.children_of(Tag::Bsdf);

@@ -30,8 +30,8 @@ use crate::camera::{DepthOfField, Lens, SceneCamera};
 use crate::geometry::triangle::Triangle;
 use crate::integrators::Integrator;
 use crate::integrators::path::PathOptions;
-use crate::lights::Light;
 use crate::lights::environment::{EnvMap, Environment};
+use crate::lights::{BeamShape, Light};
 use crate::load::shot::settings::ShotSettings;
 use crate::materials::surface::SurfaceMaterial;
 use crate::memory::Ledger;
@@ -40,7 +40,7 @@ use crate::scene::SceneParts;
 use crate::scene::mesh::{Instance, MeshData};
 use bsdfs::Materials;
 use color::Role;
-use props::Props;
+use props::{ColorProp, Props};
 
 /// A Mitsuba scene as raylab's parts.
 #[derive(Debug)]
@@ -88,6 +88,8 @@ struct Builder<'t, 'l> {
     material_of: HashMap<(usize, usize), u32>,
     /// Meshes of shape groups, by the group object's pointer.
     groups: HashMap<usize, Vec<(u32, Mat4, u32)>>,
+    /// The mesh attribute each material reads (its shapes' colours).
+    attribute_of: HashMap<u32, Option<String>>,
     approximated: Vec<String>,
 }
 
@@ -108,6 +110,7 @@ impl Builder<'_, '_> {
         }
         let tree = self.tree;
         let resolve = move |name: &str| tree.resolve(name);
+        self.materials.attribute = None;
         let mut m = match bsdf {
             Some(b) => self.materials.material(b, &resolve)?,
             None => {
@@ -120,6 +123,7 @@ impl Builder<'_, '_> {
                         reflectance: None,
                         opacity: None,
                         two_sided: false,
+                        blend: None,
                     },
                 ));
                 m
@@ -137,11 +141,30 @@ impl Builder<'_, '_> {
         let index = self.parts.materials.len() as u32;
         self.parts.materials.push(m);
         self.material_of.insert(key, index);
+        self.attribute_of
+            .insert(index, self.materials.attribute.take());
         Ok(index)
     }
 
     /// A shape object's mesh in its own space, and its `to_world`.
-    fn mesh(&mut self, shape: &Object, p: &Props) -> Result<(MeshData, Mat4), MitsubaError> {
+    fn mesh(
+        &mut self,
+        shape: &Object,
+        p: &Props,
+        attribute: Option<&str>,
+    ) -> Result<(MeshData, Mat4), MitsubaError> {
+        let no_attributes = |p: &Props| {
+            match attribute {
+            Some(a) => Err(p.error(format!(
+                "its material reads the mesh attribute '{}', which only ply and serialized meshes carry",
+                crate::guard::quote(a)
+            ))),
+            None => Ok(()),
+        }
+        };
+        if !matches!(shape.plugin.as_str(), "ply" | "serialized") {
+            no_attributes(p)?;
+        }
         let to_world = p.transform("to_world")?;
         let resolve = |p: &Props, name: &str| -> Result<PathBuf, MitsubaError> {
             self.tree
@@ -166,7 +189,7 @@ impl Builder<'_, '_> {
                 let flip_uv = p.boolean("flip_tex_coords", false)?;
                 let face_normals = p.boolean("face_normals", false)?;
                 let m = super::ply::read_ply(&file, flip_uv, self.materials.ledger())?;
-                shapes::from_mitsuba_mesh(m, face_normals)
+                shapes::from_mitsuba_mesh(m, face_normals, attribute).map_err(|e| p.error(e))?
             }
             "serialized" => {
                 let file = p
@@ -176,7 +199,7 @@ impl Builder<'_, '_> {
                 let index = p.integer("shape_index", 0)?;
                 let face_normals = p.boolean("face_normals", false)?;
                 let m = super::serialized::read_serialized(&file, index, self.materials.ledger())?;
-                shapes::from_mitsuba_mesh(m, face_normals)
+                shapes::from_mitsuba_mesh(m, face_normals, attribute).map_err(|e| p.error(e))?
             }
             "rectangle" => shapes::rectangle(),
             "cube" => shapes::cube(),
@@ -282,12 +305,14 @@ impl Builder<'_, '_> {
             }
             _ => {}
         }
-        let (mut mesh, to_world) = self.mesh(shape, &p)?;
         let bsdfs = p.children_of(Tag::Bsdf);
         let emitters = p.children_of(Tag::Emitter);
         if bsdfs.len() > 1 || emitters.len() > 1 {
             return Err(p.error("a shape holds at most one BSDF and one emitter"));
         }
+        let material = self.material(bsdfs.first(), emitters.first())?;
+        let attribute = self.attribute_of.get(&material).cloned().flatten();
+        let (mut mesh, to_world) = self.mesh(shape, &p, attribute.as_deref())?;
         for tag in [Tag::Medium, Tag::Sensor] {
             if let Some(o) = p.children_of(tag).first() {
                 return Err(p.error(format!(
@@ -298,7 +323,6 @@ impl Builder<'_, '_> {
         }
         p.ignore(&["id"]);
         p.finish()?;
-        let material = self.material(bsdfs.first(), emitters.first())?;
         mesh.material = material;
         let mesh_index = self.parts.meshes.len() as u32;
         self.parts.meshes.push(mesh);
@@ -380,6 +404,75 @@ fn rfilter(rf: &Object) -> Result<PixelFilter, MitsubaError> {
     Ok(filter)
 }
 
+/// A spot or projector placed by `to_world`.
+fn beam_light(
+    p: &Props,
+    to_world: Mat4,
+    intensity: Vec3A,
+    shape: BeamShape,
+    texture: Option<crate::textures::Pattern>,
+) -> Result<Light, MitsubaError> {
+    let linear = glam::Mat3A::from_mat4(to_world);
+    if linear.determinant().abs() < 1e-12 {
+        return Err(p.error("to_world is singular"));
+    }
+    Ok(Light::Beam(crate::lights::Beam {
+        position: Vec3A::from(to_world.w_axis.truncate()),
+        to_local: linear.inverse(),
+        axis: (linear * Vec3A::Z).normalize(),
+        intensity,
+        shape,
+        texture,
+    }))
+}
+
+/// Mitsuba's horizontal field of view in degrees from `fov` and
+/// `fov_axis` (or a `focal_length`, a diagonal field of a 36 × 24 mm film)
+/// for an image of width over height `aspect` (its `parse_fov`).
+fn x_fov(p: &Props, aspect: f32) -> Result<f32, MitsubaError> {
+    if p.has("fov") && p.has("focal_length") {
+        return Err(p.error("give either 'fov' or 'focal_length', not both"));
+    }
+    let axis = p.choice(
+        "fov_axis",
+        "x",
+        &["x", "y", "diagonal", "smaller", "larger"],
+    )?;
+    let (fov, axis) = match p.float_opt("fov")? {
+        Some(f) => (f64::from(f), axis),
+        None => {
+            let fl = p.string("focal_length", "50mm")?;
+            let mm: f64 = fl
+                .trim_end_matches("mm")
+                .parse()
+                .map_err(|_| p.error("focal_length must be like '50mm'"))?;
+            let d = (36.0f64 * 36.0 + 24.0 * 24.0).sqrt();
+            ((2.0 * (d / (2.0 * mm)).atan()).to_degrees(), "diagonal")
+        }
+    };
+    let aspect = f64::from(aspect);
+    let axis = match axis {
+        "smaller" if aspect > 1.0 => "y",
+        "smaller" => "x",
+        "larger" if aspect > 1.0 => "x",
+        "larger" => "y",
+        a => a,
+    };
+    let half = (fov.to_radians() * 0.5).tan();
+    let x = match axis {
+        "x" => fov,
+        "y" => (2.0 * (half * aspect).atan()).to_degrees(),
+        _ => {
+            let width = 2.0 * half / (1.0 + 1.0 / (aspect * aspect)).sqrt();
+            (2.0 * (width * 0.5).atan()).to_degrees()
+        }
+    };
+    if !(x > 0.0 && x < 180.0) {
+        return Err(p.error("the horizontal field of view must be between 0 and 180 degrees"));
+    }
+    Ok(x as f32)
+}
+
 /// The sensor's camera and the film's settings.
 fn sensor(sensor: &Object, settings: &mut ShotSettings) -> Result<SceneCamera, MitsubaError> {
     let p = Props::new(sensor);
@@ -439,51 +532,8 @@ fn sensor(sensor: &Object, settings: &mut ShotSettings) -> Result<SceneCamera, M
             if sensor.plugin == "thinlens" {
                 return Err(p.error("the thin lens camera is not supported yet"));
             }
-            if p.has("fov") && p.has("focal_length") {
-                return Err(p.error("give either 'fov' or 'focal_length', not both"));
-            }
-            let axis = p.choice(
-                "fov_axis",
-                "x",
-                &["x", "y", "diagonal", "smaller", "larger"],
-            )?;
-            let (fov, axis) = match p.float_opt("fov")? {
-                Some(f) => (f, axis),
-                None => {
-                    let fl = p.string("focal_length", "50mm")?;
-                    let mm: f32 = fl
-                        .trim_end_matches("mm")
-                        .parse()
-                        .map_err(|_| p.error("focal_length must be like '50mm'"))?;
-                    // Mitsuba: the diagonal field of view of a 35 mm film.
-                    let d = (36.0f32 * 36.0 + 24.0 * 24.0).sqrt();
-                    ((2.0 * (d / (2.0 * mm)).atan()).to_degrees(), "diagonal")
-                }
-            };
-            if !(fov > 0.0 && fov < 180.0) {
-                return Err(p.error("fov must be between 0 and 180 degrees"));
-            }
-            let half = (fov.to_radians() * 0.5).tan();
             // tan of half the vertical field of view.
-            let tan_y = match axis {
-                "x" => half / aspect,
-                "y" => half,
-                "diagonal" => half / (aspect * aspect + 1.0).sqrt(),
-                "smaller" => {
-                    if aspect > 1.0 {
-                        half
-                    } else {
-                        half / aspect
-                    }
-                }
-                _ => {
-                    if aspect > 1.0 {
-                        half / aspect
-                    } else {
-                        half
-                    }
-                }
-            };
+            let tan_y = (x_fov(&p, aspect)?.to_radians() * 0.5).tan() / aspect;
             Lens::Perspective {
                 focal_scale: 0.5 / tan_y,
             }
@@ -578,6 +628,7 @@ fn build(tree: &SceneTree, ledger: &Ledger) -> Result<MitsubaScene, MitsubaError
         parts: SceneParts::default(),
         material_of: HashMap::new(),
         groups: HashMap::new(),
+        attribute_of: HashMap::new(),
         approximated: Vec::new(),
     };
     let mut settings = ShotSettings::default();
@@ -622,6 +673,62 @@ fn build(tree: &SceneTree, ledger: &Ledger) -> Result<MitsubaScene, MitsubaError
                             direction: d,
                             irradiance,
                         });
+                    }
+                    "spot" => {
+                        let m = p.transform("to_world")?;
+                        let intensity =
+                            p.constant_color("intensity", Role::Emission, Vec3A::ONE)?;
+                        let cutoff = p.float("cutoff_angle", 20.0)?;
+                        let beam = p.float("beam_width", cutoff * 0.75)?;
+                        if !(cutoff > 0.0 && cutoff < 90.0 && beam >= 0.0 && beam < cutoff) {
+                            return Err(p.error(
+                                "needs 0 < cutoff_angle < 90 and 0 <= beam_width < cutoff_angle (degrees)",
+                            ));
+                        }
+                        let texture = match p.child_opt("texture") {
+                            None => None,
+                            Some(t) => {
+                                let resolve = |name: &str| tree.resolve(name);
+                                Some(b.materials.pattern(&t, &resolve)?)
+                            }
+                        };
+                        let shape = BeamShape::Spot {
+                            cutoff: cutoff.to_radians(),
+                            beam_width: beam.to_radians(),
+                        };
+                        b.parts
+                            .lights
+                            .push(beam_light(&p, m, intensity, shape, texture)?);
+                    }
+                    "projector" => {
+                        let m = p.transform("to_world")?;
+                        let scale = p.float("scale", 1.0)?;
+                        let resolve = |name: &str| tree.resolve(name);
+                        let (irradiance, texture, aspect) =
+                            match p.color_opt("irradiance", Role::Emission)? {
+                                None => (Vec3A::ONE, None, 1.0),
+                                Some(ColorProp::Value(c)) => (c, None, 1.0),
+                                Some(ColorProp::Texture(t)) => {
+                                    let pattern = b.materials.pattern(&t, &resolve)?;
+                                    let aspect = match pattern {
+                                        crate::textures::Pattern::Image { image, .. } => {
+                                            let i = b.materials.textures.get(image);
+                                            i.width() as f32 / i.height() as f32
+                                        }
+                                        _ => 1.0,
+                                    };
+                                    (Vec3A::ONE, Some(pattern), aspect)
+                                }
+                            };
+                        let x_fov = x_fov(&p, aspect)?;
+                        let shape = BeamShape::Projector {
+                            tan_half_fov: (x_fov.to_radians() * 0.5).tan(),
+                            aspect,
+                            normal: glam::Mat3A::from_mat4(m) * Vec3A::Z,
+                        };
+                        b.parts
+                            .lights
+                            .push(beam_light(&p, m, irradiance * scale, shape, texture)?);
                     }
                     "constant" => {
                         let radiance = p.constant_color("radiance", Role::Emission, Vec3A::ONE)?;
