@@ -257,3 +257,50 @@ fn bad_scenes_name_the_file_and_line() {
         );
     }
 }
+
+/// A Mitsuba scene is a model of a scene file like a glTF one: its shapes,
+/// materials, lights and camera come in, and its one-sided materials stay
+/// one-sided in a two-sided scene.
+#[test]
+fn a_scene_file_places_a_mitsuba_scene() {
+    let dir = tempfile::tempdir().unwrap();
+    let xml = from_above(
+        "direct",
+        r#"<emitter type="directional">
+        <vector name="direction" value="0, 0, -1"/>
+        <rgb name="irradiance" value="2"/>
+    </emitter>
+    <shape type="rectangle">
+        <bsdf type="diffuse"><rgb name="reflectance" value="0.5"/></bsdf>
+    </shape>
+    <shape type="rectangle">
+        <boolean name="flip_normals" value="true"/>
+        <transform name="to_world"><translate x="10"/></transform>
+        <bsdf type="diffuse"/>
+    </shape>"#,
+    );
+    std::fs::write(dir.path().join("sun.xml"), xml).unwrap();
+    let toml = dir.path().join("s.toml");
+    std::fs::write(
+        &toml,
+        "[render]\nwidth = 8\nheight = 8\nspp = 2\n[[model]]\nfile = \"sun.xml\"\n",
+    )
+    .unwrap();
+    let options = JobOptions::new(toml.to_str().unwrap());
+    let mut job = Job::new(options).unwrap();
+    let film = job.render_with(&Hooks::default()).unwrap().finished.image;
+    // Through the Mitsuba camera (the first), the plane in full sun.
+    assert_close(
+        film.get(4, 4),
+        Vec3A::splat(1.0 / std::f32::consts::PI),
+        1e-5,
+        "ρE/π",
+    );
+    // Its materials decide their sides: one-sided, even were the scene
+    // two-sided (as glTF models make it).
+    let mut loaded = raylab::load::load(toml.to_str().unwrap(), &Default::default()).unwrap();
+    loaded.scene.two_sided = true;
+    let materials = loaded.scene.materials().len() as u32;
+    assert!(materials >= 2);
+    assert!((0..materials).all(|m| !loaded.scene.material_turns(m)));
+}

@@ -156,6 +156,9 @@ pub fn load_session(
             mib(s.geometry_bytes),
             s.time.as_secs_f64() * 1e3,
         ));
+        if let Some(p) = &s.plugins {
+            hooks.say(&format!("Mitsuba scene: {p}"));
+        }
         if !s.variants.is_empty() {
             let shown = match &s.variant {
                 Some(v) => format!("showing {v}"),

@@ -242,6 +242,9 @@ pub struct LoadSummary {
     pub variants: Vec<String>,
     /// The variant shown, if one was picked.
     pub variant: Option<String>,
+    /// A Mitsuba scene's objects by kind and plugin (`4 shapes (obj ×3,
+    /// rectangle), 2 bsdfs (diffuse ×2)`), for the load line.
+    pub plugins: Option<String>,
 }
 
 /// A loaded scene with its starting view.
@@ -352,6 +355,7 @@ pub fn load(name: &str, options: &LoadOptions) -> Result<Loaded, LoadError> {
     let mut settings = ShotSettings::default();
     let (mut variants, mut variant) = (Vec::new(), None);
     let mut animations = Vec::new();
+    let mut plugins = None;
     // The environment first: a scene lit by one gets no default lighting.
     let ledger = Ledger::new(options.max_memory);
     let env_start = Instant::now();
@@ -491,6 +495,7 @@ pub fn load(name: &str, options: &LoadOptions) -> Result<Loaded, LoadError> {
         SceneKind::Mitsuba => {
             let m = mitsuba::load_mitsuba(Path::new(name), &options.defines, &ledger)?;
             warnings.extend(m.warnings);
+            plugins = Some(m.summary);
             settings = m.settings;
             let mut parts = m.parts;
             parts.ambient = Vec3A::splat(options.ambient.unwrap_or(0.0));
@@ -598,6 +603,7 @@ pub fn load(name: &str, options: &LoadOptions) -> Result<Loaded, LoadError> {
         needs: ledger.needs(),
         variants,
         variant,
+        plugins,
     };
     if options.light_selection != scene.light_selection() {
         scene.set_light_selection(options.light_selection);

@@ -605,6 +605,13 @@ impl SurfaceMaterial {
         matches!(&self.kind, MaterialKind::Textured(t) if t.two_sided)
     }
 
+    /// Whether the material decides its sides itself (a [`TexturedBsdf`]),
+    /// whatever the scene it is in says.
+    #[inline]
+    pub fn has_own_sides(&self) -> bool {
+        matches!(&self.kind, MaterialKind::Textured(_))
+    }
+
     /// What an unlit material shows at a hit: its base colour (RGB), clamped
     /// to `[0, 1]` as the glTF material's is.
     #[inline]

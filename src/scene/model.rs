@@ -438,13 +438,16 @@ impl Scene {
     }
 
     /// Whether material `index` turns a one-sided BSDF's shading normal
-    /// towards the viewer although the scene's surfaces are one-sided
-    /// ([`SurfaceMaterial::two_sided`]: Mitsuba's `twosided`).
+    /// towards the viewer: a material with sides of its own (a Mitsuba
+    /// material: [`SurfaceMaterial::two_sided`], Mitsuba's `twosided`) says
+    /// so itself, whatever the scene; the others follow the scene
+    /// ([`Scene::two_sided`]).
     #[inline]
     pub fn material_turns(&self, index: u32) -> bool {
-        self.materials
-            .get(index as usize)
-            .is_some_and(SurfaceMaterial::two_sided)
+        match self.materials.get(index as usize) {
+            Some(m) if m.has_own_sides() => m.two_sided(),
+            _ => self.two_sided,
+        }
     }
 
     /// Whether any material is `KHR_materials_unlit`.

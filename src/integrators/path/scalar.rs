@@ -624,8 +624,7 @@ pub(crate) fn shading_normal(
     } else {
         ng
     };
-    let turns = scene.two_sided || scene.material_turns(surface.material);
-    if turns && !two_sided(bsdf) && ng.dot(wo) < 0.0 {
+    if scene.material_turns(surface.material) && !two_sided(bsdf) && ng.dot(wo) < 0.0 {
         -n
     } else {
         n

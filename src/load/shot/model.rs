@@ -157,10 +157,32 @@ pub(super) fn load_model(
                         animations: Vec::new(),
                     })
                 }
+                Some("xml") => {
+                    let m = crate::load::mitsuba::load_mitsuba(&file, &[], ledger)?;
+                    let mut warnings = m.warnings;
+                    let mut parts = m.parts;
+                    if !m.environment.is_black() {
+                        warnings.push(format!(
+                            "[[model]] {}: {}: its environment emitter is not part of a model and is left out (give the scene file an [environment])",
+                            index + 1,
+                            file.display()
+                        ));
+                    }
+                    parts.cameras.extend(m.camera);
+                    Ok(ModelParts {
+                        parts,
+                        named_ranges: Vec::new(),
+                        lab_camera: None,
+                        warnings,
+                        variants: Vec::new(),
+                        variant: None,
+                        animations: Vec::new(),
+                    })
+                }
                 _ => Err(invalid(
                     path,
                     format!(
-                        "[[model]] {}: {} is neither glTF (.gltf, .glb) nor OBJ (.obj)",
+                        "[[model]] {}: {} is neither glTF (.gltf, .glb), OBJ (.obj) nor a Mitsuba scene (.xml)",
                         index + 1,
                         file.display()
                     ),

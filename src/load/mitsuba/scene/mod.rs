@@ -55,6 +55,8 @@ pub struct MitsubaScene {
     pub settings: ShotSettings,
     /// What was approximated or ignored.
     pub warnings: Vec<String>,
+    /// The objects read, by kind and plugin ([`SceneTree::summary`]).
+    pub summary: String,
 }
 
 /// The 3 × 3 part and translation of a transform.
@@ -204,11 +206,7 @@ impl Builder<'_, '_> {
             "rectangle" => shapes::rectangle(),
             "cube" => shapes::cube(),
             "sphere" | "disk" | "cylinder" => {
-                self.approximated.push(format!(
-                    "{} (tessellated: {} segments around)",
-                    shape.describe(),
-                    shapes::SEGMENTS
-                ));
+                self.approximated.push(shape.plugin.clone());
                 match shape.plugin.as_str() {
                     "sphere" => shapes::sphere(),
                     "disk" => shapes::disk(),
@@ -774,9 +772,15 @@ fn build(tree: &SceneTree, ledger: &Ledger) -> Result<MitsubaScene, MitsubaError
     }
     warnings.append(&mut b.materials.warnings);
     if !b.approximated.is_empty() {
+        let mut counts = std::collections::BTreeMap::new();
+        for plugin in &b.approximated {
+            *counts.entry(plugin.as_str()).or_insert(0usize) += 1;
+        }
+        let list: Vec<String> = counts.iter().map(|(p, n)| format!("{p} ×{n}")).collect();
         warnings.push(format!(
-            "approximated as triangles: {}",
-            b.approximated.join(", ")
+            "analytic shapes approximated by triangles ({} segments around; exact primitives are not built yet): {}",
+            shapes::SEGMENTS,
+            list.join(", ")
         ));
     }
     let mut parts = b.parts;
@@ -788,6 +792,7 @@ fn build(tree: &SceneTree, ledger: &Ledger) -> Result<MitsubaScene, MitsubaError
         camera,
         settings,
         warnings,
+        summary: tree.summary(),
     })
 }
 
