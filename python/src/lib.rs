@@ -282,8 +282,8 @@ impl Scene {
         &self.session.loaded_with.scene
     }
 
-    /// What it was made from: "lab" (the built-in box), "mesh" (OBJ), "gltf"
-    /// or "scene file".
+    /// What it was made from: "lab" (the built-in box), "mesh" (OBJ), "gltf",
+    /// "scene file" or "mitsuba" (a Mitsuba 3 XML scene).
     #[getter]
     fn kind(&self) -> &'static str {
         use raylab::load::SceneKind;
@@ -292,6 +292,7 @@ impl Scene {
             SceneKind::Mesh => "mesh",
             SceneKind::Gltf => "gltf",
             SceneKind::Shot => "scene file",
+            SceneKind::Mitsuba => "mitsuba",
         }
     }
 
