@@ -225,3 +225,45 @@ fn the_scene_fingerprint_sees_every_texel_and_coordinate() {
         raylab::load::cornell::area_scene().fingerprint()
     );
 }
+
+/// A smooth-shaded OBJ quad (vertex normals tilted a little either way) seen
+/// from behind under a white sky reflects it as from the front: meshes are
+/// two-sided, and a one-sided BSDF turned to the viewer must still take the
+/// sky's light there. (It showed black: the test that keeps light from
+/// leaking through shading normals compared directions with the front
+/// geometric normal after the shading normal had been turned to the back.)
+#[test]
+fn a_smooth_quad_seen_from_behind_reflects_as_from_the_front() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(
+        dir.path().join("quad.obj"),
+        "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nvn 0 0.05 1\nvn 0 -0.05 1\nvn 0 0.05 1\nvn 0 -0.05 1\nf 1//1 2//2 3//3\nf 1//1 3//3 4//4\n",
+    )
+    .unwrap();
+    let centre = |z: f32| {
+        let toml = dir.path().join(format!("s{z}.toml"));
+        std::fs::write(
+            &toml,
+            format!(
+                "[render]\nwidth = 8\nheight = 8\nspp = 64\nintegrator = \"path\"\n[camera]\nposition = [0, 0, {z}]\ntarget = [0, 0, 0]\n[environment]\ncolor = [1, 1, 1]\n[[model]]\nfile = \"quad.obj\"\n"
+            ),
+        )
+        .unwrap();
+        let options = raylab::job::JobOptions::new(toml.to_str().unwrap());
+        let mut job = raylab::job::Job::new(options).unwrap();
+        let film = job
+            .render_with(&raylab::job::Hooks::default())
+            .unwrap()
+            .finished
+            .image;
+        film.get(4, 4)
+    };
+    let (front, back) = (centre(3.0), centre(-3.0));
+    // A Lambertian quad open to a white sky on its side: ρ (0.8 by
+    // default) less what grazing directions lose; both sides alike.
+    assert!(front.x > 0.6, "front {front}");
+    assert!(
+        (back - front).abs().max_element() < 0.05,
+        "back {back}, front {front}"
+    );
+}
