@@ -152,6 +152,8 @@ def valid_values(tmp_path):
         "tonemap": ("aces", {}),
         "max_depth": (3, {}),
         "sampler": ("independent", {}),
+        "filter": ("gaussian:0.5", {"integrator": "path"}),
+        "define": ({"spp": 2}, {"scene": ROOT / "tests/data/mitsuba/suite/checker_ortho_path.xml"}),
         "material": ({"tall": "mirror"}, {}),
         "exposure": (-1.5, {}),
         "camera_pos": ((0.1, 0, -2.5), {}),
