@@ -101,7 +101,11 @@ def run_view(command, env, timeout):
         if not shutil.which(tool):
             return False, f"{tool} is not installed (apt-get install xvfb xdotool)"
     display = free_display()
-    xvfb = subprocess.Popen(["Xvfb", display, "-screen", "0", "1280x1024x24", "-nolisten", "tcp"],
+    # -noreset: by default Xvfb resets when its last client leaves, and the
+    # readiness probe below is a client: a viewer connecting during that reset
+    # found no server (1 run in 3 or 4 failed so, before).
+    xvfb = subprocess.Popen(["Xvfb", display, "-screen", "0", "1280x1024x24", "-nolisten", "tcp",
+                             "-noreset"],
                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     env = dict(env, DISPLAY=display)
     viewer = None
