@@ -196,7 +196,7 @@ const CASES: &[(&str, &str)] = &[
     ),
     (
         "gltf-image-not-an-image.gltf",
-        "not a PNG, JPEG, WebP or KTX2 image",
+        "not a PNG, JPEG, WebP, BMP or KTX2 image",
     ),
     // GLB
     ("glb-header-truncated.glb", "GLB header is truncated"),
@@ -316,7 +316,10 @@ const CASES: &[(&str, &str)] = &[
         "jpg-65535-square-header.jpg",
         "65535×65535 texels is too large",
     ),
-    ("jpg-not-jpeg.jpg", "not a PNG, JPEG, WebP or KTX2 image"),
+    (
+        "jpg-not-jpeg.jpg",
+        "not a PNG, JPEG, WebP, BMP or KTX2 image",
+    ),
     // Ray files (raylab bench --rays)
     ("rays-empty.rays", "holds no rays"),
     (

@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Writes the small images of raylab's own Mitsuba test scenes
-(tests/data/mitsuba/suite/textures/): a colour test pattern and a grey
-leaf-like mask, as 8-bit PNGs made here (no third-party data), with the
+(tests/data/mitsuba/suite/textures/): a colour test pattern, a grey
+leaf-like mask, and a field of round bumps as a height map and as the
+normal map of the same heights, as 8-bit PNGs made here (no third-party data), with the
 standard library only. Run again to recreate them; the output is
 deterministic."""
 
@@ -48,10 +49,37 @@ def mask(x, y):
     return (max(0, min(255, int(255 * (1.2 - d) / 0.2))),)
 
 
+def bump(x, y):
+    """Height in [0, 1] of a 4 x 4 grid of round bumps (cosine profile) on
+    a 64 x 64 image, and its gradient per texel."""
+    cx, cy = (x % 16) - 7.5, (y % 16) - 7.5
+    r = math.hypot(cx, cy)
+    if r >= 7.0:
+        return 0.0, 0.0, 0.0
+    h = 0.5 + 0.5 * math.cos(math.pi * r / 7.0)
+    dh_dr = -0.5 * math.pi / 7.0 * math.sin(math.pi * r / 7.0)
+    return h, dh_dr * cx / max(r, 1e-9), dh_dr * cy / max(r, 1e-9)
+
+
+def height(x, y):
+    return (int(round(255 * bump(x, y)[0])),)
+
+
+def normals(x, y):
+    # The normal of the height field z = 4 h per texel, in tangent space
+    # (x right, y down the image as v grows), mapped to [0, 1].
+    _, gx, gy = bump(x, y)
+    n = (-4.0 * gx, -4.0 * gy, 1.0)
+    length = math.sqrt(sum(c * c for c in n))
+    return tuple(int(round(255 * (0.5 + 0.5 * c / length))) for c in n)
+
+
 def main():
     os.makedirs(OUT, exist_ok=True)
     png(os.path.join(OUT, "pattern.png"), 64, 64, 3, pattern)
     png(os.path.join(OUT, "mask.png"), 64, 64, 1, mask)
+    png(os.path.join(OUT, "height.png"), 64, 64, 1, height)
+    png(os.path.join(OUT, "normals.png"), 64, 64, 3, normals)
     print("wrote", OUT)
 
 

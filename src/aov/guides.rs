@@ -36,7 +36,7 @@ use glam::Vec3A;
 
 use super::set::luminance;
 use crate::geometry::ray::Ray;
-use crate::integrators::path::{coat_normal, shading_normal};
+use crate::integrators::path::{coat_normal, shading};
 use crate::materials::{Frame, Material};
 use crate::scene::{Scene, SurfaceHit};
 
@@ -122,7 +122,7 @@ fn visit(
         g.albedo += tint * squash(material.emitted(&s.attrs, scene.textures()));
     }
     let wo_world = -dir;
-    let n = shading_normal(scene, s, bsdf, wo_world);
+    let n = shading(scene, s, bsdf, wo_world).n;
     let frame = Frame::from_normal(n);
     let mut bsdf = *bsdf;
     bsdf.orient_coat(&frame, coat_normal(s, n));

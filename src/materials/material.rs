@@ -10,7 +10,9 @@ use super::dielectric::{dielectric_interface, dielectric_refraction, sample_diel
 use super::disk::concentric_disk;
 use super::frame::{Frame, above, reflect_z};
 use super::fresnel::fresnel_conductor;
-use super::microfacet::{ggx_d, ggx_lambda, ggx_sample_visible_normal, is_smooth};
+use super::microfacet::{
+    MicrofacetDistribution, ggx_d, ggx_lambda, ggx_sample_visible_normal, is_smooth,
+};
 use super::mitsuba;
 use super::pbr::{self, PbrBsdf};
 use glam::{Vec2, Vec3A};
@@ -169,6 +171,37 @@ impl Material {
             Material::MiRoughDielectric(d) => d.orient_anisotropy(frame, t),
             _ => {}
         }
+    }
+
+    /// Whether the BSDF's microfacets are anisotropic (a Mitsuba rough
+    /// conductor or dielectric with `alpha_u ≠ alpha_v`; the glTF BSDF's
+    /// anisotropy is the material's, see
+    /// [`crate::materials::surface::SurfaceMaterial::has_anisotropy`]).
+    #[inline]
+    pub fn is_anisotropic(&self) -> bool {
+        match self {
+            Material::MiRoughConductor(c) => !c.distribution.is_isotropic(),
+            Material::MiRoughDielectric(d) => !d.distribution.is_isotropic(),
+            _ => false,
+        }
+    }
+
+    /// Sets a Mitsuba BSDF's scalar parameter `param` to `value` (a texture's
+    /// value at a hit); nothing for a material without it. A microfacet
+    /// width is clamped as [`MicrofacetDistribution::new`] clamps it.
+    #[inline]
+    pub fn set_param(&mut self, param: mitsuba::Param, value: f32) {
+        let distribution = match self {
+            Material::MiRoughConductor(c) => &mut c.distribution,
+            Material::MiRoughDielectric(d) => &mut d.distribution,
+            _ => return,
+        };
+        let (mut u, mut v) = (distribution.alpha_u, distribution.alpha_v);
+        match param {
+            mitsuba::Param::AlphaU => u = value,
+            mitsuba::Param::AlphaV => v = value,
+        }
+        *distribution = MicrofacetDistribution::new(distribution.kind, u, v);
     }
 
     /// Gold: RGB `eta`/`k` from Mitsuba's spectral data for Au integrated to linear

@@ -9,6 +9,7 @@
 use glam::{Vec2, Vec3A, Vec4, Vec4Swizzles};
 
 use super::material::Material;
+use super::mitsuba::Param;
 use super::pbr::PbrBsdf;
 use crate::textures::{ColorSpace, Pattern, TextureRef, TextureStore};
 
@@ -461,9 +462,71 @@ pub struct TexturedBsdf {
     /// BSDFs, which is exactly the Lambertian BSDF of the blended
     /// reflectance. `None`: the pattern is the reflectance itself.
     pub blend: Option<[Vec3A; 2]>,
+    /// Scalar parameters that textures vary over the surface (each set to
+    /// its pattern's luminance at the hit, [`Material::set_param`]).
+    pub params: Vec<(Param, Pattern)>,
+    /// How the shading normal is perturbed (Mitsuba's `normalmap` and
+    /// `bumpmap`), if it is.
+    pub perturb: Option<Perturb>,
+}
+
+/// A perturbation of the shading normal, in Mitsuba's shading frame (whose
+/// first axis is `∂p/∂u` made orthogonal to the interpolated normal; see
+/// [`crate::scene::SurfaceHit`]), with Mitsuba 3.7.1's two options.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Perturb {
+    /// The map.
+    pub map: PerturbMap,
+    /// Mitsuba's `flip_invalid_normals` (default on): where the viewer is
+    /// on different sides of the interpolated and the perturbed normal, the
+    /// perturbed normal's tangential part is negated (Schüssler et al. 2017).
+    pub flip_invalid: bool,
+    /// Mitsuba's `use_shadowing_function` (default on): the BSDF is
+    /// weighed by Estevez et al.'s (2019) microfacet shadowing term of the
+    /// bump terminator.
+    pub shadowing: bool,
+}
+
+/// How the shading normal is perturbed.
+#[derive(Clone, Debug, PartialEq)]
+pub enum PerturbMap {
+    /// Mitsuba's `normalmap`: the pattern's RGB mapped from `[0, 1]` to
+    /// `[−1, 1]` and normalized is the normal in the shading frame.
+    NormalMap(Pattern),
+    /// Mitsuba's `bumpmap`: the surface displaced along the interpolated
+    /// normal by `scale` × the pattern's luminance (only its gradient is
+    /// used: `∂p/∂u` and `∂p/∂v` get the height's derivatives as their
+    /// normal parts, and the normal is their cross product, on the
+    /// geometric normal's side).
+    BumpMap {
+        /// The height.
+        height: Pattern,
+        /// Its scale (Mitsuba's `scale`, default 1).
+        scale: f32,
+    },
 }
 
 impl TexturedBsdf {
+    /// `bsdf` everywhere, one-sided, nothing textured or perturbed.
+    pub fn new(bsdf: Material) -> Self {
+        Self {
+            bsdf,
+            reflectance: None,
+            opacity: None,
+            two_sided: false,
+            blend: None,
+            params: Vec::new(),
+            perturb: None,
+        }
+    }
+
+    /// Whether shading needs Mitsuba's frame at a hit: a normal or bump map,
+    /// or a BSDF that is (or may be, by its textures) anisotropic.
+    #[inline]
+    pub fn needs_frame(&self) -> bool {
+        self.perturb.is_some() || !self.params.is_empty() || self.bsdf.is_anisotropic()
+    }
+
     /// The reflectance at `attrs` (the pattern's, or the BSDF's own `fixed`).
     #[inline]
     fn reflectance_at(
@@ -831,10 +894,14 @@ pub fn lookup(
 /// [`SurfaceMaterial::bsdf`] of a [`TexturedBsdf`] (out of line).
 #[inline(never)]
 fn textured_bsdf(t: &TexturedBsdf, attrs: &HitAttributes, textures: &TextureStore) -> Material {
-    match &t.reflectance {
+    let mut bsdf = match &t.reflectance {
         Some(_) => with_reflectance(t.bsdf, t.reflectance_at(Vec3A::ZERO, attrs, textures)),
         None => t.bsdf,
+    };
+    for (param, pattern) in &t.params {
+        bsdf.set_param(*param, pattern.eval_1(attrs.uv[0], attrs.color, textures));
     }
+    bsdf
 }
 
 /// `bsdf` with its reflectance replaced by `rho` (the diffuse reflectance
@@ -865,9 +932,13 @@ pub fn pattern_images_mut(m: &mut SurfaceMaterial) -> impl Iterator<Item = &mut 
         _ => None,
     };
     textured.into_iter().flat_map(|t| {
-        [t.reflectance.as_mut(), t.opacity.as_mut()]
+        let perturb = t.perturb.as_mut().map(|p| match &mut p.map {
+            PerturbMap::NormalMap(p) | PerturbMap::BumpMap { height: p, .. } => p,
+        });
+        [t.reflectance.as_mut(), t.opacity.as_mut(), perturb]
             .into_iter()
             .flatten()
+            .chain(t.params.iter_mut().map(|(_, p)| p))
             .filter_map(Pattern::image_mut)
     })
 }

@@ -3,12 +3,14 @@
 //! colour, and everything shading needs ([`SurfaceHit`]: normals, normal
 //! maps, tangents).
 
-use glam::{Vec3A, Vec4};
+use glam::{Vec2, Vec3A, Vec4, Vec4Swizzles};
 
 use super::mesh::{Instance, MeshData, Tangents};
 use super::model::Scene;
 use crate::geometry::ray::{Hit, SurfacePoint};
-use crate::materials::surface::HitAttributes;
+use crate::materials::Frame;
+use crate::materials::surface::{HitAttributes, MaterialKind, PerturbMap, TexturedBsdf};
+use crate::textures::{TextureStore, mitsuba_luminance};
 
 /// What a hit looks like: its point, normals and interpolated attributes.
 #[derive(Clone, Copy, Debug)]
@@ -17,8 +19,12 @@ pub struct SurfaceHit {
     pub point: SurfacePoint,
     /// Unit front geometric normal.
     pub ng: Vec3A,
-    /// Unit shading normal (interpolated, normal-mapped), on `ng`'s side.
+    /// Unit shading normal (interpolated, normal-mapped), on `ng`'s side
+    /// (a Mitsuba material's normal or bump map may tilt it past `ng`).
     pub ns: Vec3A,
+    /// Unit interpolated normal (before any normal or bump map), on `ng`'s
+    /// side; `ng` without vertex normals.
+    pub ni: Vec3A,
     /// Unit normal of a clear coat (`KHR_materials_clearcoat`), on `ng`'s
     /// side: interpolated, then the coat's own normal map if it has one (the
     /// base's normal map does not apply); `ns` for a material without a coat.
@@ -27,7 +33,9 @@ pub struct SurfaceHit {
     /// orthogonalized against the interpolated normal) where the material
     /// is anisotropic (`KHR_materials_anisotropy`), for
     /// [`crate::materials::PbrBsdf::orient_anisotropy`]; zero elsewhere and
-    /// without tangents.
+    /// without tangents. For a Mitsuba material whose frame matters (an
+    /// anisotropic BSDF, a normal or bump map): Mitsuba's shading frame's
+    /// `s` and `t` about `ni` (`s` is `∂p/∂u` made orthogonal to `ni`).
     pub tangent: Vec3A,
     /// See `tangent`.
     pub bitangent: Vec3A,
@@ -171,6 +179,7 @@ impl Scene {
                 point,
                 ng,
                 ns: ng,
+                ni: ng,
                 nc: ng,
                 tangent: Vec3A::ZERO,
                 bitangent: Vec3A::ZERO,
@@ -190,6 +199,31 @@ impl Scene {
         }
         let interpolated = ns;
         let m = &self.materials[material as usize];
+        if let MaterialKind::Textured(t) = &m.kind
+            && t.needs_frame()
+        {
+            let uvs = (!mesh.uvs[0].is_empty()).then(|| idx.map(|i| mesh.uvs[0][i as usize]));
+            let (n, s, tb) = mitsuba_frame(
+                t,
+                &self.triangles[prim].v,
+                uvs,
+                ng,
+                interpolated,
+                &attrs,
+                &self.textures,
+            );
+            return SurfaceHit {
+                point,
+                ng,
+                ns: n,
+                ni: interpolated,
+                nc: n,
+                tangent: s,
+                bitangent: tb,
+                attrs,
+                material,
+            };
+        }
         if let Some(mapped) = m.mapped_normal(&attrs, &self.textures)
             && let Some(n) = tangent_to_world(inst, mesh, idx, hit, b, interpolated, mapped)
         {
@@ -214,6 +248,7 @@ impl Scene {
             point,
             ng,
             ns,
+            ni: interpolated,
             nc,
             tangent,
             bitangent,
@@ -221,6 +256,71 @@ impl Scene {
             material,
         }
     }
+}
+
+/// Mitsuba's shading frame at a hit of a Mitsuba material (`t`) on the
+/// triangle of world vertices `v`, texture coordinates `uvs` (if the mesh
+/// has them), face normal `ng` and interpolated normal `ni`: its `s` is
+/// `∂p/∂u` (from the triangle's texture coordinates, or Mitsuba's
+/// `coordinate_system` of the face normal where they are missing or
+/// degenerate) made orthogonal to `ni`, `t = ni × s`; its normal is `ni`,
+/// or what the material's normal or bump map makes of it (Mitsuba 3.7.1's
+/// `normalmap` and `bumpmap` before their view-dependent flip, which the
+/// integrator makes). Returns the normal, `s` and `t`.
+#[inline(never)]
+fn mitsuba_frame(
+    t: &TexturedBsdf,
+    v: &[Vec3A; 3],
+    uvs: Option<[Vec2; 3]>,
+    ng: Vec3A,
+    ni: Vec3A,
+    attrs: &HitAttributes,
+    textures: &TextureStore,
+) -> (Vec3A, Vec3A, Vec3A) {
+    let (e1, e2) = (v[1] - v[0], v[2] - v[0]);
+    let fallback = Frame::from_normal(ng);
+    let (mut dp_du, mut dp_dv) = (fallback.t, fallback.b);
+    if let Some(uv) = uvs {
+        let (d0, d1) = (uv[1] - uv[0], uv[2] - uv[0]);
+        let det = d0.x * d1.y - d0.y * d1.x;
+        if det != 0.0 {
+            let inv = 1.0 / det;
+            dp_du = (d1.y * e1 - d0.y * e2) * inv;
+            dp_dv = (d0.x * e2 - d1.x * e1) * inv;
+        }
+    }
+    let s = (dp_du - ni * ni.dot(dp_du)).normalize_or_zero();
+    let s = if s != Vec3A::ZERO && s.is_finite() {
+        s
+    } else {
+        Frame::from_normal(ni).t
+    };
+    let tb = ni.cross(s);
+    let n = match t.perturb.as_ref().map(|p| &p.map) {
+        None => ni,
+        Some(PerturbMap::NormalMap(p)) => {
+            let c = p.eval(attrs.uv[0], attrs.color, textures);
+            let m = Vec3A::from(c.xyz()) * 2.0 - Vec3A::ONE;
+            (m.x * s + m.y * tb + m.z * ni).normalize_or_zero()
+        }
+        Some(PerturbMap::BumpMap { height, scale }) => {
+            let (gu, gv) = height.gradient(attrs.uv[0], textures);
+            let (gu, gv) = (
+                scale * mitsuba_luminance(gu.xyz()),
+                scale * mitsuba_luminance(gv.xyz()),
+            );
+            let du = dp_du + ni * (gu - ni.dot(dp_du));
+            let dv = dp_dv + ni * (gv - ni.dot(dp_dv));
+            let n = du.cross(dv).normalize_or_zero();
+            if n.dot(ng) < 0.0 { -n } else { n }
+        }
+    };
+    let n = if n != Vec3A::ZERO && n.is_finite() {
+        n
+    } else {
+        ni
+    };
+    (n, s, tb)
 }
 
 /// The barycentric combination of three values.
@@ -336,5 +436,91 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// A Mitsuba material with `perturb` (and a diffuse BSDF).
+    fn textured(perturb: Option<PerturbMap>) -> TexturedBsdf {
+        let mut t = TexturedBsdf::new(crate::materials::Material::Diffuse {
+            reflectance: Vec3A::splat(0.5),
+        });
+        t.perturb = perturb.map(|map| crate::materials::surface::Perturb {
+            map,
+            flip_invalid: true,
+            shadowing: true,
+        });
+        t
+    }
+
+    /// Mitsuba's frame on a triangle with texture coordinates: `s` along
+    /// `∂p/∂u` (here `(2, 0, 0)` per unit of u, with `∂p/∂v = (0, 3, 0)`),
+    /// made orthogonal to a tilted interpolated normal; a flat normal map
+    /// leaves the normal alone; without texture coordinates `s` is the
+    /// first axis of `coordinate_system(ng)`.
+    #[test]
+    fn mitsuba_frame_follows_dp_du() {
+        use crate::textures::Pattern;
+        let v = [
+            Vec3A::ZERO,
+            Vec3A::new(2.0, 0.0, 0.0),
+            Vec3A::new(0.0, 3.0, 0.0),
+        ];
+        let uvs = Some([Vec2::ZERO, Vec2::X, Vec2::Y]);
+        let ng = Vec3A::Z;
+        let ni = Vec3A::new(0.3, 0.0, 1.0).normalize();
+        let store = TextureStore::new();
+        let attrs = HitAttributes::default();
+        let flat = textured(Some(PerturbMap::NormalMap(Pattern::Constant(Vec4::new(
+            0.5, 0.5, 1.0, 1.0,
+        )))));
+        let (n, s, t) = mitsuba_frame(&flat, &v, uvs, ng, ni, &attrs, &store);
+        assert!((n - ni).length() < 1e-6, "{n}");
+        // (2, 0, 0) − ni (ni · (2, 0, 0)), normalized.
+        let expect = (Vec3A::X - ni * ni.x).normalize();
+        assert!((s - expect).length() < 1e-6, "{s} vs {expect}");
+        assert!((t - ni.cross(expect)).length() < 1e-6);
+        // A normal map's (1, 0.5, 0.5) is the frame's +s: tilted 90°.
+        let sideways = textured(Some(PerturbMap::NormalMap(Pattern::Constant(Vec4::new(
+            1.0, 0.5, 0.5, 1.0,
+        )))));
+        let (n, ..) = mitsuba_frame(&sideways, &v, uvs, ng, ni, &attrs, &store);
+        assert!((n - expect).length() < 1e-6, "{n}");
+        // Without texture coordinates: Duff et al.'s first axis of ng.
+        let (_, s, _) = mitsuba_frame(&textured(None), &v, None, ng, ng, &attrs, &store);
+        assert!((s - Frame::from_normal(ng).t).length() < 1e-6, "{s}");
+    }
+
+    /// A bump map's normal is the analytic one of the displaced surface: a
+    /// height rising linearly along u (a 2 × 1 image from 0 to 1 between its
+    /// texel centres: ∂h/∂u = 2) scaled by 0.25 on the triangle of
+    /// `∂p/∂u = (2, 0, 0)`, `∂p/∂v = (0, 3, 0)` gives
+    /// `(2, 0, 0.5) × (0, 3, 0) ∝ (−1.5, 0, 6)`.
+    #[test]
+    fn bump_map_normal_is_the_displaced_surfaces() {
+        use crate::textures::{ColorSpace, Image, Pattern, Wrap};
+        use glam::Affine2;
+        let mut store = TextureStore::new();
+        let id = store.push(Image::from_u8(2, 1, 1, vec![0, 255]));
+        let height = Pattern::Image {
+            image: id,
+            wrap: Wrap::ClampToEdge,
+            nearest: false,
+            space: ColorSpace::Linear,
+            to_uv: Affine2::IDENTITY,
+        };
+        let bump = textured(Some(PerturbMap::BumpMap {
+            height,
+            scale: 0.25,
+        }));
+        let v = [
+            Vec3A::ZERO,
+            Vec3A::new(2.0, 0.0, 0.0),
+            Vec3A::new(0.0, 3.0, 0.0),
+        ];
+        let uvs = Some([Vec2::ZERO, Vec2::X, Vec2::Y]);
+        let mut attrs = HitAttributes::default();
+        attrs.uv[0] = Vec2::new(0.5, 0.5);
+        let (n, ..) = mitsuba_frame(&bump, &v, uvs, Vec3A::Z, Vec3A::Z, &attrs, &store);
+        let expect = Vec3A::new(-1.5, 0.0, 6.0).normalize();
+        assert!((n - expect).length() < 1e-5, "{n} vs {expect}");
     }
 }

@@ -1,4 +1,4 @@
-//! PNG, JPEG, WebP and KTX2 (Basis Universal, see [`super::ktx2`]) decoding
+//! PNG, JPEG, WebP, BMP and KTX2 (Basis Universal, see [`super::ktx2`]) decoding
 //! into [`Image`]s, with the size checked before any texel is allocated.
 
 use std::io::Cursor;
@@ -13,7 +13,7 @@ const PNG_SIGNATURE: &[u8] = b"\x89PNG\r\n\x1a\n";
 /// A JPEG file's start-of-image marker and the first byte of the next marker.
 const JPEG_SIGNATURE: &[u8] = &[0xFF, 0xD8, 0xFF];
 
-/// The format of an image file, by its signature: PNG, JPEG, or WebP (a RIFF
+/// The format of an image file, by its signature: PNG, JPEG, BMP, or WebP (a RIFF
 /// container of form type `WEBP`); `None` for anything else.
 fn format_of(bytes: &[u8]) -> Option<ImageFormat> {
     if bytes.starts_with(PNG_SIGNATURE) {
@@ -22,6 +22,9 @@ fn format_of(bytes: &[u8]) -> Option<ImageFormat> {
         Some(ImageFormat::Jpeg)
     } else if bytes.len() >= 12 && &bytes[..4] == b"RIFF" && &bytes[8..12] == b"WEBP" {
         Some(ImageFormat::WebP)
+    } else if bytes.starts_with(b"BM") {
+        // Windows bitmaps (Mitsuba's test scenes use them).
+        Some(ImageFormat::Bmp)
     } else {
         None
     }
@@ -82,7 +85,7 @@ fn bad_palette(bytes: &[u8]) -> Option<u32> {
 }
 
 impl Image {
-    /// Decodes a PNG, JPEG, WebP or KTX2 image, telling them apart by their signatures (not
+    /// Decodes a PNG, JPEG, WebP, BMP or KTX2 image, telling them apart by their signatures (not
     /// by a file name); `name` (a file name, a glTF image index…) only labels
     /// errors.
     ///

@@ -12,9 +12,9 @@ pub const MAX_TEXELS: u64 = 1 << 28;
 /// Why an image could not be decoded; the one-line message names the image.
 #[derive(Debug, Error)]
 pub enum TextureError {
-    /// The data is neither PNG, JPEG, WebP nor KTX2.
+    /// The data is neither PNG, JPEG, WebP, BMP nor KTX2.
     #[error(
-        "{name}: not a PNG, JPEG, WebP or KTX2 image (the data starts with none of their signatures)"
+        "{name}: not a PNG, JPEG, WebP, BMP or KTX2 image (the data starts with none of their signatures)"
     )]
     UnknownFormat {
         /// The image.

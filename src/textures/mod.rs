@@ -42,7 +42,7 @@ mod transform;
 mod tests;
 
 pub use error::{MAX_SIDE, MAX_TEXELS, TextureError};
-pub use pattern::Pattern;
+pub use pattern::{Pattern, mitsuba_luminance};
 pub use srgb::srgb_to_linear;
 pub use store::{TextureRef, TextureStore};
 pub use texel::{ColorSpace, Image, Wrap};

@@ -5,7 +5,7 @@
 //! the two-colour `checkerboard`, and a mesh's own per-vertex or per-face
 //! values (`mesh_attribute`, which the loader stores as the mesh's colours).
 
-use glam::{Affine2, Vec2, Vec4};
+use glam::{Affine2, Vec2, Vec3, Vec4, Vec4Swizzles};
 
 use super::store::TextureStore;
 use super::texel::{ColorSpace, Wrap};
@@ -40,6 +40,9 @@ pub enum Pattern {
     /// constant over a face): Mitsuba's `mesh_attribute`, held as the
     /// mesh's vertex colours.
     MeshAttribute,
+    /// The same value everywhere (Mitsuba's `rawconstant`, or a constant
+    /// where a pattern is expected).
+    Constant(Vec4),
 }
 
 impl Pattern {
@@ -80,6 +83,64 @@ impl Pattern {
                 }
             }
             Pattern::MeshAttribute => color,
+            Pattern::Constant(c) => c,
+        }
+    }
+
+    /// The value at a hit read as one number, as Mitsuba's `eval_1` reads a
+    /// texture for a scalar parameter (a microfacet width, a weight): the
+    /// luminance of [`Pattern::eval`]'s RGB (Mitsuba's weights; a grey value
+    /// is itself), except that Mitsuba 3.7.1's `checkerboard` gives its two
+    /// colours the other way round there (`color0` where exactly one of the
+    /// fractional parts is above ½), which scenes made for Mitsuba rely on.
+    #[inline]
+    pub fn eval_1(&self, uv: Vec2, color: Vec4, textures: &TextureStore) -> f32 {
+        let c = match *self {
+            Pattern::Checkerboard {
+                color0,
+                color1,
+                to_uv,
+            } => Pattern::Checkerboard {
+                color0: color1,
+                color1: color0,
+                to_uv,
+            }
+            .eval(uv, color, textures),
+            _ => self.eval(uv, color, textures),
+        };
+        mitsuba_luminance(c.xyz())
+    }
+
+    /// The partial derivatives of [`Pattern::eval`] with respect to the
+    /// surface's `u` and `v`: a bilinear image's (through `to_uv` by the chain
+    /// rule), zero for what is constant or piecewise constant (nearest
+    /// images, checkerboards, constants) and for mesh attributes (whose
+    /// derivative is not a function of `uv`). Mitsuba's `eval_1_grad`, per
+    /// channel.
+    #[inline]
+    pub fn gradient(&self, uv: Vec2, textures: &TextureStore) -> (Vec4, Vec4) {
+        match *self {
+            Pattern::Image {
+                image,
+                wrap,
+                nearest: false,
+                space,
+                to_uv,
+            } => {
+                let (gx, gy) = textures.get(image).lookup_gradient(
+                    to_uv.transform_point2(uv),
+                    wrap,
+                    wrap,
+                    space,
+                );
+                // d/du = ∂f/∂u' ∂u'/∂u + ∂f/∂v' ∂v'/∂u: the transpose of the map.
+                let m = to_uv.matrix2;
+                (
+                    gx * m.x_axis.x + gy * m.x_axis.y,
+                    gx * m.y_axis.x + gy * m.y_axis.y,
+                )
+            }
+            _ => (Vec4::ZERO, Vec4::ZERO),
         }
     }
 
@@ -87,7 +148,7 @@ impl Pattern {
     pub fn image(&self) -> Option<u32> {
         match self {
             Pattern::Image { image, .. } => Some(*image),
-            Pattern::Checkerboard { .. } | Pattern::MeshAttribute => None,
+            Pattern::Checkerboard { .. } | Pattern::MeshAttribute | Pattern::Constant(_) => None,
         }
     }
 
@@ -95,9 +156,17 @@ impl Pattern {
     pub fn image_mut(&mut self) -> Option<&mut u32> {
         match self {
             Pattern::Image { image, .. } => Some(image),
-            Pattern::Checkerboard { .. } | Pattern::MeshAttribute => None,
+            Pattern::Checkerboard { .. } | Pattern::MeshAttribute | Pattern::Constant(_) => None,
         }
     }
+}
+
+/// Mitsuba's luminance of linear sRGB (its `eval_1` of a colour texture,
+/// with the sRGB primaries' exact weights rather than Rec. 709's rounded
+/// ones); a grey value is its own luminance.
+#[inline]
+pub fn mitsuba_luminance(c: Vec3) -> f32 {
+    c.x * 0.212_671 + c.y * 0.715_160 + c.z * 0.072_169
 }
 
 #[cfg(test)]
@@ -147,5 +216,79 @@ mod tests {
         assert!((b - 0.9).abs() < 1e-4, "{b}");
         // u = 0.9 + 0.5 = 1.4 wraps to 0.4: the first texel.
         assert_eq!(image(true).eval_uv(Vec2::new(0.9, 0.5), &t).x, 0.0);
+    }
+
+    /// The gradient is the derivative of the bilinear value: central
+    /// differences inside a texel cell agree, through a rotating, scaling
+    /// `to_uv` and on a non-square image.
+    #[test]
+    fn gradient_is_the_derivative_of_the_bilinear_value() {
+        let mut t = TextureStore::new();
+        let texels: Vec<u8> = (0..5 * 3).map(|i| ((i * 97 + 13) % 251) as u8).collect();
+        let id = t.push(Image::from_u8(5, 3, 1, texels));
+        let p = Pattern::Image {
+            image: id,
+            wrap: Wrap::Repeat,
+            nearest: false,
+            space: ColorSpace::Linear,
+            to_uv: Affine2::from_scale_angle_translation(
+                Vec2::new(1.7, 0.6),
+                0.4,
+                Vec2::new(0.1, -0.3),
+            ),
+        };
+        let h = 1e-3;
+        let mut checked = 0;
+        for k in 0..200 {
+            let uv = Vec2::new((k as f32 * 0.618).fract(), (k as f32 * 0.414).fract());
+            let (du, dv) = p.gradient(uv, &t);
+            let fd = |d: Vec2| (p.eval_uv(uv + d, &t).x - p.eval_uv(uv - d, &t).x) / (2.0 * h);
+            let (fu, fv) = (fd(Vec2::new(h, 0.0)), fd(Vec2::new(0.0, h)));
+            // Skip points whose stencil crosses a cell edge (a kink).
+            let (fu2, fv2) = (
+                (p.eval_uv(uv + Vec2::new(h, 0.0), &t).x - p.eval_uv(uv, &t).x) / h,
+                (p.eval_uv(uv + Vec2::new(0.0, h), &t).x - p.eval_uv(uv, &t).x) / h,
+            );
+            if (fu - fu2).abs() > 1e-2 * (1.0 + fu.abs())
+                || (fv - fv2).abs() > 1e-2 * (1.0 + fv.abs())
+            {
+                continue;
+            }
+            checked += 1;
+            assert!(
+                (du.x - fu).abs() < 2e-2 * (1.0 + fu.abs()),
+                "{uv}: {} vs {fu}",
+                du.x
+            );
+            assert!(
+                (dv.x - fv).abs() < 2e-2 * (1.0 + fv.abs()),
+                "{uv}: {} vs {fv}",
+                dv.x
+            );
+        }
+        assert!(checked > 100, "{checked}");
+        // Nearest lookups and constants have none.
+        assert_eq!(
+            Pattern::Constant(Vec4::ONE).gradient(Vec2::ZERO, &t),
+            (Vec4::ZERO, Vec4::ZERO)
+        );
+    }
+
+    /// Read as a scalar (Mitsuba's `eval_1`), a checkerboard gives its
+    /// colours the other way round, as Mitsuba 3.7.1 does; an image gives
+    /// its luminance.
+    #[test]
+    fn scalar_reads_swap_the_checkerboard_as_mitsuba() {
+        let p = Pattern::Checkerboard {
+            color0: Vec4::splat(0.4),
+            color1: Vec4::splat(0.2),
+            to_uv: Affine2::IDENTITY,
+        };
+        let t = TextureStore::new();
+        let uv = Vec2::new(0.25, 0.25);
+        assert_eq!(p.eval_uv(uv, &t).x, 0.4);
+        assert!((p.eval_1(uv, Vec4::ONE, &t) - 0.2).abs() < 1e-6);
+        let c = Pattern::Constant(Vec4::new(1.0, 0.0, 0.0, 1.0));
+        assert!((c.eval_1(uv, Vec4::ONE, &t) - 0.212_671).abs() < 1e-6);
     }
 }

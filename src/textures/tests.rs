@@ -723,3 +723,40 @@ fn webp_lossless_round_trip() {
     let err = Image::decode(cut, "cut.webp").unwrap_err().to_string();
     assert!(err.contains("cut.webp"), "{err}");
 }
+
+/// A Windows bitmap (24-bit, bottom-up rows, padded to 4 bytes, BGR) decodes
+/// to its texels, top row first; a cut one is an error naming it.
+#[test]
+fn bmp_decodes_top_row_first() {
+    // 2 × 2: top row red, green; bottom row blue, white.
+    let mut bmp = Vec::new();
+    let pixels: [[u8; 3]; 4] = [[255, 0, 0], [255, 255, 255], [0, 0, 255], [0, 255, 0]];
+    let row_bytes = 8; // 2 × 3 bytes, padded to 8.
+    let size = 54 + 2 * row_bytes;
+    bmp.extend_from_slice(b"BM");
+    bmp.extend_from_slice(&(size as u32).to_le_bytes());
+    bmp.extend_from_slice(&[0; 4]);
+    bmp.extend_from_slice(&54u32.to_le_bytes());
+    bmp.extend_from_slice(&40u32.to_le_bytes());
+    bmp.extend_from_slice(&2i32.to_le_bytes());
+    bmp.extend_from_slice(&2i32.to_le_bytes());
+    bmp.extend_from_slice(&1u16.to_le_bytes());
+    bmp.extend_from_slice(&24u16.to_le_bytes());
+    bmp.extend_from_slice(&[0; 24]);
+    // Rows bottom-up: blue, white; then red, green. Each texel BGR.
+    for row in [[pixels[0], pixels[1]], [pixels[2], pixels[3]]] {
+        for bgr in row {
+            bmp.extend_from_slice(&bgr);
+        }
+        bmp.extend_from_slice(&[0, 0]);
+    }
+    let image = Image::decode(&bmp, "flower.bmp").unwrap();
+    assert_eq!((image.width(), image.height()), (2, 2));
+    let at = |x, y| image.texel(x, y, ColorSpace::Linear);
+    assert_eq!(at(0, 0), Vec4::new(1.0, 0.0, 0.0, 1.0));
+    assert_eq!(at(1, 0), Vec4::new(0.0, 1.0, 0.0, 1.0));
+    assert_eq!(at(0, 1), Vec4::new(0.0, 0.0, 1.0, 1.0));
+    assert_eq!(at(1, 1), Vec4::ONE);
+    let err = Image::decode(&bmp[..60], "cut.bmp").unwrap_err();
+    assert!(err.to_string().starts_with("cut.bmp: "), "{err}");
+}

@@ -270,6 +270,27 @@ impl Image {
         row(y0) * (1.0 - fy) + row(y1) * fy
     }
 
+    /// The partial derivatives of [`Image::lookup`]'s bilinear value at `uv`
+    /// with respect to `u` and `v` (each texel's value as [`Image::texel`]
+    /// decodes it), the derivative of the bilinear patch the point lies in:
+    /// Mitsuba's `Texture::eval_1_grad` of a bilinear `bitmap`.
+    #[inline]
+    pub fn lookup_gradient(
+        &self,
+        uv: Vec2,
+        wrap_s: Wrap,
+        wrap_t: Wrap,
+        space: ColorSpace,
+    ) -> (Vec4, Vec4) {
+        let (x0, x1, fx) = taps(uv.x, self.width, wrap_s);
+        let (y0, y1, fy) = taps(uv.y, self.height, wrap_t);
+        let (f00, f10) = (self.texel(x0, y0, space), self.texel(x1, y0, space));
+        let (f01, f11) = (self.texel(x0, y1, space), self.texel(x1, y1, space));
+        let d_dx = (f10 - f00) * (1.0 - fy) + (f11 - f01) * fy;
+        let d_dy = (f01 - f00) * (1.0 - fx) + (f11 - f10) * fx;
+        (d_dx * self.width as f32, d_dy * self.height as f32)
+    }
+
     /// The texel nearest to `uv` (the one whose square holds it), its indices
     /// wrapped as in [`Image::lookup`]: Mitsuba's `filter_type = "nearest"`.
     /// A NaN or infinite coordinate reads texel 0.

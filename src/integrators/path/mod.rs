@@ -30,4 +30,4 @@ pub use scalar::{
     SOBOL_PAIRS, SamplerKind, SobolSampler, consistent_normal, power_heuristic, radiance,
     radiance_from, radiance_observed, radiance_traced,
 };
-pub(crate) use scalar::{coat_normal, shading_normal};
+pub(crate) use scalar::{coat_normal, shading};

@@ -5,6 +5,7 @@ use glam::{Vec2, Vec3A};
 
 use crate::geometry::ray::{Hit, Ray};
 use crate::lights::environment::SkyRadiance;
+use crate::materials::surface::{MaterialKind, SurfaceMaterial};
 use crate::materials::{Frame, Material, spectrum};
 use crate::sampling::sampler::Rng;
 use crate::sampling::sobol;
@@ -408,20 +409,14 @@ pub fn radiance_traced(
             bsdf.set_wavelength(lambda);
         }
         let wo_world = -ray.dir;
-        let shading = surface.ns != ng;
-        let n = shading_normal(scene, &surface, &bsdf, wo_world);
+        let shading = shading(scene, &surface, &bsdf, wo_world);
+        let n = shading.n;
         let sp = surface.point;
         let frame = Frame::from_normal(n);
         bsdf.orient_coat(&frame, coat_normal(&surface, n));
         bsdf.orient_anisotropy(&frame, surface.tangent, surface.bitangent);
         let wo = frame.to_local(wo_world);
         let bsdf_at = bsdf.at(wo);
-        // With shading normals, a direction must be on the same side of the
-        // geometric and the shading surface, or light leaks through it. (The
-        // geometric normal taken on the shading normal's side: a one-sided
-        // BSDF seen from behind has had its shading normal turned there.)
-        let ng_n = if n.dot(ng) < 0.0 { -ng } else { ng };
-        let same_side = |w: Vec3A| !shading || (w.dot(ng_n) > 0.0) == (w.dot(n) > 0.0);
 
         // Choices and the roulette's number are drawn only where they are
         // used: each independent number costs about a dozen instructions, and
@@ -461,7 +456,11 @@ pub fn radiance_traced(
                 let wi_world = (target - sp.p).normalize();
                 let wi = frame.to_local(wi_world);
                 let (f, pdf_here) = bsdf_at.eval_and_pdf(wi);
-                if f != Vec3A::ZERO && same_side(wi_world) {
+                // With shading normals, which directions count (and how
+                // much) is `shading`'s rule.
+                let side = shading.weight(wi_world);
+                if f != Vec3A::ZERO && side > 0.0 {
+                    let f = f * side;
                     let (shadow, t_max) = sp.ray_to(target);
                     *rays += 1;
                     if !scene.occluded(&shadow, t_max) {
@@ -481,18 +480,20 @@ pub fn radiance_traced(
             break;
         };
         let wi_world = frame.to_world(bs.wi);
-        if !same_side(wi_world) {
+        let side = shading.weight(wi_world);
+        if side <= 0.0 {
             break;
         }
+        let weight = bs.weight * side;
         tracer.event(
             depth,
             beta,
             PathEvent::Bounce {
-                weight: bs.weight,
+                weight,
                 pdf: bs.pdf,
             },
         );
-        beta *= bs.weight;
+        beta *= weight;
         specular = bs.specular;
         bsdf_pdf = bs.pdf;
         // Crossing a refracting surface enters or leaves its medium.
@@ -605,34 +606,152 @@ pub(crate) fn light_terms(p: Vec3A, light: LightSample) -> (Vec3A, Arriving, Opt
     }
 }
 
-/// The normal of the shading frame at `surface` for the BSDF `bsdf` seen from
-/// `wo` (pointing away from the surface): the shading normal made consistent
-/// with `wo` ([`consistent_normal`]), on the front side. Two-sided BSDFs
-/// (glass, glTF) take the front normal and tell the sides apart themselves;
+/// The shading frame's normal at a hit and the rule by which directions
+/// meet it ([`shading`]).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Shading {
+    /// The normal of the shading frame.
+    pub n: Vec3A,
+    rule: SideRule,
+}
+
+/// How a direction of light meets the shading normal.
+#[derive(Clone, Copy, Debug)]
+enum SideRule {
+    /// No shading normal: every direction counts.
+    None,
+    /// raylab's: a direction must be on the same side of the geometric
+    /// surface (`ng` taken on the shading normal's side) as of the shading
+    /// one, or light would leak through it.
+    SameSide(Vec3A),
+    /// Mitsuba's `normalmap` and `bumpmap`: a direction must be on the same
+    /// side of the interpolated normal (`ni`, on the side the BSDF was
+    /// turned to) as of the perturbed one, and, where `alpha2 ≥ 0`, the BSDF
+    /// is weighed by the shadowing term of the bump terminator (Estevez et
+    /// al. 2019, "A Microfacet-Based Shadowing Function to Solve the Bump
+    /// Terminator Problem") `2 / (1 + √(1 + α² tan²θ))`, `θ` the
+    /// direction's angle to `ni` and `α² = min(tan²θₙ / 8, 1)`, `θₙ` the
+    /// perturbed normal's.
+    Perturbed { ni: Vec3A, alpha2: f32 },
+}
+
+impl Shading {
+    /// What a BSDF value or sample towards the light direction `w` (world,
+    /// away from the surface) is multiplied by: 0 where the rule rejects it,
+    /// else 1 (or Mitsuba's shadowing term).
+    #[inline(always)]
+    pub fn weight(&self, w: Vec3A) -> f32 {
+        match self.rule {
+            SideRule::None => 1.0,
+            SideRule::SameSide(ng) => {
+                if (w.dot(ng) > 0.0) == (w.dot(self.n) > 0.0) {
+                    1.0
+                } else {
+                    0.0
+                }
+            }
+            SideRule::Perturbed { ni, alpha2 } => {
+                let c = w.dot(ni);
+                if c * w.dot(self.n) > 0.0 {
+                    if alpha2 >= 0.0 {
+                        2.0 / (1.0 + (1.0 + alpha2 * tan_theta_2(c)).sqrt())
+                    } else {
+                        1.0
+                    }
+                } else {
+                    0.0
+                }
+            }
+        }
+    }
+}
+
+/// `tan²θ` of a direction whose cosine to the normal is `c` (Mitsuba's
+/// `Frame::tan_theta_2`).
+#[inline]
+fn tan_theta_2(c: f32) -> f32 {
+    (1.0 - c * c).max(0.0) / (c * c)
+}
+
+/// The shading frame's normal at `surface` for the BSDF `bsdf` seen from
+/// `wo` (pointing away from the surface), and the rule for directions of
+/// light. raylab's materials: the shading normal made consistent with `wo`
+/// ([`consistent_normal`]), on the front side; two-sided BSDFs (glass,
+/// glTF) take the front normal and tell the sides apart themselves,
 /// one-sided ones face `wo` in two-sided scenes and reflect nothing from
-/// behind in the lab box.
+/// behind in the lab box. Mitsuba's materials (which have their own sides)
+/// follow Mitsuba's rules instead: [`mitsuba_shading`].
 #[inline(always)]
-pub(crate) fn shading_normal(
-    scene: &Scene,
-    surface: &SurfaceHit,
-    bsdf: &Material,
-    wo: Vec3A,
-) -> Vec3A {
+pub(crate) fn shading(scene: &Scene, surface: &SurfaceHit, bsdf: &Material, wo: Vec3A) -> Shading {
+    let material = &scene.materials()[surface.material as usize];
+    if material.has_own_sides() {
+        return mitsuba_shading(material, surface, bsdf, wo);
+    }
     let ng = surface.ng;
-    let n = if surface.ns != ng {
+    let mut n = if surface.ns != ng {
         consistent_normal(surface.ns, ng, wo)
     } else {
         ng
     };
     if scene.material_turns(surface.material) && !two_sided(bsdf) && ng.dot(wo) < 0.0 {
-        -n
+        n = -n;
+    }
+    let rule = if surface.ns != ng {
+        SideRule::SameSide(if n.dot(ng) < 0.0 { -ng } else { ng })
     } else {
-        n
+        SideRule::None
+    };
+    Shading { n, rule }
+}
+
+/// [`shading`] of a Mitsuba material, as Mitsuba 3.7.1 shades: the
+/// interpolated (or normal- or bump-mapped) normal as it is, no check
+/// against the geometric normal; `twosided` turns the frame where the
+/// viewer is behind the interpolated normal (Mitsuba mirrors the
+/// directions through the shading frame's tangent plane: the same as
+/// negating the interpolated normal and mirroring the perturbed one); a
+/// normal or bump map's normal has its tangential part negated where the
+/// viewer is on different sides of it and of the interpolated normal
+/// (`flip_invalid_normals`), and directions of light meet it by
+/// [`SideRule::Perturbed`].
+#[inline(never)]
+fn mitsuba_shading(
+    material: &SurfaceMaterial,
+    surface: &SurfaceHit,
+    bsdf: &Material,
+    wo: Vec3A,
+) -> Shading {
+    let perturb = match &material.kind {
+        MaterialKind::Textured(t) => t.perturb.as_ref(),
+        _ => None,
+    };
+    let (mut ni, mut n) = (surface.ni, surface.ns);
+    if material.two_sided() && !two_sided(bsdf) && ni.dot(wo) < 0.0 {
+        n -= 2.0 * ni.dot(n) * ni;
+        ni = -ni;
+    }
+    let Some(perturb) = perturb else {
+        return Shading {
+            n,
+            rule: SideRule::None,
+        };
+    };
+    if perturb.flip_invalid && ni.dot(wo) * n.dot(wo) <= 0.0 {
+        n = 2.0 * ni.dot(n) * ni - n;
+    }
+    let alpha2 = if perturb.shadowing {
+        (0.125 * tan_theta_2(ni.dot(n))).min(1.0)
+    } else {
+        -1.0
+    };
+    Shading {
+        n,
+        rule: SideRule::Perturbed { ni, alpha2 },
     }
 }
 
 /// The clear coat's normal on the side of the shading normal `n` (which
-/// [`shading_normal`] may have turned to the back).
+/// [`shading`] may have turned to the back).
 #[inline]
 pub(crate) fn coat_normal(surface: &SurfaceHit, n: Vec3A) -> Vec3A {
     if n.dot(surface.ns) < 0.0 {
@@ -697,4 +816,50 @@ fn two_sided(material: &Material) -> bool {
             | Material::MiThinDielectric(_)
             | Material::MiRoughDielectric(_)
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Mitsuba's rule for a perturbed normal: a direction on different sides
+    /// of the interpolated and the perturbed normal counts for nothing; one
+    /// along the interpolated normal is not shadowed; a grazing one under a
+    /// tilted normal is, by Estevez et al.'s term (here the perturbed
+    /// normal at 45°: α² = 1/8, and a direction at 60° from `ni`:
+    /// tan²θ = 3, so 2 / (1 + √(1 + 3/8))).
+    #[test]
+    fn perturbed_normals_weigh_directions_as_mitsuba() {
+        let ni = Vec3A::Z;
+        let n = Vec3A::new(1.0, 0.0, 1.0).normalize();
+        let alpha2 = (0.125 * tan_theta_2(ni.dot(n))).min(1.0);
+        assert!((alpha2 - 0.125).abs() < 1e-6);
+        let shading = Shading {
+            n,
+            rule: SideRule::Perturbed { ni, alpha2 },
+        };
+        assert_eq!(shading.weight(Vec3A::Z), 1.0);
+        // Above ni, below n.
+        assert_eq!(shading.weight(Vec3A::new(-1.0, 0.0, 0.5).normalize()), 0.0);
+        let w = Vec3A::new(3f32.sqrt() / 2.0, 0.0, 0.5);
+        let expect = 2.0 / (1.0 + (1.0f32 + 3.0 / 8.0).sqrt());
+        assert!(
+            (shading.weight(w) - expect).abs() < 1e-5,
+            "{}",
+            shading.weight(w)
+        );
+        // Without the shadowing term only the sides count.
+        let plain = Shading {
+            n,
+            rule: SideRule::Perturbed { ni, alpha2: -1.0 },
+        };
+        assert_eq!(plain.weight(w), 1.0);
+        // raylab's rule: the same side of the geometric and shading normal.
+        let raylab = Shading {
+            n,
+            rule: SideRule::SameSide(ni),
+        };
+        assert_eq!(raylab.weight(w), 1.0);
+        assert_eq!(raylab.weight(Vec3A::new(-1.0, 0.0, 0.5).normalize()), 0.0);
+    }
 }

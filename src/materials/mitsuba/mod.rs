@@ -51,6 +51,7 @@
 mod common;
 mod conductor;
 mod dielectric;
+mod param;
 mod plastic;
 mod rough_conductor;
 mod rough_dielectric;
@@ -62,6 +63,7 @@ mod thin_dielectric;
 pub use common::Tangent;
 pub use conductor::Conductor;
 pub use dielectric::SmoothDielectric;
+pub use param::Param;
 pub use plastic::{Plastic, specular_sampling_weight};
 pub use rough_conductor::RoughConductor;
 pub use rough_dielectric::RoughDielectric;

@@ -14,11 +14,14 @@ use super::color::Role;
 use super::props::{ColorProp, Props};
 use crate::materials::Material;
 use crate::materials::MicrofacetKind;
+use crate::materials::mitsuba::Param;
 use crate::materials::mitsuba::{
     Conductor, Plastic, RoughConductor, RoughDielectric, RoughPlastic, SmoothDielectric,
     ThinDielectric,
 };
-use crate::materials::surface::{AlphaMode, MaterialKind, SurfaceMaterial, TexturedBsdf};
+use crate::materials::surface::{
+    AlphaMode, MaterialKind, Perturb, PerturbMap, SurfaceMaterial, TexturedBsdf,
+};
 use crate::memory::Ledger;
 use crate::textures::{ColorSpace, Pattern, TextureStore, Wrap};
 
@@ -84,37 +87,6 @@ fn distribution(p: &Props) -> Result<MicrofacetKind, MitsubaError> {
     )
 }
 
-/// `alpha`, or `alpha_u` and `alpha_v` (Mitsuba's default 0.1), constants.
-fn alphas(p: &Props) -> Result<(f32, f32), MitsubaError> {
-    let check = |a: f32| match a.is_finite() && a >= 0.0 {
-        true => Ok(a),
-        false => Err(p.error("alpha must be a non-negative number")),
-    };
-    let constant = |name: &str| -> Result<Option<f32>, MitsubaError> {
-        match p.color_opt(name, Role::Unbounded)? {
-            None => Ok(None),
-            Some(ColorProp::Value(c)) => Ok(Some(check(c.x)?)),
-            Some(ColorProp::Texture(t)) => Err(p.error(format!(
-                "a textured '{name}' ({}) is not supported yet",
-                t.describe()
-            ))),
-        }
-    };
-    if p.has("alpha") && (p.has("alpha_u") || p.has("alpha_v")) {
-        return Err(p.error("give either alpha or alpha_u and alpha_v"));
-    }
-    if let Some(a) = constant("alpha")? {
-        return Ok((a, a));
-    }
-    let u = constant("alpha_u")?;
-    let v = constant("alpha_v")?;
-    match (u, v) {
-        (None, None) => Ok((0.1, 0.1)),
-        (Some(u), Some(v)) => Ok((u, v)),
-        _ => Err(p.error("alpha_u and alpha_v go together")),
-    }
-}
-
 /// A conductor's complex index: `eta` and `k`, or a `material` preset
 /// (Mitsuba's default `none`: a perfect mirror, η = 0, k = 1).
 fn conductor_ior(p: &Props) -> Result<(Vec3A, Vec3A), MitsubaError> {
@@ -153,6 +125,10 @@ fn to_uv(m: Mat4) -> Affine2 {
         translation: m.w_axis.truncate().truncate(),
     }
 }
+
+/// Constant microfacet widths `(alpha_u, alpha_v)` and the textures that
+/// vary them.
+type Widths = ((f32, f32), Vec<(Param, Pattern)>);
 
 /// Builds materials and their textures, each object once.
 pub(super) struct Materials<'l> {
@@ -276,10 +252,18 @@ impl<'l> Materials<'l> {
                     to_uv: to_uv(t.transform("to_uv")?),
                 }
             }
+            (Tag::Texture, "rawconstant") => {
+                // A float or a 3-D vector (Mitsuba's default: 1).
+                let v = match t.vector_opt("value")? {
+                    Some(v) => v,
+                    None => glam::Vec3::splat(t.float("value", 1.0)?),
+                };
+                Pattern::Constant(v.extend(1.0))
+            }
             _ => {
-                return Err(
-                    t.error("this texture is not supported yet (bitmap and checkerboard are)")
-                );
+                return Err(t.error(
+                    "this texture is not supported yet (bitmap, checkerboard, mesh_attribute and rawconstant are)",
+                ));
             }
         };
         t.finish()?;
@@ -300,6 +284,7 @@ impl<'l> Materials<'l> {
             // (Mitsuba's mean of a mesh attribute is its values' mean; the
             // mesh is not known here: the middle of the range.)
             Pattern::MeshAttribute => 0.5,
+            Pattern::Constant(c) => c.truncate().element_sum() / 3.0,
         }
     }
 
@@ -322,6 +307,45 @@ impl<'l> Materials<'l> {
         }
     }
 
+    /// `alpha`, or `alpha_u` and `alpha_v` (Mitsuba's default 0.1): the
+    /// constant widths, and the textures that vary them (a textured width's
+    /// constant is its texture's mean, for what shows a material's mean).
+    fn alphas(
+        &mut self,
+        p: &Props,
+        resolve: &dyn Fn(&str) -> Option<PathBuf>,
+    ) -> Result<Widths, MitsubaError> {
+        let mut params = Vec::new();
+        let mut width = |name: &str, at: &[Param]| -> Result<Option<f32>, MitsubaError> {
+            match p.color_opt(name, Role::Unbounded)? {
+                None => Ok(None),
+                Some(ColorProp::Value(c)) => match c.x.is_finite() && c.x >= 0.0 {
+                    true => Ok(Some(c.x)),
+                    false => Err(p.error(format!("'{name}' must be a non-negative number"))),
+                },
+                Some(ColorProp::Texture(t)) => {
+                    let pattern = self.pattern(&t, resolve)?;
+                    let mean = self.mean(&pattern);
+                    params.extend(at.iter().map(|&a| (a, pattern)));
+                    Ok(Some(mean))
+                }
+            }
+        };
+        if p.has("alpha") && (p.has("alpha_u") || p.has("alpha_v")) {
+            return Err(p.error("give either alpha or alpha_u and alpha_v"));
+        }
+        if let Some(a) = width("alpha", &[Param::AlphaU, Param::AlphaV])? {
+            return Ok(((a, a), params));
+        }
+        let u = width("alpha_u", &[Param::AlphaU])?;
+        let v = width("alpha_v", &[Param::AlphaV])?;
+        match (u, v) {
+            (None, None) => Ok(((0.1, 0.1), params)),
+            (Some(u), Some(v)) => Ok(((u, v), params)),
+            _ => Err(p.error("alpha_u and alpha_v go together")),
+        }
+    }
+
     /// A `<bsdf>` as a material (no emission yet).
     pub fn material(
         &mut self,
@@ -329,15 +353,9 @@ impl<'l> Materials<'l> {
         resolve: &dyn Fn(&str) -> Option<PathBuf>,
     ) -> Result<SurfaceMaterial, MitsubaError> {
         let p = Props::new(bsdf);
-        let mut textured = TexturedBsdf {
-            bsdf: Material::Diffuse {
-                reflectance: Vec3A::splat(0.5),
-            },
-            reflectance: None,
-            opacity: None,
-            two_sided: false,
-            blend: None,
-        };
+        let mut textured = TexturedBsdf::new(Material::Diffuse {
+            reflectance: Vec3A::splat(0.5),
+        });
         let rho;
         match bsdf.plugin.as_str() {
             "diffuse" => {
@@ -391,6 +409,44 @@ impl<'l> Materials<'l> {
                 p.finish()?;
                 return Ok(m);
             }
+            "normalmap" | "bumpmap" => {
+                let inner = p.children_of(Tag::Bsdf);
+                let [one] = inner.as_slice() else {
+                    return Err(p.error("needs exactly one nested BSDF"));
+                };
+                let map = if bsdf.plugin == "normalmap" {
+                    let t = p
+                        .child_opt("normalmap")
+                        .ok_or_else(|| p.error("needs a 'normalmap' texture"))?;
+                    PerturbMap::NormalMap(self.pattern(&t, resolve)?)
+                } else {
+                    // Mitsuba takes the one nested texture, whatever its name.
+                    let textures = p.children_of(Tag::Texture);
+                    let [t] = textures.as_slice() else {
+                        return Err(p.error("needs exactly one nested texture (the height)"));
+                    };
+                    PerturbMap::BumpMap {
+                        height: self.pattern(t, resolve)?,
+                        scale: p.float("scale", 1.0)?,
+                    }
+                };
+                let perturb = Perturb {
+                    map,
+                    flip_invalid: p.boolean("flip_invalid_normals", true)?,
+                    shadowing: p.boolean("use_shadowing_function", true)?,
+                };
+                let mut m = self.material(one, resolve)?;
+                match &mut m.kind {
+                    MaterialKind::Textured(t) if t.perturb.is_none() => t.perturb = Some(perturb),
+                    _ => {
+                        return Err(p.error(
+                            "a normal or bump map of a normal- or bump-mapped BSDF is not supported yet",
+                        ));
+                    }
+                }
+                p.finish()?;
+                return Ok(m);
+            }
             "mask" => {
                 let inner = p.children_of(Tag::Bsdf);
                 let [one] = inner.as_slice() else {
@@ -427,7 +483,8 @@ impl<'l> Materials<'l> {
                     Material::MiConductor(Conductor::new(eta, k, specular))
                 } else {
                     let kind = distribution(&p)?;
-                    let (au, av) = alphas(&p)?;
+                    let ((au, av), params) = self.alphas(&p, resolve)?;
+                    textured.params = params;
                     Material::MiRoughConductor(RoughConductor::new(kind, au, av, eta, k, specular))
                 };
                 p.ignore(&["sample_visible"]);
@@ -448,7 +505,8 @@ impl<'l> Materials<'l> {
                     "thindielectric" => Material::MiThinDielectric(ThinDielectric::new(eta, r, t)),
                     _ => {
                         let kind = distribution(&p)?;
-                        let (au, av) = alphas(&p)?;
+                        let ((au, av), params) = self.alphas(&p, resolve)?;
+                        textured.params = params;
                         p.ignore(&["sample_visible"]);
                         Material::MiRoughDielectric(RoughDielectric::new(kind, au, av, eta, r, t))
                     }

@@ -38,6 +38,7 @@ use crate::memory::Ledger;
 use crate::sampling::filter::PixelFilter;
 use crate::scene::SceneParts;
 use crate::scene::mesh::{Instance, MeshData};
+use crate::textures::{ColorSpace, Pattern, TextureRef};
 use bsdfs::Materials;
 use color::Role;
 use props::{ColorProp, Props};
@@ -116,17 +117,14 @@ impl Builder<'_, '_> {
         let mut m = match bsdf {
             Some(b) => self.materials.material(b, &resolve)?,
             None => {
-                let mut m = SurfaceMaterial::diffuse(Vec3A::splat(0.5));
+                // Mitsuba's default: diffuse, 0.5 grey, or black for a shape
+                // that emits (`Shape::Shape` in Mitsuba 3.7.1).
+                let rho = Vec3A::splat(if emitter.is_some() { 0.0 } else { 0.5 });
+                let mut m = SurfaceMaterial::diffuse(rho);
                 m.kind = crate::materials::surface::MaterialKind::Textured(Box::new(
-                    crate::materials::surface::TexturedBsdf {
-                        bsdf: crate::materials::Material::Diffuse {
-                            reflectance: Vec3A::splat(0.5),
-                        },
-                        reflectance: None,
-                        opacity: None,
-                        two_sided: false,
-                        blend: None,
-                    },
+                    crate::materials::surface::TexturedBsdf::new(
+                        crate::materials::Material::Diffuse { reflectance: rho },
+                    ),
                 ));
                 m
             }
@@ -136,7 +134,34 @@ impl Builder<'_, '_> {
             if e.plugin != "area" {
                 return Err(p.error("only 'area' emitters can be attached to a shape"));
             }
-            m.emission = p.constant_color("radiance", Role::Emission, Vec3A::ONE)?;
+            match p.color_opt("radiance", Role::Emission)? {
+                None => m.emission = Vec3A::ONE,
+                Some(ColorProp::Value(c)) => m.emission = c,
+                Some(ColorProp::Texture(t)) => {
+                    // An sRGB image (Mitsuba's `bitmap` as radiance), bilinear.
+                    let pattern = self.materials.pattern(&t, &resolve)?;
+                    let tex = match pattern {
+                        Pattern::Image {
+                            image,
+                            wrap,
+                            nearest: false,
+                            space: ColorSpace::Srgb,
+                            to_uv,
+                        } if to_uv == glam::Affine2::IDENTITY => TextureRef {
+                            wrap_s: wrap,
+                            wrap_t: wrap,
+                            ..TextureRef::new(image)
+                        },
+                        _ => {
+                            return Err(Props::new(&t).error(
+                                "an area light's radiance texture must be a bilinear sRGB bitmap without to_uv (others are not supported yet)",
+                            ));
+                        }
+                    };
+                    m.emission = Vec3A::ONE;
+                    m.emission_texture = Some(tex);
+                }
+            }
             m.emits_both_sides = false;
             p.finish()?;
         }
@@ -547,9 +572,11 @@ fn sensor(sensor: &Object, settings: &mut ShotSettings) -> Result<SceneCamera, M
         }
     };
     let _ = sx;
+    // (A pinhole's `focus_distance` is read by Mitsuba and has no effect.)
     p.ignore(&[
         "near_clip",
         "far_clip",
+        "focus_distance",
         "shutter_open",
         "shutter_close",
         "srf",
