@@ -68,6 +68,13 @@ pub enum Material {
     MiPlastic(mitsuba::Plastic),
     /// Mitsuba 3's `roughplastic` (one-sided).
     MiRoughPlastic(mitsuba::RoughPlastic),
+    /// Mitsuba 3's `principled` (Burley's Disney BSDF): one-sided without
+    /// transmission, an interface (`+z` outside: never flip its normal)
+    /// with it.
+    MiPrincipled(mitsuba::Principled),
+    /// Mitsuba 3's `principledthin` (a thin sheet, the same from both
+    /// sides).
+    MiPrincipledThin(mitsuba::PrincipledThin),
 }
 
 /// A material seen from one direction `wo` ([`Material::at`]): its
@@ -167,7 +174,22 @@ impl Material {
             Material::Pbr(p) => p.orient_anisotropy(frame, t, b),
             Material::MiRoughConductor(c) => c.orient_anisotropy(frame, t),
             Material::MiRoughDielectric(d) => d.orient_anisotropy(frame, t),
+            Material::MiPrincipled(p) => p.orient_anisotropy(frame, t),
+            Material::MiPrincipledThin(p) => p.orient_anisotropy(frame, t),
             _ => {}
+        }
+    }
+
+    /// Sets a scalar parameter of Mitsuba's principled BSDFs (a textured
+    /// value at a hit); false, and nothing changed, for other materials or
+    /// a parameter the BSDF does not have. Set `anisotropic` before
+    /// [`Material::orient_anisotropy`].
+    #[inline]
+    pub fn set_principled(&mut self, p: mitsuba::PrincipledParam, v: f32) -> bool {
+        match self {
+            Material::MiPrincipled(m) => m.set(p, v),
+            Material::MiPrincipledThin(m) => m.set(p, v),
+            _ => false,
         }
     }
 
@@ -232,6 +254,8 @@ impl Material {
                 | Material::MiRoughDielectric(_)
                 | Material::MiPlastic(_)
                 | Material::MiRoughPlastic(_)
+                | Material::MiPrincipled(_)
+                | Material::MiPrincipledThin(_)
         )
     }
 
@@ -251,7 +275,9 @@ impl Material {
             Material::MiRoughConductor(_)
             | Material::MiRoughDielectric(_)
             | Material::MiPlastic(_)
-            | Material::MiRoughPlastic(_) => false,
+            | Material::MiRoughPlastic(_)
+            | Material::MiPrincipled(_)
+            | Material::MiPrincipledThin(_) => false,
         }
     }
 
@@ -277,6 +303,8 @@ impl Material {
             Material::MiRoughDielectric(ref d) => d.albedo(cos),
             Material::MiPlastic(ref p) => p.albedo(cos),
             Material::MiRoughPlastic(ref p) => p.albedo(cos),
+            Material::MiPrincipled(ref p) => p.albedo(cos),
+            Material::MiPrincipledThin(ref p) => p.albedo(cos),
         };
         finite_or_zero(a).clamp(Vec3A::ZERO, Vec3A::ONE)
     }
@@ -293,6 +321,8 @@ impl Material {
             Material::Pbr(ref p) => {
                 (p.transmission > 0.0 && p.metallic < 1.0) || p.transmits_diffusely()
             }
+            Material::MiPrincipled(ref p) => p.transmits(),
+            Material::MiPrincipledThin(ref p) => p.transmits(),
             _ => false,
         }
     }
@@ -353,6 +383,8 @@ impl Material {
             Material::MiRoughDielectric(ref d) => d.guide_lobes(wo),
             Material::MiPlastic(ref p) => p.guide_lobes(wo),
             Material::MiRoughPlastic(ref p) => p.guide_lobes(wo),
+            Material::MiPrincipled(ref p) => p.guide_lobes(wo),
+            Material::MiPrincipledThin(ref p) => p.guide_lobes(wo),
         }
     }
 
@@ -391,6 +423,8 @@ impl Material {
             Material::MiRoughDielectric(ref d) => d.eval(wo, wi),
             Material::MiPlastic(ref p) => p.eval(wo, wi),
             Material::MiRoughPlastic(ref p) => p.eval(wo, wi),
+            Material::MiPrincipled(ref p) => p.eval(wo, wi),
+            Material::MiPrincipledThin(ref p) => p.eval(wo, wi),
         }
     }
 
@@ -441,6 +475,8 @@ impl Material {
             Material::MiRoughDielectric(ref d) => d.pdf(wo, wi),
             Material::MiPlastic(ref p) => p.pdf(wo, wi),
             Material::MiRoughPlastic(ref p) => p.pdf(wo, wi),
+            Material::MiPrincipled(ref p) => p.pdf(wo, wi),
+            Material::MiPrincipledThin(ref p) => p.pdf(wo, wi),
         }
     }
 
@@ -533,6 +569,8 @@ impl Material {
             Material::MiRoughDielectric(ref d) => d.sample(wo, u_lobe, u),
             Material::MiPlastic(ref p) => p.sample(wo, u_lobe, u),
             Material::MiRoughPlastic(ref p) => p.sample(wo, u_lobe, u),
+            Material::MiPrincipled(ref p) => p.sample(wo, u_lobe, u),
+            Material::MiPrincipledThin(ref p) => p.sample(wo, u_lobe, u),
         }
     }
 }
