@@ -144,13 +144,13 @@ def mitsuba_reference(python, scene, integrator, spp, cache):
 def scenes(data, only):
     root = os.path.join(data, "tests", "scenes")
     for group in sorted(os.listdir(root)):
-        if group == "participating_media" or (only and only not in group):
+        if group == "participating_media":
             continue
         folder = os.path.join(root, group)
         if not os.path.isdir(folder):
             continue
         for name in sorted(os.listdir(folder)):
-            if not name.endswith(".xml"):
+            if not name.endswith(".xml") or (only and only not in f"{group}/{name}"):
                 continue
             stem = name[:-4]
             base, integrator = stem.rsplit("_", 1)
@@ -168,7 +168,7 @@ def main():
     ap.add_argument("--cache", default="mitsuba-suite-cache", help="where --scenes' references go")
     ap.add_argument("--ref-spp", type=int, default=16384, help="samples per pixel of --scenes' references")
     ap.add_argument("--raylab", default="target/release/raylab")
-    ap.add_argument("--only", help="only groups whose name contains this")
+    ap.add_argument("--only", help="only scenes whose group/file name contains this")
     ap.add_argument("--out", default="mitsuba-suite-out", help="where renders go")
     ap.add_argument("--budget", type=int, default=2_000_000, help="samples per image")
     args = ap.parse_args()

@@ -70,6 +70,13 @@ pub enum Material {
     MiPlastic(mitsuba::Plastic),
     /// Mitsuba 3's `roughplastic` (one-sided).
     MiRoughPlastic(mitsuba::RoughPlastic),
+    /// Mitsuba 3's `principled` (Burley's Disney BSDF): one-sided without
+    /// transmission, an interface (`+z` outside: never flip its normal)
+    /// with it.
+    MiPrincipled(mitsuba::Principled),
+    /// Mitsuba 3's `principledthin` (a thin sheet, the same from both
+    /// sides).
+    MiPrincipledThin(mitsuba::PrincipledThin),
 }
 
 /// A material seen from one direction `wo` ([`Material::at`]): its
@@ -169,28 +176,43 @@ impl Material {
             Material::Pbr(p) => p.orient_anisotropy(frame, t, b),
             Material::MiRoughConductor(c) => c.orient_anisotropy(frame, t),
             Material::MiRoughDielectric(d) => d.orient_anisotropy(frame, t),
+            Material::MiPrincipled(p) => p.orient_anisotropy(frame, t),
+            Material::MiPrincipledThin(p) => p.orient_anisotropy(frame, t),
             _ => {}
         }
     }
 
     /// Whether the BSDF's microfacets are anisotropic (a Mitsuba rough
-    /// conductor or dielectric with `alpha_u ≠ alpha_v`; the glTF BSDF's
-    /// anisotropy is the material's, see
+    /// conductor or dielectric with `alpha_u ≠ alpha_v`, a principled BSDF
+    /// with `anisotropic > 0`; the glTF BSDF's anisotropy is the
+    /// material's, see
     /// [`crate::materials::surface::SurfaceMaterial::has_anisotropy`]).
     #[inline]
     pub fn is_anisotropic(&self) -> bool {
         match self {
             Material::MiRoughConductor(c) => !c.distribution.is_isotropic(),
             Material::MiRoughDielectric(d) => !d.distribution.is_isotropic(),
+            Material::MiPrincipled(m) => m.anisotropic > 0.0,
+            Material::MiPrincipledThin(m) => m.anisotropic > 0.0,
             _ => false,
         }
     }
 
     /// Sets a Mitsuba BSDF's scalar parameter `param` to `value` (a texture's
     /// value at a hit); nothing for a material without it. A microfacet
-    /// width is clamped as [`MicrofacetDistribution::new`] clamps it.
+    /// width is clamped as [`MicrofacetDistribution::new`] clamps it. Set
+    /// a principled BSDF's `anisotropic` before
+    /// [`Material::orient_anisotropy`].
     #[inline]
     pub fn set_param(&mut self, param: mitsuba::Param, value: f32) {
+        if let mitsuba::Param::Principled(p) = param {
+            match self {
+                Material::MiPrincipled(m) => m.set(p, value),
+                Material::MiPrincipledThin(m) => m.set(p, value),
+                _ => false,
+            };
+            return;
+        }
         let distribution = match self {
             Material::MiRoughConductor(c) => &mut c.distribution,
             Material::MiRoughDielectric(d) => &mut d.distribution,
@@ -200,6 +222,7 @@ impl Material {
         match param {
             mitsuba::Param::AlphaU => u = value,
             mitsuba::Param::AlphaV => v = value,
+            mitsuba::Param::Principled(_) => {}
         }
         *distribution = MicrofacetDistribution::new(distribution.kind, u, v);
     }
@@ -265,6 +288,8 @@ impl Material {
                 | Material::MiRoughDielectric(_)
                 | Material::MiPlastic(_)
                 | Material::MiRoughPlastic(_)
+                | Material::MiPrincipled(_)
+                | Material::MiPrincipledThin(_)
         )
     }
 
@@ -284,7 +309,9 @@ impl Material {
             Material::MiRoughConductor(_)
             | Material::MiRoughDielectric(_)
             | Material::MiPlastic(_)
-            | Material::MiRoughPlastic(_) => false,
+            | Material::MiRoughPlastic(_)
+            | Material::MiPrincipled(_)
+            | Material::MiPrincipledThin(_) => false,
         }
     }
 
@@ -310,6 +337,8 @@ impl Material {
             Material::MiRoughDielectric(ref d) => d.albedo(cos),
             Material::MiPlastic(ref p) => p.albedo(cos),
             Material::MiRoughPlastic(ref p) => p.albedo(cos),
+            Material::MiPrincipled(ref p) => p.albedo(cos),
+            Material::MiPrincipledThin(ref p) => p.albedo(cos),
         };
         finite_or_zero(a).clamp(Vec3A::ZERO, Vec3A::ONE)
     }
@@ -326,6 +355,8 @@ impl Material {
             Material::Pbr(ref p) => {
                 (p.transmission > 0.0 && p.metallic < 1.0) || p.transmits_diffusely()
             }
+            Material::MiPrincipled(ref p) => p.transmits(),
+            Material::MiPrincipledThin(ref p) => p.transmits(),
             _ => false,
         }
     }
@@ -386,6 +417,8 @@ impl Material {
             Material::MiRoughDielectric(ref d) => d.guide_lobes(wo),
             Material::MiPlastic(ref p) => p.guide_lobes(wo),
             Material::MiRoughPlastic(ref p) => p.guide_lobes(wo),
+            Material::MiPrincipled(ref p) => p.guide_lobes(wo),
+            Material::MiPrincipledThin(ref p) => p.guide_lobes(wo),
         }
     }
 
@@ -424,6 +457,8 @@ impl Material {
             Material::MiRoughDielectric(ref d) => d.eval(wo, wi),
             Material::MiPlastic(ref p) => p.eval(wo, wi),
             Material::MiRoughPlastic(ref p) => p.eval(wo, wi),
+            Material::MiPrincipled(ref p) => p.eval(wo, wi),
+            Material::MiPrincipledThin(ref p) => p.eval(wo, wi),
         }
     }
 
@@ -474,6 +509,8 @@ impl Material {
             Material::MiRoughDielectric(ref d) => d.pdf(wo, wi),
             Material::MiPlastic(ref p) => p.pdf(wo, wi),
             Material::MiRoughPlastic(ref p) => p.pdf(wo, wi),
+            Material::MiPrincipled(ref p) => p.pdf(wo, wi),
+            Material::MiPrincipledThin(ref p) => p.pdf(wo, wi),
         }
     }
 
@@ -566,6 +603,8 @@ impl Material {
             Material::MiRoughDielectric(ref d) => d.sample(wo, u_lobe, u),
             Material::MiPlastic(ref p) => p.sample(wo, u_lobe, u),
             Material::MiRoughPlastic(ref p) => p.sample(wo, u_lobe, u),
+            Material::MiPrincipled(ref p) => p.sample(wo, u_lobe, u),
+            Material::MiPrincipledThin(ref p) => p.sample(wo, u_lobe, u),
         }
     }
 }

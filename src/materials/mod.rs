@@ -26,7 +26,9 @@
 //!   like [`Material::Diffuse`] (zero unless `wo.z > 0` and `wi.z > 0`);
 //!   [`Material::MiDielectric`], [`Material::MiThinDielectric`] and
 //!   [`Material::MiRoughDielectric`] are interfaces (`+z` outside) and must
-//!   not have their normal flipped.
+//!   not have their normal flipped; [`Material::MiPrincipled`] is one-sided
+//!   without transmission and such an interface with it, and
+//!   [`Material::MiPrincipledThin`] a sheet, the same from both sides.
 //!
 //! # Estimator
 //!
@@ -78,8 +80,8 @@
 //!   ([`MicrofacetDistribution`]: anisotropic, separable masking, Mitsuba's
 //!   visible-normal sampling);
 //! * [`mitsuba`] (`mitsuba/`): Mitsuba 3's `conductor`, `roughconductor`,
-//!   `dielectric`, `thindielectric`, `roughdielectric`, `plastic` and
-//!   `roughplastic`, a file each (Mitsuba's `diffuse` is
+//!   `dielectric`, `thindielectric`, `roughdielectric`, `plastic`,
+//!   `roughplastic`, `principled` and `principledthin`, a file each (Mitsuba's `diffuse` is
 //!   [`Material::Diffuse`]);
 //! * `fresnel.rs`: the exact Fresnel terms, [`fresnel_dielectric`] and
 //!   [`fresnel_conductor`], and Mitsuba's [`fresnel_mitsuba`] and

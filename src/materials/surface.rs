@@ -905,7 +905,8 @@ fn textured_bsdf(t: &TexturedBsdf, attrs: &HitAttributes, textures: &TextureStor
 }
 
 /// `bsdf` with its reflectance replaced by `rho` (the diffuse reflectance
-/// of a Lambertian surface or a plastic, the specular one of a mirror);
+/// of a Lambertian surface or a plastic, the specular one of a mirror, the
+/// base colour of a principled BSDF);
 /// other BSDFs are returned unchanged.
 #[inline]
 pub fn with_reflectance(bsdf: Material, rho: Vec3A) -> Material {
@@ -919,6 +920,14 @@ pub fn with_reflectance(bsdf: Material, rho: Vec3A) -> Material {
         Material::MiRoughPlastic(mut m) => {
             m.diffuse_reflectance = rho;
             Material::MiRoughPlastic(m)
+        }
+        Material::MiPrincipled(mut m) => {
+            m.base_color = rho;
+            Material::MiPrincipled(m)
+        }
+        Material::MiPrincipledThin(mut m) => {
+            m.base_color = rho;
+            Material::MiPrincipledThin(m)
         }
         other => other,
     }

@@ -803,8 +803,8 @@ pub fn power_heuristic(a: f32, b: f32) -> f32 {
 }
 
 /// Whether a BSDF tells the two sides of a surface apart itself (glass,
-/// Mitsuba's dielectrics, the glTF material, whose transmission refracts into
-/// the inside); the others are one-sided and face the side their normal
+/// Mitsuba's dielectrics and principled BSDFs that transmit, the glTF
+/// material, whose transmission refracts into the inside); the others are one-sided and face the side their normal
 /// points to.
 #[inline]
 fn two_sided(material: &Material) -> bool {
@@ -815,7 +815,8 @@ fn two_sided(material: &Material) -> bool {
             | Material::MiDielectric(_)
             | Material::MiThinDielectric(_)
             | Material::MiRoughDielectric(_)
-    )
+            | Material::MiPrincipledThin(_)
+    ) || matches!(material, Material::MiPrincipled(p) if p.transmits())
 }
 
 #[cfg(test)]

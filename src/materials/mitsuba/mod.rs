@@ -9,7 +9,13 @@
 //! * `rough_dielectric.rs`: `roughdielectric`, [`RoughDielectric`];
 //! * `plastic.rs`: `plastic`, [`Plastic`];
 //! * `rough_plastic.rs`: `roughplastic`, [`RoughPlastic`], with its table of
-//!   the rough interface's transmittance ([`RoughPlasticTable`]).
+//!   the rough interface's transmittance ([`RoughPlasticTable`]);
+//! * `principled.rs`: `principled`, [`Principled`] (Burley's Disney BSDF),
+//!   and the names of the principled BSDFs' scalar parameters
+//!   ([`PrincipledParam`]);
+//! * `principled_thin.rs`: `principledthin`, [`PrincipledThin`];
+//! * `principled_common.rs`: what the two share (Mitsuba's
+//!   `principledhelpers.h`).
 //!
 //! Mitsuba's `diffuse` is [`Material::Diffuse`](super::Material::Diffuse)
 //! (the same one-sided Lambertian). The microfacet model they share is
@@ -21,7 +27,10 @@
 //! Mitsuba's `wo`; Mitsuba's `eval` already includes the cosine, as raylab's
 //! does. Mitsuba's conductors and plastics are one-sided (zero unless both
 //! directions are above the surface); its dielectrics are interfaces whose
-//! `+z` side is the outside (`ext_ior`), seen from either side.
+//! `+z` side is the outside (`ext_ior`), seen from either side. Its
+//! `principled` is one-sided without transmission and an interface (`+z`
+//! outside) with it; its `principledthin` is a sheet, the same from both
+//! sides.
 //!
 //! Radiance mode: Mitsuba scales light *transmitted* through a dielectric by
 //! `1/η²`, `η` the relative index across the interface in the direction the
@@ -41,7 +50,10 @@
 //! Mitsuba computes from the textures' *means*, is a parameter of its own
 //! for that reason ([`specular_sampling_weight`]). The rough plastic's table
 //! depends only on the distribution, alpha and the index, which Mitsuba
-//! does not let vary.
+//! does not let vary. The principled BSDFs' scalar parameters are public
+//! fields, also settable by name ([`PrincipledParam`],
+//! [`Material::set_param`](super::Material::set_param)); their
+//! base colour is the reflectance a texture replaces.
 //!
 //! Every `eta` here is Mitsuba's relative index `int_ior / ext_ior`; note
 //! that Mitsuba's default `ext_ior` is air, 1.000277, not 1. Anisotropic
@@ -53,6 +65,9 @@ mod conductor;
 mod dielectric;
 mod param;
 mod plastic;
+mod principled;
+mod principled_common;
+mod principled_thin;
 mod rough_conductor;
 mod rough_dielectric;
 mod rough_plastic;
@@ -65,6 +80,8 @@ pub use conductor::Conductor;
 pub use dielectric::SmoothDielectric;
 pub use param::Param;
 pub use plastic::{Plastic, specular_sampling_weight};
+pub use principled::{Principled, PrincipledParam};
+pub use principled_thin::PrincipledThin;
 pub use rough_conductor::RoughConductor;
 pub use rough_dielectric::RoughDielectric;
 pub use rough_plastic::{RoughPlastic, RoughPlasticTable};

@@ -11,4 +11,6 @@ pub enum Param {
     AlphaU,
     /// The microfacet width along the bitangent (`alpha_v`).
     AlphaV,
+    /// A scalar parameter of `principled` or `principledthin`.
+    Principled(super::PrincipledParam),
 }

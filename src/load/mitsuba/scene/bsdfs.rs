@@ -14,11 +14,11 @@ use super::color::Role;
 use super::props::{ColorProp, Props};
 use crate::materials::Material;
 use crate::materials::MicrofacetKind;
-use crate::materials::mitsuba::Param;
 use crate::materials::mitsuba::{
-    Conductor, Plastic, RoughConductor, RoughDielectric, RoughPlastic, SmoothDielectric,
-    ThinDielectric,
+    Conductor, Plastic, Principled, PrincipledThin, RoughConductor, RoughDielectric, RoughPlastic,
+    SmoothDielectric, ThinDielectric,
 };
+use crate::materials::mitsuba::{Param, PrincipledParam};
 use crate::materials::surface::{
     AlphaMode, MaterialKind, Perturb, PerturbMap, SurfaceMaterial, TexturedBsdf,
 };
@@ -85,6 +85,112 @@ fn distribution(p: &Props) -> Result<MicrofacetKind, MitsubaError> {
             _ => MicrofacetKind::Beckmann,
         },
     )
+}
+
+/// Textures of scalar parameters met while reading a BSDF: the
+/// parameter's name and the texture object.
+type ScalarTextures = Vec<(&'static str, Arc<Object>)>;
+
+/// A scalar parameter that Mitsuba lets be a texture (its `eval_1`): a
+/// float, or a grey colour; `default` if not given. A texture is kept in
+/// `textures` for the caller (which varies the parameter by it), and
+/// `default` stands for it here.
+fn scalar(
+    p: &Props,
+    name: &'static str,
+    default: f32,
+    textures: &mut ScalarTextures,
+) -> Result<f32, MitsubaError> {
+    match p.color_opt(name, Role::Unbounded)? {
+        None => Ok(default),
+        Some(ColorProp::Value(c)) if c.x == c.y && c.y == c.z => Ok(c.x),
+        Some(ColorProp::Value(_)) => Err(p.error(format!(
+            "'{name}' is a scalar: give a <float> (raylab does not take a coloured one)"
+        ))),
+        Some(ColorProp::Texture(t)) => {
+            textures.push((name, t));
+            Ok(default)
+        }
+    }
+}
+
+/// Mitsuba's `principled`, all constants but `base_color` (whose texture
+/// the caller keeps as the reflectance).
+fn principled(
+    p: &Props,
+    base_color: Vec3A,
+    t: &mut ScalarTextures,
+) -> Result<Principled, MitsubaError> {
+    let mut m = Principled {
+        base_color,
+        roughness: scalar(p, "roughness", 0.5, t)?,
+        anisotropic: scalar(p, "anisotropic", 0.0, t)?,
+        metallic: scalar(p, "metallic", 0.0, t)?,
+        spec_trans: scalar(p, "spec_trans", 0.0, t)?,
+        spec_tint: scalar(p, "spec_tint", 0.0, t)?,
+        sheen: scalar(p, "sheen", 0.0, t)?,
+        sheen_tint: scalar(p, "sheen_tint", 0.0, t)?,
+        flatness: scalar(p, "flatness", 0.0, t)?,
+        clearcoat: scalar(p, "clearcoat", 0.0, t)?,
+        clearcoat_gloss: scalar(p, "clearcoat_gloss", 0.0, t)?,
+        main_specular_sampling_rate: p.float("main_specular_sampling_rate", 1.0)?,
+        clearcoat_sampling_rate: p.float("clearcoat_sampling_rate", 1.0)?,
+        diffuse_reflectance_sampling_rate: p.float("diffuse_reflectance_sampling_rate", 1.0)?,
+        ..Principled::default()
+    };
+    // Mitsuba keeps the index away from 1 (no refraction) when the
+    // transmission lobe is on: `spec_trans` given and not the float 0 (a
+    // texture turns it on whatever its values).
+    let transmits = m.spec_trans != 0.0 || t.iter().any(|(n, _)| *n == "spec_trans");
+    if p.has("eta") && p.has("specular") {
+        return Err(p.error("give either eta or specular, not both"));
+    }
+    m.eta = if p.has("eta") {
+        let eta = p.float("eta", 1.5)?;
+        if transmits && eta == 1.0 { 1.001 } else { eta }
+    } else {
+        let specular = p.float("specular", 0.5)?;
+        let specular = if transmits && specular == 0.0 {
+            1e-3
+        } else {
+            specular
+        };
+        Principled::eta_of_specular(specular)
+    };
+    if !(m.eta.is_finite() && m.eta > 0.0) {
+        return Err(p.error("the index of refraction (eta, or from specular) must be positive"));
+    }
+    Ok(m)
+}
+
+/// Mitsuba's `principledthin`, all constants but `base_color`.
+fn principled_thin(
+    p: &Props,
+    base_color: Vec3A,
+    t: &mut ScalarTextures,
+) -> Result<PrincipledThin, MitsubaError> {
+    let m = PrincipledThin {
+        base_color,
+        roughness: scalar(p, "roughness", 0.5, t)?,
+        anisotropic: scalar(p, "anisotropic", 0.0, t)?,
+        spec_trans: scalar(p, "spec_trans", 0.0, t)?,
+        eta: scalar(p, "eta", 1.5, t)?,
+        spec_tint: scalar(p, "spec_tint", 0.0, t)?,
+        sheen: scalar(p, "sheen", 0.0, t)?,
+        sheen_tint: scalar(p, "sheen_tint", 0.0, t)?,
+        flatness: scalar(p, "flatness", 0.0, t)?,
+        diff_trans: scalar(p, "diff_trans", 0.0, t)?,
+        specular_reflectance_sampling_rate: p.float("specular_reflectance_sampling_rate", 1.0)?,
+        specular_transmittance_sampling_rate: p
+            .float("specular_transmittance_sampling_rate", 1.0)?,
+        diffuse_reflectance_sampling_rate: p.float("diffuse_reflectance_sampling_rate", 1.0)?,
+        diffuse_transmittance_sampling_rate: p.float("diffuse_transmittance_sampling_rate", 1.0)?,
+        ..PrincipledThin::default()
+    };
+    if !(m.eta.is_finite() && m.eta > 0.0) {
+        return Err(p.error("eta must be positive"));
+    }
+    Ok(m)
 }
 
 /// A conductor's complex index: `eta` and `k`, or a `material` preset
@@ -553,6 +659,28 @@ impl<'l> Materials<'l> {
                 textured.reflectance = pattern;
                 rho = diffuse;
             }
+            "principled" | "principledthin" => {
+                let (base, pattern) = self.color(&p, "base_color", Vec3A::splat(0.5), resolve)?;
+                let mut scalars = ScalarTextures::new();
+                textured.bsdf = if bsdf.plugin == "principled" {
+                    Material::MiPrincipled(principled(&p, base, &mut scalars)?)
+                } else {
+                    Material::MiPrincipledThin(principled_thin(&p, base, &mut scalars)?)
+                };
+                for (name, object) in scalars {
+                    let param = PrincipledParam::ALL
+                        .into_iter()
+                        .find(|q| q.name() == name)
+                        .ok_or_else(|| p.error(format!("'{name}' cannot be textured")))?;
+                    let pattern = self.pattern(&object, resolve)?;
+                    // The texture's mean stands for it where one value does.
+                    let mean = self.mean(&pattern);
+                    textured.bsdf.set_param(Param::Principled(param), mean);
+                    textured.params.push((Param::Principled(param), pattern));
+                }
+                textured.reflectance = pattern;
+                rho = base;
+            }
             "null" => {
                 textured.bsdf = Material::Dielectric { ior: 1.0 };
                 rho = Vec3A::ZERO;
@@ -570,5 +698,189 @@ impl<'l> Materials<'l> {
         m.name = bsdf.id.clone().unwrap_or_default();
         m.kind = MaterialKind::Textured(Box::new(textured));
         Ok(m)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::materials::mitsuba::PrincipledParam;
+    use std::path::Path;
+
+    /// The material of the `<bsdf>` in `body` (a scene's only child), or
+    /// the one-line error.
+    fn bsdf(body: &str) -> Result<Material, String> {
+        let text = format!("<scene version=\"3.0.0\">{body}</scene>");
+        let tree = crate::load::mitsuba::read_str(&text, Path::new("/virtual/scene.xml"), &[])
+            .map_err(|e| e.to_string())?;
+        let ledger = Ledger::unlimited();
+        let mut materials = Materials::new(&ledger, "test".into());
+        let object = tree.root.children[0].object.clone();
+        let m = materials
+            .material(&object, &|_| None)
+            .map_err(|e| e.to_string())?;
+        match m.kind {
+            MaterialKind::Textured(t) => Ok(t.bsdf),
+            _ => Err("not a textured material".into()),
+        }
+    }
+
+    #[test]
+    fn principled_reads_every_parameter_with_mitsubas_defaults() {
+        let Ok(Material::MiPrincipled(d)) = bsdf(r#"<bsdf type="principled"/>"#) else {
+            panic!()
+        };
+        assert_eq!(d, Principled::default());
+        assert!((d.eta - 1.5).abs() < 1e-6);
+        let Ok(Material::MiPrincipled(m)) = bsdf(
+            r#"<bsdf type="principled">
+                <rgb name="base_color" value="0.8, 0.4, 0.2"/>
+                <float name="roughness" value="0.3"/>
+                <float name="anisotropic" value="0.5"/>
+                <float name="metallic" value="0.2"/>
+                <float name="spec_trans" value="0.4"/>
+                <float name="eta" value="1.33"/>
+                <float name="spec_tint" value="0.1"/>
+                <float name="sheen" value="0.6"/>
+                <float name="sheen_tint" value="0.7"/>
+                <float name="flatness" value="0.8"/>
+                <float name="clearcoat" value="0.9"/>
+                <float name="clearcoat_gloss" value="0.35"/>
+                <float name="main_specular_sampling_rate" value="0.5"/>
+                <float name="clearcoat_sampling_rate" value="2"/>
+                <float name="diffuse_reflectance_sampling_rate" value="0.7"/>
+            </bsdf>"#,
+        ) else {
+            panic!()
+        };
+        let want = Principled {
+            base_color: Vec3A::new(0.8, 0.4, 0.2),
+            roughness: 0.3,
+            anisotropic: 0.5,
+            metallic: 0.2,
+            spec_trans: 0.4,
+            eta: 1.33,
+            spec_tint: 0.1,
+            sheen: 0.6,
+            sheen_tint: 0.7,
+            flatness: 0.8,
+            clearcoat: 0.9,
+            clearcoat_gloss: 0.35,
+            main_specular_sampling_rate: 0.5,
+            clearcoat_sampling_rate: 2.0,
+            diffuse_reflectance_sampling_rate: 0.7,
+            ..Principled::default()
+        };
+        assert_eq!(m, want);
+        // specular sets eta; with transmission on, Mitsuba keeps the index
+        // off 1 (specular 0 is 1e-3, eta 1 is 1.001).
+        let eta = |body: &str| match bsdf(body) {
+            Ok(Material::MiPrincipled(m)) => m.eta,
+            other => panic!("{other:?}"),
+        };
+        let spec = r#"<bsdf type="principled"><float name="specular" value="0.7"/></bsdf>"#;
+        assert_eq!(eta(spec), Principled::eta_of_specular(0.7));
+        let zero = r#"<bsdf type="principled"><float name="specular" value="0"/></bsdf>"#;
+        assert_eq!(eta(zero), 1.0);
+        let zero_t = r#"<bsdf type="principled"><float name="specular" value="0"/><float name="spec_trans" value="0.5"/></bsdf>"#;
+        assert_eq!(eta(zero_t), Principled::eta_of_specular(1e-3));
+        let one_t = r#"<bsdf type="principled"><float name="eta" value="1"/><float name="spec_trans" value="0.5"/></bsdf>"#;
+        assert_eq!(eta(one_t), 1.001);
+    }
+
+    #[test]
+    fn principled_thin_reads_every_parameter_with_mitsubas_defaults() {
+        let Ok(Material::MiPrincipledThin(d)) = bsdf(r#"<bsdf type="principledthin"/>"#) else {
+            panic!()
+        };
+        assert_eq!(d, PrincipledThin::default());
+        let Ok(Material::MiPrincipledThin(m)) = bsdf(
+            r#"<bsdf type="principledthin">
+                <rgb name="base_color" value="0.7, 0.1, 0.1"/>
+                <float name="roughness" value="0.3"/>
+                <float name="anisotropic" value="0.5"/>
+                <float name="spec_trans" value="0.4"/>
+                <float name="eta" value="1.33"/>
+                <float name="spec_tint" value="0.1"/>
+                <float name="sheen" value="0.6"/>
+                <float name="sheen_tint" value="0.7"/>
+                <float name="flatness" value="0.8"/>
+                <float name="diff_trans" value="1.4"/>
+                <float name="specular_reflectance_sampling_rate" value="0.5"/>
+                <float name="specular_transmittance_sampling_rate" value="2"/>
+                <float name="diffuse_reflectance_sampling_rate" value="0.7"/>
+                <float name="diffuse_transmittance_sampling_rate" value="1.5"/>
+            </bsdf>"#,
+        ) else {
+            panic!()
+        };
+        let mut want = PrincipledThin {
+            base_color: Vec3A::new(0.7, 0.1, 0.1),
+            specular_reflectance_sampling_rate: 0.5,
+            specular_transmittance_sampling_rate: 2.0,
+            diffuse_reflectance_sampling_rate: 0.7,
+            diffuse_transmittance_sampling_rate: 1.5,
+            ..PrincipledThin::default()
+        };
+        for (p, v) in [
+            (PrincipledParam::Roughness, 0.3),
+            (PrincipledParam::Anisotropic, 0.5),
+            (PrincipledParam::SpecTrans, 0.4),
+            (PrincipledParam::Eta, 1.33),
+            (PrincipledParam::SpecTint, 0.1),
+            (PrincipledParam::Sheen, 0.6),
+            (PrincipledParam::SheenTint, 0.7),
+            (PrincipledParam::Flatness, 0.8),
+            (PrincipledParam::DiffTrans, 1.4),
+        ] {
+            assert!(want.set(p, v));
+        }
+        assert_eq!(m, want);
+    }
+
+    #[test]
+    fn principled_refuses_what_it_cannot_take() {
+        for (body, says) in [
+            (
+                r#"<bsdf type="principled"><float name="eta" value="1.5"/><float name="specular" value="0.5"/></bsdf>"#,
+                "either eta or specular",
+            ),
+            (
+                r#"<bsdf type="principled"><float name="diff_trans" value="1"/></bsdf>"#,
+                "unused parameter 'diff_trans'",
+            ),
+            (
+                r#"<bsdf type="principledthin"><float name="clearcoat" value="1"/></bsdf>"#,
+                "unused parameter 'clearcoat'",
+            ),
+            (
+                r#"<bsdf type="principled"><rgb name="roughness" value="0.1, 0.2, 0.3"/></bsdf>"#,
+                "'roughness' is a scalar",
+            ),
+        ] {
+            let e = bsdf(body).expect_err(body);
+            assert!(e.contains(says), "{body}: {e}");
+        }
+        // A textured base colour is the reflectance a texture replaces.
+        let m = bsdf(
+            r#"<bsdf type="principled"><texture name="base_color" type="checkerboard"/></bsdf>"#,
+        );
+        assert!(matches!(m, Ok(Material::MiPrincipled(_))), "{m:?}");
+        // Textured scalars vary per hit; the constant is the texture's mean,
+        // and a textured spec_trans turns the transmission on (eta ≠ 1).
+        let m = bsdf(
+            r#"<bsdf type="principled"><float name="eta" value="1"/>
+                <texture name="metallic" type="checkerboard"><float name="color0" value="0.2"/><float name="color1" value="0.6"/></texture>
+                <texture name="spec_trans" type="checkerboard"/></bsdf>"#,
+        );
+        let Ok(Material::MiPrincipled(m)) = m else {
+            panic!("{m:?}")
+        };
+        assert!((m.metallic - 0.4).abs() < 1e-6, "{}", m.metallic);
+        assert_eq!(m.eta, 1.001);
+        let m = bsdf(
+            r#"<bsdf type="principledthin"><texture name="diff_trans" type="checkerboard"/></bsdf>"#,
+        );
+        assert!(matches!(m, Ok(Material::MiPrincipledThin(_))), "{m:?}");
     }
 }
