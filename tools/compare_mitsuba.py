@@ -18,6 +18,24 @@ Scenes, 256×256, both renderers' `path` integrator with unbounded depth:
                 Mitsuba reference rendered once by this tool (--ref-spp, default 16384,
                 in two independent halves whose relMSE gives its own noise) and cached
                 in --cache.
+Mitsuba 3 XML scenes (--xml PATH[::NAME=VALUE,...], repeatable; the built-in scenes are
+then left out unless --scenes names them): both renderers read the same file, at the
+file's own size, with the same defines (`-D NAME=VALUE` for raylab, keyword arguments of
+`mi.load_file` for Mitsuba; `spp` is added for raylab when the file uses `$spp`). The
+reference is rendered by Mitsuba (--ref-spp, two halves, in passes of at most 2^23
+samples) and cached like cornell-area's, keyed by the text of the file and its includes
+and the defines. --mitsuba-spp N,... replaces --targets: each scene's targets are the
+relMSE Mitsuba's pilot predicts at N spp (c / N plus the reference's own noise), i.e. the
+time each renderer needs to reach Mitsuba's error at N spp. For example (2026-11-29,
+docs/mitsuba-scenes.md, "Speed: time to Mitsuba's error on XML scenes"):
+
+    python3 tools/compare_mitsuba.py --threads 2 --rounds 3 --ref-spp 1024 --mitsuba-spp 64 \
+        --xml docs-copy/bsdf_twosided_cbox.xml \
+        --xml "bitterli/cornell-box/mitsuba/scene_v3.xml::integrator=path,resx=512,resy=512"
+
+The log's first line names raylab's BVH box test (AVX2 unless the CPU lacks it or
+RAYLAB_NO_AVX2 is set).
+
 relMSE as in assets/refs/README.md: mean over pixels and channels of
 (c − r)² / (r² + ε), ε = 0.01·mean(r)².
 
@@ -194,6 +212,45 @@ SCENES = {
 }
 
 
+# Mitsuba XML scenes given with --xml (name -> (path, {define: value})): the same
+# file is read by both renderers, each at the file's own resolution.
+XML = {}
+
+
+def parse_xml_arg(arg):
+    """`PATH[::NAME=VALUE,...]` (defines for both renderers, as `-D`) -> name, path, defines.
+    The name is the file's stem, or, for `scene*.xml`, its folder's name (the folder
+    above a `mitsuba` folder: `cornell-box/mitsuba/scene_v3.xml` is `cornell-box`)."""
+    path, _, rest = arg.partition("::")
+    path = os.path.abspath(path)
+    defines = dict(kv.split("=", 1) for kv in rest.split(",") if kv)
+    stem = os.path.basename(path)[:-4]
+    name = stem
+    if stem.startswith("scene"):
+        folder = os.path.dirname(path)
+        if os.path.basename(folder) == "mitsuba":
+            folder = os.path.dirname(folder)
+        name = os.path.basename(folder)
+    return name, path, defines
+
+
+def xml_text(path):
+    """The file and the files it includes, for cache keys and for `$spp`."""
+    import re
+
+    out, todo, seen = [], [path], set()
+    while todo:
+        p = todo.pop(0)
+        if p in seen or not os.path.exists(p):
+            continue
+        seen.add(p)
+        text = open(p, encoding="utf-8", errors="replace").read()
+        out.append(text)
+        todo += [os.path.normpath(os.path.join(os.path.dirname(p), f))
+                 for f in re.findall(r'<include\s+filename="([^"]+)"', text)]
+    return "".join(out)
+
+
 def mitsuba_scene_dict(name, objdir):
     """The Mitsuba 3 scene for `name` (built from OBJ files written into objdir)."""
     import mitsuba as mi
@@ -256,6 +313,10 @@ def mitsuba_scene_dict(name, objdir):
 
 def scene_key(name):
     """A hash of everything that defines a scene, so that cached references follow it."""
+    if name in XML:
+        path, defines = XML[name]
+        src = xml_text(path) + json.dumps(sorted(defines.items()))
+        return hashlib.sha256(src.encode()).hexdigest()[:10]
     src = json.dumps([SCENES[name], box_triangles(), AREA_LIGHT_CORNERS, AREA_LIGHT_RADIANCE,
                       LIGHT_POSITION, LIGHT_POWER, SIZE, "path max_depth -1 box independent"])
     return hashlib.sha256(src.encode()).hexdigest()[:10]
@@ -303,9 +364,18 @@ class Raylab:
         """(image, seconds): the whole process, wall clock (nothing to warm up)."""
         self.seed += 1
         out = os.path.join(self.tmp, "raylab.exr")
-        cmd = [self.binary, "render", *SCENES[scene][0], "--integrator", "path",
-               "--width", str(SIZE), "--height", str(SIZE), "--spp", str(spp),
-               "--seed", str(self.seed), "--threads", str(self.threads), "-o", out, "-q"]
+        if scene in XML:
+            path, defines = XML[scene]
+            d = dict(defines)
+            if "$spp" in xml_text(path):
+                d["spp"] = spp
+            cmd = [self.binary, "render", path, *[f"-D{k}={v}" for k, v in d.items()],
+                   "--spp", str(spp), "--seed", str(self.seed), "--threads", str(self.threads),
+                   "-o", out, "-q"]
+        else:
+            cmd = [self.binary, "render", *SCENES[scene][0], "--integrator", "path",
+                   "--width", str(SIZE), "--height", str(SIZE), "--spp", str(spp),
+                   "--seed", str(self.seed), "--threads", str(self.threads), "-o", out, "-q"]
         t0 = time.perf_counter()
         subprocess.run(cmd, check=True)
         t = time.perf_counter() - t0
@@ -328,7 +398,11 @@ class Mitsuba:
 
     def scene(self, name):
         if name not in self.scenes:
-            self.scenes[name] = self.mi.load_dict(mitsuba_scene_dict(name, self.tmp))
+            if name in XML:
+                path, defines = XML[name]
+                self.scenes[name] = self.mi.load_file(path, **defines)
+            else:
+                self.scenes[name] = self.mi.load_dict(mitsuba_scene_dict(name, self.tmp))
         return self.scenes[name]
 
     def render(self, scene, spp, seed=None, warm_up=True):
@@ -349,6 +423,10 @@ class Mitsuba:
         t = time.perf_counter() - t0
         return img[:, :, :3], t
 
+    def pixels(self, scene):
+        w, h = self.scene(scene).sensors()[0].film().size()
+        return int(w) * int(h)
+
 
 # ----------------------------------------------------------------------------------
 # References.
@@ -357,7 +435,7 @@ class Mitsuba:
 def reference(name, args, mitsuba):
     """The reference image of `name`, its own noise (relMSE against the exact image)
     and a note on where it comes from."""
-    if name == "cornell":
+    if name == "cornell" and name not in XML:
         # assets/refs/README.md: its two 8,192-spp halves differ by 1.2e-4.
         return (read_exr(args.ref), 3e-5,
                 f"{os.path.relpath(args.ref)} (Mitsuba 3.9.1, 16,384 spp, own noise ≈ 3e-5)")
@@ -365,9 +443,11 @@ def reference(name, args, mitsuba):
 
     os.makedirs(args.cache, exist_ok=True)
     spp = args.ref_spp
-    base = os.path.join(args.cache, f"{name}-mitsuba-{SIZE}-{spp}spp-{scene_key(name)}")
+    size = "xml" if name in XML else SIZE
+    base = os.path.join(args.cache, f"{name}-mitsuba-{size}-{spp}spp-{scene_key(name)}")
     if not os.path.exists(base + ".exr"):
-        chunk = min(512, spp // 2)
+        # Passes of at most 2^23 samples: llvm variants hold a whole pass in memory.
+        chunk = max(1, min(512, spp // 2, (1 << 23) // mitsuba.pixels(name)))
         halves = []
         t0 = time.perf_counter()
         print(f"# rendering the {name} reference with Mitsuba: {spp} spp in passes of "
@@ -450,8 +530,15 @@ def fmt_t(s):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--scenes", default="cornell,cornell-area")
+    ap.add_argument("--scenes", default=None,
+                    help="built-in scenes (default cornell,cornell-area; none when --xml is given)")
+    ap.add_argument("--xml", action="append", default=[], metavar="PATH[::NAME=VALUE,...]",
+                    help="a Mitsuba 3 XML scene, read by both renderers at its own resolution "
+                    "(repeatable); NAME=VALUE are defines for both (`-D`)")
     ap.add_argument("--targets", default="1e-2,1e-3")
+    ap.add_argument("--mitsuba-spp", default=None, metavar="N,...",
+                    help="targets per scene instead of --targets: the relMSE Mitsuba's pilot "
+                    "predicts at N spp (c_Mitsuba / N + the reference's noise)")
     ap.add_argument("--rounds", type=int, default=2)
     ap.add_argument("--threads", type=int, default=os.cpu_count())
     ap.add_argument("--max-seconds", type=float, default=90.0,
@@ -475,11 +562,19 @@ def main():
     import drjit as dr
     import mitsuba as mi
 
-    scenes = args.scenes.split(",")
+    for arg in args.xml:
+        name, path, defines = parse_xml_arg(arg)
+        if not os.path.exists(path):
+            sys.exit(f"no such scene file: {path}")
+        XML[name] = (path, defines)
+    scenes = (args.scenes or ("" if XML else "cornell,cornell-area")).split(",")
+    scenes = [s for s in scenes if s] + list(XML)
     for s in scenes:
-        if s not in SCENES:
+        if s not in SCENES and s not in XML:
             sys.exit(f"unknown scene {s} (known: {', '.join(SCENES)})")
     targets = sorted((float(x) for x in args.targets.split(",")), reverse=True)
+    mitsuba_spp = [int(x) for x in args.mitsuba_spp.split(",")] if args.mitsuba_spp else None
+    scene_targets = {}
     log = lambda msg: print("# " + msg, file=sys.stderr, flush=True)  # noqa: E731
     start = time.perf_counter()
 
@@ -501,7 +596,10 @@ def main():
         mtime = time.strftime("%Y-%m-%d %H:%M", time.localtime(os.path.getmtime(args.raylab)))
         raylab = Raylab(binary, args.threads, tmp)
         renderers = (raylab, mitsuba)
-        log(f"raylab: {args.raylab} (built {mtime}, sha256 {digest}); "
+        avx2 = "avx2" in open("/proc/cpuinfo").read() if os.path.exists("/proc/cpuinfo") else False
+        no_avx2 = os.environ.get("RAYLAB_NO_AVX2", "") not in ("", "0")
+        isa = "AVX2 (8-wide box test)" if avx2 and not no_avx2 else "portable (4-wide box test)"
+        log(f"raylab: {args.raylab} (built {mtime}, sha256 {digest}), BVH ISA {isa}; "
             f"Mitsuba {mi.__version__} llvm_ad_rgb, drjit {dr.__version__}; "
             f"{args.threads} threads each")
 
@@ -515,7 +613,14 @@ def main():
                 cal[(scene, r.name)] = Calibration(r, scene, ref, noise, log)
                 # Pilot (Mitsuba's warmed up, for a fair time per spp).
                 cal[(scene, r.name)].render(16, warm_up=True)
-            for target in targets:
+            if mitsuba_spp:
+                c_mi = cal[(scene, "Mitsuba")].c
+                scene_targets[scene] = [noise + c_mi / n for n in mitsuba_spp]
+                log(f"{scene}: targets " + ", ".join(
+                    f"{t:.3e} (Mitsuba at {n} spp)" for t, n in zip(scene_targets[scene], mitsuba_spp)))
+            else:
+                scene_targets[scene] = targets
+            for target in scene_targets[scene]:
                 found = {}
                 for r in renderers:
                     k = cal[(scene, r.name)]
@@ -539,7 +644,7 @@ def main():
             for (scene, _, target) in spps}
         for rnd in range(3 * args.rounds):
             for scene in scenes:
-                for target in targets:
+                for target in scene_targets[scene]:
                     if (scene, "raylab", target) not in spps:
                         continue
                     if rnd >= args.rounds and not short[(scene, target)]:
@@ -555,7 +660,8 @@ def main():
                             f"{t:.2f} s relMSE {e:.3e}")
 
     print()
-    print(f"{SIZE}×{SIZE}, {args.threads} threads each; seconds: the best of {args.rounds} "
+    size = f"{SIZE}×{SIZE}" if not XML else "XML scenes at their own size"
+    print(f"{size}, {args.threads} threads each; seconds: the best of {args.rounds} "
           "timed renders (3× that for renders under 5 s; raylab: whole process; Mitsuba: "
           "mi.render after warm-up); relMSE: "
           "the worst of them (! above the target); est.: not rendered, spp = c / target and "
@@ -567,8 +673,8 @@ def main():
           "| Mitsuba spp | Mitsuba s | Mitsuba relMSE | raylab / Mitsuba time |")
     print("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
     for scene in scenes:
-        for target in targets:
-            row = [scene, f"{target:g}"]
+        for target in scene_targets[scene]:
+            row = [scene, f"{target:.3g}"]
             secs = {}
             for r in renderers:
                 key = (scene, r.name, target)
