@@ -20,7 +20,7 @@ use std::f32::consts::PI;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use glam::{Vec2, Vec3A};
+use glam::{Mat3A, Vec2, Vec3A};
 use rayon::prelude::*;
 use thiserror::Error;
 
@@ -439,6 +439,9 @@ pub struct Environment {
     rotation: (f32, f32),
     /// Rotation in degrees, as given.
     rotation_degrees: f32,
+    /// A general rotation from the map's frame to the world, which replaces
+    /// the one about +y where it is given ([`Environment::with_frame`]).
+    frame: Option<Mat3A>,
     sampling: EnvSampling,
 }
 
@@ -459,6 +462,9 @@ impl Environment {
             }
         }
         f.floats([self.strength, self.rotation_degrees]);
+        if let Some(m) = &self.frame {
+            f.floats(m.to_cols_array());
+        }
         f.update(format!("{:?}", self.sampling).as_bytes());
     }
 
@@ -500,6 +506,7 @@ impl Environment {
             strength: 1.0,
             rotation: (0.0, 1.0),
             rotation_degrees: 0.0,
+            frame: None,
             sampling: EnvSampling::Importance,
         }
     }
@@ -523,6 +530,14 @@ impl Environment {
         let r = (d as f64).to_radians();
         self.rotation = (r.sin() as f32, r.cos() as f32);
         self.rotation_degrees = d;
+        self
+    }
+
+    /// The same environment turned by the rotation `frame` (map directions
+    /// to world ones; orthonormal, right-handed), instead of a rotation about
+    /// +y: a Mitsuba `envmap`'s `to_world`.
+    pub fn with_frame(mut self, frame: Mat3A) -> Self {
+        self.frame = Some(frame);
         self
     }
 
@@ -559,6 +574,9 @@ impl Environment {
     /// A world direction in the map's frame (undoing the rotation).
     #[inline]
     fn to_map(&self, d: Vec3A) -> Vec3A {
+        if let Some(m) = &self.frame {
+            return m.transpose() * d;
+        }
         let (s, c) = self.rotation;
         Vec3A::new(c * d.x - s * d.z, d.y, s * d.x + c * d.z)
     }
@@ -566,6 +584,9 @@ impl Environment {
     /// A map direction in the world (applying the rotation).
     #[inline]
     fn to_world(&self, d: Vec3A) -> Vec3A {
+        if let Some(m) = &self.frame {
+            return *m * d;
+        }
         let (s, c) = self.rotation;
         Vec3A::new(c * d.x + s * d.z, d.y, -s * d.x + c * d.z)
     }

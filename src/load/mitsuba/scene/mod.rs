@@ -668,6 +668,9 @@ fn build(tree: &SceneTree, ledger: &Ledger) -> Result<MitsubaScene, MitsubaError
             Tag::Bsdf | Tag::Texture => {} // used through references
             Tag::Sensor if camera.is_none() => camera = Some(sensor(o, &mut settings)?),
             Tag::Integrator => integrator(o, &mut settings)?,
+            // An area light declared at the top (with an id) belongs to the
+            // shapes that refer to it, which read it there.
+            Tag::Emitter if o.plugin == "area" && o.id.is_some() => {}
             Tag::Emitter => {
                 let p = Props::new(o);
                 match o.plugin.as_str() {
@@ -768,16 +771,30 @@ fn build(tree: &SceneTree, ledger: &Ledger) -> Result<MitsubaScene, MitsubaError
                         })?;
                         let scale = p.float("scale", 1.0)?;
                         let m = p.transform("to_world")?;
-                        if m != Mat4::IDENTITY {
-                            return Err(p.error("a to_world on an envmap is not supported yet"));
-                        }
                         // Mitsuba's u is raylab's shifted by half a turn.
                         let map = EnvMap::load_with(&file, ledger)
                             .map_err(|e| p.error(e.to_string()))?
                             .with_pole_rows();
-                        environment = Environment::map(map)
-                            .with_strength(scale)
-                            .with_rotation(180.0);
+                        environment = Environment::map(map).with_strength(scale);
+                        environment = if m == Mat4::IDENTITY {
+                            environment.with_rotation(180.0)
+                        } else {
+                            // A rotation (Mitsuba looks up the inverse
+                            // transform's direction), then the half turn.
+                            let r = Mat3A::from_mat4(m);
+                            let orthonormal = (r.transpose() * r - Mat3A::IDENTITY)
+                                .to_cols_array()
+                                .iter()
+                                .all(|e| e.abs() < 1e-4)
+                                && r.determinant() > 0.0;
+                            if !orthonormal {
+                                return Err(p.error(
+                                    "an envmap's to_world must be a rotation (raylab does not take a scale or a mirror there)",
+                                ));
+                            }
+                            environment
+                                .with_frame(r * Mat3A::from_diagonal(Vec3::new(-1.0, 1.0, -1.0)))
+                        };
                     }
                     other => {
                         return Err(p.error(format!(
