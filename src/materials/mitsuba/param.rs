@@ -12,5 +12,5 @@ pub enum Param {
     /// The microfacet width along the bitangent (`alpha_v`).
     AlphaV,
     /// A scalar parameter of `principled` or `principledthin`.
-    Principled(super::PrincipledParam),
+    Principled(super::principled::PrincipledParam),
 }
