@@ -71,7 +71,7 @@ impl PixelFilter {
                 }
             }
             PixelFilter::Gaussian { stddev_bits } => {
-                gaussian_inverse_cdf(f64::from(f32::from_bits(stddev_bits)), f64::from(u)) as f32
+                f32::from_bits(stddev_bits) * standard_gaussian_quantile(u)
             }
         }
     }
@@ -160,6 +160,54 @@ fn probit(p: f64) -> f64 {
     }
 }
 
+/// Segments of the tabulated standard quantile (of σ = 1).
+const QUANTILE_SEGMENTS: usize = 4096;
+
+/// The quantile of the truncated, lowered Gaussian of σ = 1 (every σ's is
+/// σ times it: the filter is a function of x/σ alone) for `u` in `[0, 1)`:
+/// a cubic Hermite interpolation of the exact quantile between
+/// `QUANTILE_SEGMENTS` equal steps of `u`, from its values and its exact
+/// slopes (the normaliser over the filter at the node), which stays within
+/// 1e-5 σ of the Newton solve wherever |x| ≤ 3σ (the test bounds it; 99.7 %
+/// of the mass). The two end segments, where the filter reaches zero and the
+/// slope grows without bound, take the Newton solve itself. The solve costs
+/// about as much as a path through a small scene; this costs two loads and
+/// a few multiply-adds.
+#[inline]
+fn standard_gaussian_quantile(u: f32) -> f32 {
+    static TABLE: std::sync::OnceLock<Box<[[f32; 2]]>> = std::sync::OnceLock::new();
+    let table = TABLE.get_or_init(|| {
+        let bias = (-8.0f64).exp();
+        let total = std::f64::consts::FRAC_PI_2.sqrt() * 2.0 * erf(2.0 * std::f64::consts::SQRT_2)
+            - bias * 8.0;
+        (0..=QUANTILE_SEGMENTS)
+            .map(|i| {
+                let x = gaussian_inverse_cdf(1.0, i as f64 / QUANTILE_SEGMENTS as f64);
+                let pdf = (-x * x / 2.0).exp() - bias;
+                // dx/du over one segment (unused at the ends, where pdf = 0).
+                let slope = if pdf > 0.0 {
+                    total / pdf / QUANTILE_SEGMENTS as f64
+                } else {
+                    0.0
+                };
+                [x as f32, slope as f32]
+            })
+            .collect()
+    });
+    let s = u.clamp(0.0, 1.0) * QUANTILE_SEGMENTS as f32;
+    let i = (s as usize).min(QUANTILE_SEGMENTS - 1);
+    if i == 0 || i == QUANTILE_SEGMENTS - 1 {
+        return gaussian_inverse_cdf(1.0, f64::from(u)) as f32;
+    }
+    let t = s - i as f32;
+    let ([x0, d0], [x1, d1]) = (table[i], table[i + 1]);
+    let (t2, t3) = (t * t, t * t * t);
+    (2.0 * t3 - 3.0 * t2 + 1.0) * x0
+        + (t3 - 2.0 * t2 + t) * d0
+        + (3.0 * t2 - 2.0 * t3) * x1
+        + (t3 - t2) * d1
+}
+
 /// The point x in `[−4σ, 4σ]` below which a fraction `u` of the truncated,
 /// lowered Gaussian lies. Its cumulative integral has the closed form
 /// `σ√(π/2)·(erf(x/σ√2) + erf(2√2)) − e⁻⁸(x + 4σ)`, whose derivative is the
@@ -241,6 +289,26 @@ mod tests {
         check(PixelFilter::tent(2.5), 2.5);
         check(PixelFilter::gaussian(0.5), 2.0);
         check(PixelFilter::gaussian(0.3), 1.2);
+    }
+
+    #[test]
+    fn the_tabulated_gaussian_quantile_is_the_exact_one() {
+        // Within |x| ≤ 3σ (all but 0.3 % of the mass), against the Newton
+        // solve, at points between the table's nodes.
+        let mut worst = 0.0f64;
+        for k in 0..100_000 {
+            let u = (k as f64 + 0.37) / 100_000.0;
+            let exact = gaussian_inverse_cdf(1.0, u);
+            if exact.abs() <= 3.0 {
+                let got = f64::from(standard_gaussian_quantile(u as f32));
+                worst = worst.max((got - exact).abs());
+            }
+        }
+        assert!(worst < 1e-5, "worst deviation {worst:e} σ");
+        let g = PixelFilter::gaussian(0.5);
+        assert!(g.sample_1d(0.5).abs() < 1e-6);
+        let ends = (g.sample_1d(0.0), g.sample_1d(0.999_999_9));
+        assert!(ends.0 == -2.0 && ends.1 > 1.98 && ends.1 <= 2.0, "{ends:?}");
     }
 
     #[test]
