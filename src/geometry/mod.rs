@@ -4,6 +4,7 @@
 pub mod bvh;
 pub(crate) mod packet;
 pub mod ray;
+pub mod sphere;
 pub mod triangle;
 
 /// The square roots of four lanes (`sqrtps`: correctly rounded, as `f32::sqrt`,

@@ -14,6 +14,17 @@ impl SceneParts {
     /// normal on the side it was (as glTF's node transforms do).
     pub fn transform(&mut self, to_world: Affine3A) {
         let linear = to_world.matrix3;
+        match similarity(linear) {
+            Some(scale) => {
+                for s in &mut self.spheres {
+                    s.sphere.center = to_world.transform_point3a(s.sphere.center);
+                    s.sphere.radius *= scale;
+                    s.sphere.frame = linear * (1.0 / scale) * s.sphere.frame;
+                }
+            }
+            // An ellipsoid is not a sphere: as triangles.
+            None => self.spheres_to_meshes(),
+        }
         let normal_matrix = linear.inverse().transpose();
         for t in &mut self.triangles {
             for v in &mut t.v {
@@ -122,7 +133,69 @@ impl SceneParts {
         self.lights.extend(other.lights);
         self.cameras.extend(other.cameras);
         self.two_sided |= other.two_sided;
+        self.spheres.extend(other.spheres.into_iter().map(|mut s| {
+            s.material += material_offset;
+            s
+        }));
     }
+
+    /// Replaces the analytic spheres by meshes (Mitsuba's parametrisation,
+    /// [`SPHERE_SEGMENTS`] around), for transforms that would make them
+    /// ellipsoids.
+    pub fn spheres_to_meshes(&mut self) {
+        for s in std::mem::take(&mut self.spheres) {
+            let mut mesh = super::spheres::unit_sphere_mesh(SPHERE_SEGMENTS, s.flip);
+            mesh.material = s.material;
+            let to_world = Affine3A::from_mat3_translation(
+                (s.sphere.frame * s.sphere.radius).into(),
+                s.sphere.center.into(),
+            );
+            self.place_mesh(mesh, to_world);
+        }
+    }
+
+    /// Adds `mesh` placed by `to_world`: its world triangles (front normals
+    /// by their winding) and an instance.
+    pub fn place_mesh(&mut self, mesh: super::mesh::MeshData, to_world: Affine3A) {
+        let first = self.triangles.len() as u32;
+        if self.instance_of.is_empty() && first > 0 {
+            self.instance_of = vec![NO_INSTANCE; first as usize];
+        }
+        let instance = self.instances.len() as u32;
+        for tri in &mesh.indices {
+            let v = tri.map(|i| to_world.transform_point3a(mesh.positions[i as usize].into()));
+            let n = (v[1] - v[0]).cross(v[2] - v[0]).normalize_or_zero();
+            self.triangles
+                .push(crate::geometry::triangle::Triangle::new(v[0], v[1], v[2]));
+            self.normals.push(n);
+            self.material_of.push(mesh.material);
+            self.instance_of.push(instance);
+        }
+        self.instances
+            .push(Instance::new(self.meshes.len() as u32, first, to_world));
+        self.meshes.push(mesh);
+    }
+}
+
+/// Segments around a sphere made into triangles (256: within 2e-4 of its area).
+pub const SPHERE_SEGMENTS: u32 = 256;
+
+/// The scale of `m` if it is a rotation (or a mirror) times a uniform scale,
+/// to a relative 1e-5.
+pub fn similarity(m: Mat3A) -> Option<f32> {
+    let cols = [m.x_axis, m.y_axis, m.z_axis];
+    let s = cols[0].length();
+    if !(s > 0.0 && s.is_finite()) {
+        return None;
+    }
+    let tol = 1e-5 * s * s;
+    let same = cols
+        .iter()
+        .all(|c| (c.length_squared() - s * s).abs() <= tol * 2.0);
+    let orthogonal = cols[0].dot(cols[1]).abs() <= tol
+        && cols[0].dot(cols[2]).abs() <= tol
+        && cols[1].dot(cols[2]).abs() <= tol;
+    (same && orthogonal).then_some(s)
 }
 
 #[cfg(test)]

@@ -13,6 +13,7 @@ use rayon::prelude::*;
 use super::light_table::{AreaLights, LightRef, LightSelection, LightTable};
 use super::light_tree::{self, Facing, LightBounds, LightTree, TreeLight};
 use super::model::Scene;
+use crate::geometry::ray::Hit;
 use crate::lights::environment::SkyRadiance;
 use crate::lights::{Incident, Light};
 use crate::materials::surface::SurfaceMaterial;
@@ -103,7 +104,7 @@ impl Scene {
         }
         let mut prim_entry = Vec::new();
         if !self.area_lights.prims.is_empty() {
-            prim_entry = vec![u32::MAX; self.triangles.len()];
+            prim_entry = vec![u32::MAX; self.triangles.len() + self.spheres.len()];
             for &prim in &self.area_lights.prims {
                 prim_entry[prim as usize] = entries.len() as u32;
                 entries.push(LightRef::Triangle(prim));
@@ -153,6 +154,12 @@ impl Scene {
         let Some(&first) = prims.first() else {
             return false;
         };
+        if prims
+            .iter()
+            .any(|&prim| prim as usize >= self.triangles.len())
+        {
+            return false;
+        }
         let n = self.normals[first as usize];
         let v = self.triangles[first as usize].v[0];
         let scale = 1e-5 * (1.0 + v.abs().max_element());
@@ -200,6 +207,15 @@ impl Scene {
         for &prim in &self.area_lights.prims {
             let power = self.area_lights.per_prim[prim as usize].0;
             let two_sided = self.material(prim).emits_both_sides;
+            if let Some(s) = self.sphere_of(prim) {
+                // `power = π·4πr²·Le`: the intensity `πr²·Le` every way.
+                let (lo, hi) = s.sphere.bounds();
+                lights.push((
+                    LightBounds::sphere(lo, hi, power / (4.0 * PI)),
+                    TreeLight::Triangle(prim),
+                ));
+                continue;
+            }
             // `power = π A Le` per side: the intensity along the normal is `A Le`.
             let phi = power / (PI * if two_sided { 2.0 } else { 1.0 });
             lights.push((
@@ -218,7 +234,7 @@ impl Scene {
             0.0
         };
         (
-            LightTree::build(lights, self.triangles.len()),
+            LightTree::build(lights, self.triangles.len() + self.spheres.len()),
             directional,
             env_importance,
         )
@@ -301,9 +317,7 @@ impl Scene {
                 let probability = pmf * probability;
                 match light {
                     TreeLight::Punctual(i) => self.punctual_sample(i, p, probability),
-                    TreeLight::Triangle(prim) => {
-                        Some(self.triangle_sample(prim, u, probability, p))
-                    }
+                    TreeLight::Triangle(prim) => self.triangle_sample(prim, u, probability, p),
                 }
             }
             TopLevel::Environment => self.environment_sample(p, u, probability),
@@ -358,21 +372,58 @@ impl Scene {
 
     /// A point on emitting triangle `prim`, uniform by area with `u`, chosen
     /// with `probability`, for the shading point `p` (towards which a clear
-    /// coat dims it).
+    /// coat dims it); for a sphere, [`Scene::sphere_sample`].
     #[inline]
-    fn triangle_sample(&self, prim: u32, u: Vec2, probability: f32, p: Vec3A) -> LightSample {
+    fn triangle_sample(
+        &self,
+        prim: u32,
+        u: Vec2,
+        probability: f32,
+        p: Vec3A,
+    ) -> Option<LightSample> {
+        if prim as usize >= self.triangles.len() {
+            return self.sphere_sample(prim, u, probability, p);
+        }
         let v = &self.triangles[prim as usize].v;
         let (b1, b2) = uniform_barycentrics(u);
         let position = (1.0 - b1 - b2) * v[0] + b1 * v[1] + b2 * v[2];
         let area = self.area_lights.per_prim[prim as usize].1;
-        LightSample::Area {
+        Some(LightSample::Area {
             position,
             normal: self.normals[prim as usize],
             radiance: self.emission_at(prim, b1, b2)
                 * self.coat_dimming(prim, b1, b2, p - position),
             two_sided: self.material(prim).emits_both_sides,
             pdf_area: probability / area,
+        })
+    }
+
+    /// A point of emitting sphere `prim` for the shading point `p`, chosen
+    /// with `probability`: by the solid angle it subtends from `p`
+    /// ([`Sphere::sample_from`](crate::geometry::sphere::Sphere::sample_from)),
+    /// its density stated per unit area at the point (as the integrators
+    /// read an area light's).
+    #[cold]
+    #[inline(never)]
+    fn sphere_sample(&self, prim: u32, u: Vec2, probability: f32, p: Vec3A) -> Option<LightSample> {
+        let s = self.sphere_of(prim)?;
+        let (uv, pdf) = s.sphere.sample_from(p, u)?;
+        let point = s.sphere.point_at(uv);
+        let normal = if s.flip { -point.n } else { point.n };
+        let d = point.p - p;
+        let r2 = d.length_squared();
+        let cos = normal.dot(d).abs() / r2.sqrt();
+        if !(cos > 0.0 && r2 > 0.0) {
+            return None;
         }
+        Some(LightSample::Area {
+            position: point.p,
+            normal,
+            radiance: self.emission_at(prim, uv.x, uv.y)
+                * self.coat_dimming(prim, uv.x, uv.y, p - point.p),
+            two_sided: self.material(prim).emits_both_sides,
+            pdf_area: probability * pdf * cos / r2,
+        })
     }
 
     /// The key light's selection weight.
@@ -476,7 +527,7 @@ impl Scene {
                 self.punctual_sample(i, p, probability)
             }
             LightRef::Environment => self.environment_sample(p, u, probability),
-            LightRef::Triangle(prim) => Some(self.triangle_sample(prim, u, probability, p)),
+            LightRef::Triangle(prim) => self.triangle_sample(prim, u, probability, p),
         }
     }
 
@@ -576,6 +627,36 @@ impl Scene {
             return pmf * weights.share(weights.tree) / area;
         }
         self.entry_probability(entry as usize) / area
+    }
+
+    /// The solid-angle density with which [`Scene::sample_light`], lighting
+    /// a surface at `from` that `facing` describes, picks the direction of
+    /// `hit` (a ray's from `from`, with unit direction, meeting an emitter
+    /// whose normal makes cosine `cos_out` with it): for a triangle its area
+    /// density times `t²/|cos|`, for a sphere the density of its solid-angle
+    /// sampling.
+    #[inline]
+    pub fn light_pdf_hit(&self, hit: &Hit, from: Vec3A, facing: Facing, cos_out: f32) -> f32 {
+        if (hit.prim as usize) < self.triangles.len() {
+            return self.light_pdf_area(hit.prim, from, facing) * hit.t * hit.t / cos_out.abs();
+        }
+        self.sphere_light_pdf(hit, from, facing, cos_out)
+    }
+
+    /// [`Scene::light_pdf_hit`] of a sphere.
+    #[cold]
+    #[inline(never)]
+    fn sphere_light_pdf(&self, hit: &Hit, from: Vec3A, facing: Facing, cos_out: f32) -> f32 {
+        let Some(s) = self.sphere_of(hit.prim) else {
+            return 0.0;
+        };
+        // The selection probability: the area density times the area.
+        let choice = self.light_pdf_area(hit.prim, from, facing) * s.sphere.area();
+        if choice <= 0.0 {
+            return 0.0;
+        }
+        let q = s.sphere.point_at(Vec2::new(hit.b1, hit.b2)).p;
+        choice * s.sphere.pdf_from(from, q, cos_out)
     }
 
     /// Total power emitted by the emitting triangles (the estimate they are
@@ -742,14 +823,18 @@ impl AreaLights {
         if !emissive.iter().any(|&e| e) {
             return Self::default();
         }
-        let per_prim: Vec<(f32, f32)> = (0..scene.triangles.len())
+        let n_tri = scene.triangles.len();
+        let per_prim: Vec<(f32, f32)> = (0..n_tri + scene.spheres.len())
             .into_par_iter()
             .map(|i| {
                 let m = scene.material_of[i] as usize;
                 if !emissive[m] {
                     return (0.0, 0.0);
                 }
-                let area = scene.triangles[i].area();
+                let area = match scene.sphere_of(i as u32) {
+                    Some(s) => s.sphere.area(),
+                    None => scene.triangles[i].area(),
+                };
                 let le = mean_emission(scene, i as u32);
                 let sides = if scene.materials[m].emits_both_sides {
                     2.0

@@ -105,6 +105,20 @@ impl LightBounds {
         }
     }
 
+    /// A sphere in the box `lo`–`hi` (or anything that sends intensity
+    /// `phi` every way from inside it).
+    pub(super) fn sphere(lo: Vec3A, hi: Vec3A, phi: f32) -> Self {
+        Self {
+            lo,
+            hi,
+            phi,
+            axis: Vec3A::Z,
+            cos_o: -1.0,
+            cos_e: 0.0,
+            two_sided: false,
+        }
+    }
+
     /// A triangle with vertices `v`, unit front normal `n`, emitting intensity
     /// `phi` along its normal, from the front or from both sides.
     pub(super) fn triangle(v: &[Vec3A; 3], n: Vec3A, phi: f32, two_sided: bool) -> Self {

@@ -94,3 +94,41 @@ impl Instance {
         self.to_world.transform_point3a(p.into())
     }
 }
+
+/// A grid of `(cols + 1) × (rows + 1)` vertices over `(s, t) ∈ [0, 1]²`,
+/// placed by `at` (position, normal, uv), two triangles per cell wound so
+/// that the normal `at` gives is their front.
+pub fn grid(cols: u32, rows: u32, at: impl Fn(f32, f32) -> (Vec3, Vec3, Vec2)) -> MeshData {
+    let mut mesh = MeshData::default();
+    for j in 0..=rows {
+        for i in 0..=cols {
+            let (p, n, uv) = at(i as f32 / cols as f32, j as f32 / rows as f32);
+            mesh.positions.push(p);
+            mesh.normals.push(n);
+            mesh.uvs[0].push(uv);
+        }
+    }
+    let v = |i: u32, j: u32| j * (cols + 1) + i;
+    for j in 0..rows {
+        for i in 0..cols {
+            for tri in [
+                [v(i, j), v(i + 1, j), v(i + 1, j + 1)],
+                [v(i, j), v(i + 1, j + 1), v(i, j + 1)],
+            ] {
+                let p = tri.map(|k| mesh.positions[k as usize]);
+                let face = (p[1] - p[0]).cross(p[2] - p[0]);
+                if face.length_squared() <= 0.0 {
+                    continue;
+                }
+                let n = mesh.normals[tri[0] as usize]
+                    + mesh.normals[tri[1] as usize]
+                    + mesh.normals[tri[2] as usize];
+                mesh.indices.push(match face.dot(n) >= 0.0 {
+                    true => tri,
+                    false => [tri[0], tri[2], tri[1]],
+                });
+            }
+        }
+    }
+    mesh
+}

@@ -25,6 +25,7 @@ mod light_tree;
 pub mod mesh;
 mod model;
 mod parts;
+pub mod spheres;
 mod surface;
 
 pub use light_sampling::{LightSample, MAX_IMPORTANCE_LIGHTS};
@@ -33,4 +34,5 @@ pub use light_tree::Facing;
 pub use mesh::{Instance, MeshData, Tangents};
 pub use model::{MAX_ALPHA_LAYERS, Scene};
 pub use parts::{NO_INSTANCE, PointLight, SceneError, SceneParts};
+pub use spheres::SceneSphere;
 pub use surface::SurfaceHit;

@@ -10,6 +10,7 @@ use rayon::prelude::*;
 use super::light_table::{AreaLights, LightSelection, LightTable};
 use super::mesh::{Instance, MeshData, Tangents};
 use super::parts::{PointLight, SceneError, SceneParts};
+use super::spheres::Spheres;
 use crate::camera::SceneCamera;
 use crate::geometry::bvh::Bvh;
 use crate::geometry::ray::{Hit, Ray, SurfacePoint};
@@ -48,6 +49,9 @@ pub struct Scene {
     pub(super) light_table: LightTable,
     pub(super) bounds: (Vec3A, Vec3A),
     pub(super) bvh: Bvh,
+    /// Analytic spheres: primitive `triangles.len() + k` is sphere `k`
+    /// (`material_of` holds their materials after the triangles').
+    pub(super) spheres: Spheres,
     /// The key point light: the lab's light, `direct`'s light and the one the
     /// viewer moves (power 0 when the scene has none).
     pub light: PointLight,
@@ -113,6 +117,9 @@ impl Scene {
         // was a choice stay the same.)
         if self.selection != LightSelection::default() {
             let _ = write!(f, "|light selection {:?}", self.selection);
+        }
+        if !self.spheres.is_empty() {
+            let _ = write!(f, "|spheres {:?}", self.spheres.in_order());
         }
         f.value()
     }
@@ -209,6 +216,23 @@ impl Scene {
                 });
             }
         }
+        for (k, s) in parts.spheres.iter().enumerate() {
+            let r = s.sphere.radius;
+            if !(s.sphere.center.is_finite() && r.is_finite() && r > 0.0) {
+                return Err(SceneError::BadReference {
+                    what: format!("sphere {k} has centre {} and radius {r}", s.sphere.center),
+                });
+            }
+            if s.material as usize >= parts.materials.len() {
+                return Err(SceneError::BadReference {
+                    what: format!(
+                        "sphere {k} has material {} of {}",
+                        s.material,
+                        parts.materials.len()
+                    ),
+                });
+            }
+        }
         let has_alpha = parts.materials.iter().any(|m| m.alpha != AlphaMode::Opaque);
         let has_unlit = parts.materials.iter().any(SurfaceMaterial::is_unlit);
         let bounds = parts
@@ -222,16 +246,22 @@ impl Scene {
                 || (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY)),
                 |a, b| (a.0.min(b.0), a.1.max(b.1)),
             );
-        let bounds = if n == 0 {
-            (Vec3A::ZERO, Vec3A::ZERO)
-        } else {
-            bounds
-        };
+        let bounds = parts
+            .spheres
+            .iter()
+            .map(|s| s.sphere.bounds())
+            .fold((n > 0).then_some(bounds), |all, (a, b)| {
+                Some(all.map_or((a, b), |(lo, hi)| (lo.min(a), hi.max(b))))
+            })
+            .unwrap_or((Vec3A::ZERO, Vec3A::ZERO));
         let bvh = Bvh::build(&parts.triangles);
+        let spheres = Spheres::build(&parts.spheres);
+        let mut material_of = parts.material_of;
+        material_of.extend(parts.spheres.iter().map(|s| s.material));
         let mut scene = Self {
             triangles: parts.triangles,
             normals: parts.normals,
-            material_of: parts.material_of,
+            material_of,
             instance_of: parts.instance_of,
             meshes: parts.meshes,
             instances: parts.instances,
@@ -246,6 +276,7 @@ impl Scene {
             light_table: LightTable::default(),
             bounds,
             bvh,
+            spheres,
             light: parts.light,
             ambient: parts.ambient,
             two_sided: parts.two_sided,
@@ -260,11 +291,56 @@ impl Scene {
     /// are passed through.
     #[inline]
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
-        let hit = self.bvh.intersect(ray, t_max)?;
+        let hit = self.intersect_solid(ray, t_max)?;
         if !self.has_alpha {
             return Some(hit);
         }
         self.through_holes(ray, t_max, hit)
+    }
+
+    /// The closest hit along `ray` in `(0, t_max]`, holes counted as solid:
+    /// the triangles', or a sphere's when the scene has spheres.
+    #[inline(always)]
+    fn intersect_solid(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
+        if self.spheres.is_empty() {
+            self.bvh.intersect(ray, t_max)
+        } else {
+            self.intersect_with_spheres(ray, t_max)
+        }
+    }
+
+    /// [`Scene::intersect_solid`] in a scene with spheres: the triangles'
+    /// closest hit, then any sphere nearer than it.
+    #[inline(never)]
+    fn intersect_with_spheres(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
+        let triangle = self.bvh.intersect(ray, t_max);
+        let limit = triangle.map_or(t_max, |h| h.t);
+        match self.spheres.intersect(ray, limit) {
+            Some((t, k)) if triangle.is_none_or(|h| t < h.t) => {
+                let s = self.spheres.get(k);
+                let uv = s.sphere.uv_of(ray.origin + t * ray.dir);
+                Some(Hit {
+                    t,
+                    prim: self.triangles.len() as u32 + k,
+                    b1: uv.x,
+                    b2: uv.y,
+                })
+            }
+            _ => triangle,
+        }
+    }
+
+    /// Sphere `k` of primitive `prim`, if `prim` is a sphere.
+    #[inline]
+    pub(super) fn sphere_of(&self, prim: u32) -> Option<&super::spheres::SceneSphere> {
+        let k = (prim as usize).checked_sub(self.triangles.len())?;
+        (k < self.spheres.len()).then(|| self.spheres.get(k as u32))
+    }
+
+    /// Whether the scene has analytic spheres.
+    #[inline]
+    pub fn has_spheres(&self) -> bool {
+        !self.spheres.is_empty()
     }
 
     /// Whether anything blocks `ray` for `t` in `(0, t_max]` (holes do not).
@@ -274,6 +350,7 @@ impl Scene {
             return self.occluded_through_holes(ray, t_max);
         }
         self.bvh.occluded(ray, t_max)
+            || (!self.spheres.is_empty() && self.spheres.occluded(ray, t_max))
     }
 
     /// [`Scene::occluded`] in a scene with alpha holes.
@@ -288,7 +365,7 @@ impl Scene {
     /// which triangle is reported at an exact tie.
     #[inline]
     pub fn intersect4(&self, rays: &[Ray; 4], t_max: f32) -> [Option<Hit>; 4] {
-        if self.has_alpha {
+        if self.has_alpha || !self.spheres.is_empty() {
             return self.intersect4_one_by_one(rays, t_max);
         }
         self.bvh.intersect4(rays, t_max)
@@ -306,7 +383,7 @@ impl Scene {
     /// not `active` answer `false`.
     #[inline]
     pub fn occluded4(&self, rays: &[Ray; 4], t_max: [f32; 4], active: [bool; 4]) -> [bool; 4] {
-        if self.has_alpha {
+        if self.has_alpha || !self.spheres.is_empty() {
             return self.occluded4_one_by_one(rays, t_max, active);
         }
         self.bvh.occluded4(rays, t_max, active)
@@ -328,7 +405,7 @@ impl Scene {
     /// together where the CPU has AVX2; as [`Scene::intersect4`] otherwise.
     #[inline]
     pub fn intersect8(&self, rays: &[Ray; 8], t_max: f32) -> [Option<Hit>; 8] {
-        if self.has_alpha {
+        if self.has_alpha || !self.spheres.is_empty() {
             return self.intersect8_one_by_one(rays, t_max);
         }
         self.bvh.intersect8(rays, t_max)
@@ -344,7 +421,7 @@ impl Scene {
     /// not `active` answer `false`.
     #[inline]
     pub fn occluded8(&self, rays: &[Ray; 8], t_max: [f32; 8], active: [bool; 8]) -> [bool; 8] {
-        if self.has_alpha {
+        if self.has_alpha || !self.spheres.is_empty() {
             return self.occluded8_one_by_one(rays, t_max, active);
         }
         self.bvh.occluded8(rays, t_max, active)
@@ -379,7 +456,7 @@ impl Scene {
             let origin = p.offset_origin(ray.dir);
             let travelled = (origin - ray.origin).dot(ray.dir) * inv_len2;
             current = Ray::new(origin, ray.dir);
-            hit = self.bvh.intersect(&current, t_max - travelled)?;
+            hit = self.intersect_solid(&current, t_max - travelled)?;
         }
         let p = self.hit_point(&hit);
         hit.t = (p.p - ray.origin).dot(ray.dir) * inv_len2;
@@ -389,6 +466,9 @@ impl Scene {
     /// The point of a hit, reconstructed from its barycentrics.
     #[inline]
     fn hit_point(&self, hit: &Hit) -> SurfacePoint {
+        if let Some(s) = self.sphere_of(hit.prim) {
+            return s.sphere.point_at(glam::Vec2::new(hit.b1, hit.b2));
+        }
         let prim = hit.prim as usize;
         SurfacePoint::on_triangle(&self.triangles[prim].v, hit.b1, hit.b2, self.normals[prim])
     }
@@ -413,10 +493,14 @@ impl Scene {
     }
 
     /// Front normal of triangle `prim` (for the built-in boxes the lab's
-    /// convention; for glTF the counter-clockwise side after the transform).
+    /// convention; for glTF the counter-clockwise side after the transform);
+    /// zero for a sphere (whose normal varies: see [`Scene::surface`]).
     #[inline]
     pub fn normal(&self, prim: u32) -> Vec3A {
-        self.normals[prim as usize]
+        self.normals
+            .get(prim as usize)
+            .copied()
+            .unwrap_or(Vec3A::ZERO)
     }
 
     /// Reflectance ρ of triangle `prim` for `flat` and `direct`, without
@@ -588,6 +672,7 @@ impl Scene {
                 .map(MeshData::memory_bytes)
                 .sum::<usize>()
             + self.bvh.memory_bytes()
+            + self.spheres.len() * std::mem::size_of::<super::spheres::SceneSphere>()
     }
 }
 

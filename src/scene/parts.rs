@@ -8,6 +8,7 @@ use glam::Vec3A;
 use thiserror::Error;
 
 use super::mesh::{Instance, MeshData};
+use super::spheres::SceneSphere;
 use crate::camera::SceneCamera;
 use crate::geometry::triangle::Triangle;
 use crate::lights::Light;
@@ -97,6 +98,8 @@ pub struct SceneParts {
     pub two_sided: bool,
     /// Cameras from the file.
     pub cameras: Vec<SceneCamera>,
+    /// Analytic spheres (primitives `triangles.len() + k` of the scene).
+    pub spheres: Vec<SceneSphere>,
 }
 
 impl SceneParts {

@@ -52,6 +52,9 @@ impl Scene {
     #[inline]
     pub fn surface_point(&self, hit: &Hit, dir: Vec3A) -> SurfacePoint {
         let prim = hit.prim as usize;
+        if prim >= self.triangles.len() {
+            return self.sphere_point(hit, dir);
+        }
         let mut n = self.normals[prim];
         if self.two_sided && n.dot(dir) > 0.0 {
             n = -n;
@@ -67,6 +70,9 @@ impl Scene {
     /// a tenth of a `direct` frame).
     #[inline(always)]
     pub fn surface_points4(&self, hits: [&Hit; 4], dirs: [Vec3A; 4]) -> [[Vec4; 3]; 3] {
+        if !self.spheres.is_empty() {
+            return self.surface_points4_one_by_one(hits, dirs);
+        }
         let prims = [
             hits[0].prim as usize,
             hits[1].prim as usize,
@@ -121,6 +127,48 @@ impl Scene {
         [p, n, error]
     }
 
+    /// [`Scene::surface_points4`] in a scene with spheres: point by point.
+    #[cold]
+    #[inline(never)]
+    fn surface_points4_one_by_one(&self, hits: [&Hit; 4], dirs: [Vec3A; 4]) -> [[Vec4; 3]; 3] {
+        let points: [SurfacePoint; 4] =
+            std::array::from_fn(|i| self.surface_point(hits[i], dirs[i]));
+        let lanes = |v: [Vec3A; 4]| {
+            [
+                Vec4::new(v[0].x, v[1].x, v[2].x, v[3].x),
+                Vec4::new(v[0].y, v[1].y, v[2].y, v[3].y),
+                Vec4::new(v[0].z, v[1].z, v[2].z, v[3].z),
+            ]
+        };
+        [
+            lanes(points.map(|p| p.p)),
+            lanes(points.map(|p| p.n)),
+            lanes(points.map(|p| p.error)),
+        ]
+    }
+
+    /// [`Scene::surface_point`] of a sphere's hit: its front normal (outward,
+    /// or inward when flipped) turned towards the ray in a two-sided scene.
+    #[cold]
+    #[inline(never)]
+    fn sphere_point(&self, hit: &Hit, dir: Vec3A) -> SurfacePoint {
+        let Some(s) = self.sphere_of(hit.prim) else {
+            return SurfacePoint {
+                p: Vec3A::ZERO,
+                error: Vec3A::ZERO,
+                n: Vec3A::Z,
+            };
+        };
+        let mut point = s.sphere.point_at(Vec2::new(hit.b1, hit.b2));
+        if s.flip {
+            point.n = -point.n;
+        }
+        if self.two_sided && point.n.dot(dir) > 0.0 {
+            point.n = -point.n;
+        }
+        point
+    }
+
     /// The base colour at a hit (textures and vertex colours applied), which
     /// `flat` shows and `direct` uses as ρ.
     #[inline]
@@ -148,6 +196,7 @@ impl Scene {
     pub fn attributes(&self, hit: &Hit) -> HitAttributes {
         match self.mesh_of(hit.prim) {
             Some((_, mesh, idx)) => attributes_of(mesh, idx, barycentrics(hit)),
+            None if hit.prim as usize >= self.triangles.len() => sphere_attributes(hit),
             None => HitAttributes::default(),
         }
     }
@@ -171,6 +220,9 @@ impl Scene {
     #[inline(always)]
     pub fn surface(&self, hit: &Hit) -> SurfaceHit {
         let prim = hit.prim as usize;
+        if prim >= self.triangles.len() {
+            return self.sphere_surface(hit);
+        }
         let ng = self.normals[prim];
         let point = SurfacePoint::on_triangle(&self.triangles[prim].v, hit.b1, hit.b2, ng);
         let material = self.material_of[prim];
@@ -203,15 +255,9 @@ impl Scene {
             && t.needs_frame()
         {
             let uvs = (!mesh.uvs[0].is_empty()).then(|| idx.map(|i| mesh.uvs[0][i as usize]));
-            let (n, s, tb) = mitsuba_frame(
-                t,
-                &self.triangles[prim].v,
-                uvs,
-                ng,
-                interpolated,
-                &attrs,
-                &self.textures,
-            );
+            let (dp_du, dp_dv) = triangle_derivatives(&self.triangles[prim].v, uvs, ng);
+            let (n, s, tb) =
+                mitsuba_frame(t, dp_du, dp_dv, ng, interpolated, &attrs, &self.textures);
             return SurfaceHit {
                 point,
                 ng,
@@ -258,25 +304,83 @@ impl Scene {
     }
 }
 
-/// Mitsuba's shading frame at a hit of a Mitsuba material (`t`) on the
-/// triangle of world vertices `v`, texture coordinates `uvs` (if the mesh
-/// has them), face normal `ng` and interpolated normal `ni`: its `s` is
-/// `∂p/∂u` (from the triangle's texture coordinates, or Mitsuba's
-/// `coordinate_system` of the face normal where they are missing or
-/// degenerate) made orthogonal to `ni`, `t = ni × s`; its normal is `ni`,
-/// or what the material's normal or bump map makes of it (Mitsuba 3.7.1's
-/// `normalmap` and `bumpmap` before their view-dependent flip, which the
-/// integrator makes). Returns the normal, `s` and `t`.
-#[inline(never)]
-fn mitsuba_frame(
-    t: &TexturedBsdf,
-    v: &[Vec3A; 3],
-    uvs: Option<[Vec2; 3]>,
-    ng: Vec3A,
-    ni: Vec3A,
-    attrs: &HitAttributes,
-    textures: &TextureStore,
-) -> (Vec3A, Vec3A, Vec3A) {
+impl Scene {
+    /// [`Scene::surface`] of a sphere's hit: the point and normal from its
+    /// spherical coordinates, which are also its texture coordinates, and
+    /// Mitsuba's frame from the sphere's `∂p/∂u`.
+    #[cold]
+    #[inline(never)]
+    fn sphere_surface(&self, hit: &Hit) -> SurfaceHit {
+        let uv = Vec2::new(hit.b1, hit.b2);
+        let material = self
+            .material_of
+            .get(hit.prim as usize)
+            .copied()
+            .unwrap_or(0);
+        let Some(sphere) = self.sphere_of(hit.prim) else {
+            let point = SurfacePoint {
+                p: Vec3A::ZERO,
+                error: Vec3A::ZERO,
+                n: Vec3A::Z,
+            };
+            return SurfaceHit {
+                point,
+                ng: Vec3A::Z,
+                ns: Vec3A::Z,
+                ni: Vec3A::Z,
+                nc: Vec3A::Z,
+                tangent: Vec3A::ZERO,
+                bitangent: Vec3A::ZERO,
+                attrs: HitAttributes::default(),
+                material,
+            };
+        };
+        let mut point = sphere.sphere.point_at(uv);
+        if sphere.flip {
+            point.n = -point.n;
+        }
+        let ng = point.n;
+        let attrs = sphere_attributes(hit);
+        let (mut ns, mut tangent, mut bitangent) = (ng, Vec3A::ZERO, Vec3A::ZERO);
+        if let Some(m) = self.materials.get(material as usize)
+            && let MaterialKind::Textured(t) = &m.kind
+            && t.needs_frame()
+        {
+            let (dp_du, dp_dv) = sphere.sphere.derivatives(uv);
+            (ns, tangent, bitangent) =
+                mitsuba_frame(t, dp_du, dp_dv, ng, ng, &attrs, &self.textures);
+        }
+        SurfaceHit {
+            point,
+            ng,
+            ns,
+            ni: ng,
+            nc: ns,
+            tangent,
+            bitangent,
+            attrs,
+            material,
+        }
+    }
+}
+
+/// A sphere hit's attributes: its spherical coordinates as texture
+/// coordinates (both sets), white.
+#[inline]
+fn sphere_attributes(hit: &Hit) -> HitAttributes {
+    let uv = Vec2::new(hit.b1, hit.b2);
+    HitAttributes {
+        uv: [uv, uv],
+        ..HitAttributes::default()
+    }
+}
+
+/// `∂p/∂u` and `∂p/∂v` of the triangle of world vertices `v` with texture
+/// coordinates `uvs` (if the mesh has them), or Mitsuba's
+/// `coordinate_system` of the face normal `ng` where they are missing or
+/// degenerate.
+#[inline]
+fn triangle_derivatives(v: &[Vec3A; 3], uvs: Option<[Vec2; 3]>, ng: Vec3A) -> (Vec3A, Vec3A) {
     let (e1, e2) = (v[1] - v[0], v[2] - v[0]);
     let fallback = Frame::from_normal(ng);
     let (mut dp_du, mut dp_dv) = (fallback.t, fallback.b);
@@ -289,6 +393,26 @@ fn mitsuba_frame(
             dp_dv = (d0.x * e2 - d1.x * e1) * inv;
         }
     }
+    (dp_du, dp_dv)
+}
+
+/// Mitsuba's shading frame at a hit of a Mitsuba material (`t`) with
+/// surface derivatives `dp_du`, `dp_dv`, front geometric normal `ng` and
+/// interpolated normal `ni`: its `s` is `∂p/∂u` made orthogonal to `ni`,
+/// `t = ni × s`; its normal is `ni`, or what the material's normal or bump
+/// map makes of it (Mitsuba 3.7.1's `normalmap` and `bumpmap` before their
+/// view-dependent flip, which the integrator makes). Returns the normal,
+/// `s` and `t`.
+#[inline(never)]
+fn mitsuba_frame(
+    t: &TexturedBsdf,
+    dp_du: Vec3A,
+    dp_dv: Vec3A,
+    ng: Vec3A,
+    ni: Vec3A,
+    attrs: &HitAttributes,
+    textures: &TextureStore,
+) -> (Vec3A, Vec3A, Vec3A) {
     let s = (dp_du - ni * ni.dot(dp_du)).normalize_or_zero();
     let s = if s != Vec3A::ZERO && s.is_finite() {
         s
@@ -406,6 +530,20 @@ fn tangent_frame(
 mod tests {
     use super::*;
 
+    /// [`mitsuba_frame`] of a triangle's derivatives.
+    fn mitsuba_frame_of(
+        t: &TexturedBsdf,
+        v: &[Vec3A; 3],
+        uvs: Option<[Vec2; 3]>,
+        ng: Vec3A,
+        ni: Vec3A,
+        attrs: &HitAttributes,
+        textures: &TextureStore,
+    ) -> (Vec3A, Vec3A, Vec3A) {
+        let (du, dv) = triangle_derivatives(v, uvs, ng);
+        mitsuba_frame(t, du, dv, ng, ni, attrs, textures)
+    }
+
     /// Four surface points in lanes are the four one at a time, bit for bit,
     /// in one-sided and two-sided scenes.
     #[test]
@@ -472,7 +610,7 @@ mod tests {
         let flat = textured(Some(PerturbMap::NormalMap(Pattern::Constant(Vec4::new(
             0.5, 0.5, 1.0, 1.0,
         )))));
-        let (n, s, t) = mitsuba_frame(&flat, &v, uvs, ng, ni, &attrs, &store);
+        let (n, s, t) = mitsuba_frame_of(&flat, &v, uvs, ng, ni, &attrs, &store);
         assert!((n - ni).length() < 1e-6, "{n}");
         // (2, 0, 0) − ni (ni · (2, 0, 0)), normalized.
         let expect = (Vec3A::X - ni * ni.x).normalize();
@@ -482,10 +620,10 @@ mod tests {
         let sideways = textured(Some(PerturbMap::NormalMap(Pattern::Constant(Vec4::new(
             1.0, 0.5, 0.5, 1.0,
         )))));
-        let (n, ..) = mitsuba_frame(&sideways, &v, uvs, ng, ni, &attrs, &store);
+        let (n, ..) = mitsuba_frame_of(&sideways, &v, uvs, ng, ni, &attrs, &store);
         assert!((n - expect).length() < 1e-6, "{n}");
         // Without texture coordinates: Duff et al.'s first axis of ng.
-        let (_, s, _) = mitsuba_frame(&textured(None), &v, None, ng, ng, &attrs, &store);
+        let (_, s, _) = mitsuba_frame_of(&textured(None), &v, None, ng, ng, &attrs, &store);
         assert!((s - Frame::from_normal(ng).t).length() < 1e-6, "{s}");
     }
 
@@ -519,7 +657,7 @@ mod tests {
         let uvs = Some([Vec2::ZERO, Vec2::X, Vec2::Y]);
         let mut attrs = HitAttributes::default();
         attrs.uv[0] = Vec2::new(0.5, 0.5);
-        let (n, ..) = mitsuba_frame(&bump, &v, uvs, Vec3A::Z, Vec3A::Z, &attrs, &store);
+        let (n, ..) = mitsuba_frame_of(&bump, &v, uvs, Vec3A::Z, Vec3A::Z, &attrs, &store);
         let expect = Vec3A::new(-1.5, 0.0, 6.0).normalize();
         assert!((n - expect).length() < 1e-5, "{n} vs {expect}");
     }

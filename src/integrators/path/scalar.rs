@@ -364,8 +364,7 @@ pub fn radiance_traced(
             let weight = if specular {
                 1.0
             } else {
-                let light_pdf = scene.light_pdf_area(hit.prim, from, from_facing) * hit.t * hit.t
-                    / cos_out.abs();
+                let light_pdf = scene.light_pdf_hit(&hit, from, from_facing, cos_out);
                 power_heuristic(bsdf_pdf, light_pdf)
             };
             tracer.event(depth, beta, PathEvent::Emission { le, weight });

@@ -230,10 +230,11 @@ impl Builder<'_, '_> {
             }
             "rectangle" => shapes::rectangle(),
             "cube" => shapes::cube(),
-            "sphere" | "disk" | "cylinder" => {
+            // (A sphere stays analytic where it can: see `shape`.)
+            "sphere" => shapes::sphere(),
+            "disk" | "cylinder" => {
                 self.approximated.push(shape.plugin.clone());
                 match shape.plugin.as_str() {
-                    "sphere" => shapes::sphere(),
                     "disk" => shapes::disk(),
                     _ => shapes::cylinder(),
                 }
@@ -347,6 +348,27 @@ impl Builder<'_, '_> {
         p.ignore(&["id"]);
         p.finish()?;
         mesh.material = material;
+        if shape.plugin == "sphere" {
+            // An analytic sphere where its placement is a similarity and it
+            // is not in a shape group (whose instances may scale unevenly);
+            // else the triangles.
+            let linear = Mat3A::from_mat4(to_world);
+            match crate::scene::compose::similarity(linear) {
+                Some(scale) if within.is_none() => {
+                    self.parts.spheres.push(crate::scene::SceneSphere {
+                        sphere: crate::geometry::sphere::Sphere {
+                            center: Vec3A::from(to_world.w_axis.truncate()),
+                            radius: scale,
+                            frame: linear * (1.0 / scale),
+                        },
+                        flip: p.boolean("flip_normals", false)?,
+                        material,
+                    });
+                    return Ok(());
+                }
+                _ => self.approximated.push(shape.plugin.clone()),
+            }
+        }
         let mesh_index = self.parts.meshes.len() as u32;
         self.parts.meshes.push(mesh);
         match within {
@@ -822,7 +844,7 @@ fn build(tree: &SceneTree, ledger: &Ledger) -> Result<MitsubaScene, MitsubaError
         }
         let list: Vec<String> = counts.iter().map(|(p, n)| format!("{p} ×{n}")).collect();
         warnings.push(format!(
-            "analytic shapes approximated by triangles ({} segments around; exact primitives are not built yet): {}",
+            "shapes approximated by triangles ({} segments around; disks and cylinders are not analytic yet, nor spheres in shape groups or under uneven scales): {}",
             shapes::SEGMENTS,
             list.join(", ")
         ));

@@ -268,64 +268,15 @@ pub(super) fn cube() -> MeshData {
     mesh
 }
 
-/// A grid of `(cols + 1) × (rows + 1)` vertices over `(s, t) ∈ [0, 1]²`,
-/// placed by `at` (position, normal, uv), two triangles per cell wound so
-/// that the normal `at` gives is their front.
-fn grid(cols: u32, rows: u32, at: impl Fn(f32, f32) -> (Vec3, Vec3, Vec2)) -> MeshData {
-    let mut mesh = MeshData::default();
-    for j in 0..=rows {
-        for i in 0..=cols {
-            let (p, n, uv) = at(i as f32 / cols as f32, j as f32 / rows as f32);
-            mesh.positions.push(p);
-            mesh.normals.push(n);
-            mesh.uvs[0].push(uv);
-        }
-    }
-    let v = |i: u32, j: u32| j * (cols + 1) + i;
-    for j in 0..rows {
-        for i in 0..cols {
-            for tri in [
-                [v(i, j), v(i + 1, j), v(i + 1, j + 1)],
-                [v(i, j), v(i + 1, j + 1), v(i, j + 1)],
-            ] {
-                let p = tri.map(|k| mesh.positions[k as usize]);
-                let face = (p[1] - p[0]).cross(p[2] - p[0]);
-                if face.length_squared() <= 0.0 {
-                    continue;
-                }
-                let n = mesh.normals[tri[0] as usize]
-                    + mesh.normals[tri[1] as usize]
-                    + mesh.normals[tri[2] as usize];
-                mesh.indices.push(match face.dot(n) >= 0.0 {
-                    true => tri,
-                    false => [tri[0], tri[2], tri[1]],
-                });
-            }
-        }
-    }
-    mesh
-}
-
-/// Mitsuba's unit `sphere` tessellated: (u, v) = (φ/2π, θ/π) of
-/// `(sin θ cos φ, sin θ sin φ, cos θ)`, normals outwards.
+/// Mitsuba's unit `sphere` tessellated (where it cannot stay analytic):
+/// see [`crate::scene::spheres::unit_sphere_mesh`].
 pub(super) fn sphere() -> MeshData {
-    grid(SEGMENTS, SEGMENTS / 2, |s, t| {
-        let phi = 2.0 * PI * s;
-        // The poles exactly (sin π is not 0 in f32): their triangles are
-        // then exactly degenerate and left out.
-        let (sin_t, cos_t) = match t {
-            0.0 => (0.0, 1.0),
-            1.0 => (0.0, -1.0),
-            _ => (PI * t).sin_cos(),
-        };
-        let p = Vec3::new(sin_t * phi.cos(), sin_t * phi.sin(), cos_t);
-        (p, p, Vec2::new(s, t))
-    })
+    crate::scene::spheres::unit_sphere_mesh(SEGMENTS, false)
 }
 
 /// Mitsuba's unit `disk` at z = 0 facing +z tessellated: (u, v) = (r, φ/2π).
 pub(super) fn disk() -> MeshData {
-    grid(SEGMENTS, SEGMENTS / 8, |s, t| {
+    crate::scene::mesh::grid(SEGMENTS, SEGMENTS / 8, |s, t| {
         let phi = 2.0 * PI * s;
         (
             Vec3::new(t * phi.cos(), t * phi.sin(), 0.0),
@@ -338,7 +289,7 @@ pub(super) fn disk() -> MeshData {
 /// Mitsuba's unit `cylinder` (radius 1, z from 0 to 1, open) tessellated:
 /// (u, v) = (φ/2π, z), normals outwards.
 pub(super) fn cylinder() -> MeshData {
-    grid(SEGMENTS, 1, |s, t| {
+    crate::scene::mesh::grid(SEGMENTS, 1, |s, t| {
         let phi = 2.0 * PI * s;
         let n = Vec3::new(phi.cos(), phi.sin(), 0.0);
         (n + Vec3::Z * t, n, Vec2::new(s, t))
