@@ -230,8 +230,9 @@ impl Builder<'_, '_> {
             }
             "rectangle" => shapes::rectangle(),
             "cube" => shapes::cube(),
-            // (A sphere stays analytic where it can: see `shape`.)
-            "sphere" => shapes::sphere(),
+            // (Made into triangles only where it cannot stay analytic: see
+            // `shape`.)
+            "sphere" => MeshData::default(),
             "disk" | "cylinder" => {
                 self.approximated.push(shape.plugin.clone());
                 match shape.plugin.as_str() {
@@ -366,7 +367,15 @@ impl Builder<'_, '_> {
                     });
                     return Ok(());
                 }
-                _ => self.approximated.push(shape.plugin.clone()),
+                _ => {
+                    self.approximated.push(shape.plugin.clone());
+                    let material = mesh.material;
+                    mesh = shapes::sphere();
+                    mesh.material = material;
+                    if p.boolean("flip_normals", false)? {
+                        shapes::flip(&mut mesh);
+                    }
+                }
             }
         }
         let mesh_index = self.parts.meshes.len() as u32;
