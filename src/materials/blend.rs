@@ -219,21 +219,18 @@ mod tests {
 
     /// Blends without delta lobes: Lambertian and metal (the suite's
     /// floor), plastic and glass (one part one-sided, the other an
-    /// interface), a principled BSDF and a Lambertian.
+    /// interface), a principled BSDF and a Lambertian. (GGX plastic:
+    /// Mitsuba's Beckmann `G1` is a fit that its sampling does not follow
+    /// exactly, see `mitsuba/tests.rs`; blended at 60° with the glass, a
+    /// Beckmann plastic's p values over 12 seeds were all below 0.6, a GGX
+    /// one's spread over [0.25, 0.9].)
     fn glossy() -> Vec<Material> {
-        use MicrofacetKind::{Beckmann, Ggx};
+        use MicrofacetKind::Ggx;
         vec![
             blend(0.35, diffuse(Vec3A::splat(0.7)), gold(Ggx, 0.3)),
             blend(
                 0.5,
-                BlendPart::RoughPlastic(RoughPlastic::new(
-                    Beckmann,
-                    0.3,
-                    1.5,
-                    RHO,
-                    Vec3A::ONE,
-                    false,
-                )),
+                BlendPart::RoughPlastic(RoughPlastic::new(Ggx, 0.3, 1.5, RHO, Vec3A::ONE, false)),
                 BlendPart::RoughDielectric(RoughDielectric::new(
                     Ggx,
                     0.4,
