@@ -100,6 +100,9 @@ pub fn part(name: &str) -> Option<std::ops::Range<usize>> {
 /// conductors `gold`, `copper`, `silver`, `aluminium` and `conductor` (a perfect
 /// one, Fresnel 1), each with an optional GGX width `:ALPHA` in `[0, 1]` (0, the
 /// default, is polished: a delta lobe).
+// (A command-line choice, read once: a `Material` as large as a Mitsuba
+// blend is no cost here.)
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum MaterialChoice {
     /// Lambertian with the part's reflectance.

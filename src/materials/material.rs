@@ -5,6 +5,7 @@
 //! The frame, side and estimator conventions are the module's
 //! ([`crate::materials`]).
 
+use super::blend::{Blend, BlendPart};
 use super::bsdf::{BsdfSample, GUIDE_ALPHA, GuideLobes, finite_or_zero};
 use super::dielectric::{dielectric_interface, dielectric_refraction, sample_dielectric};
 use super::disk::concentric_disk;
@@ -77,6 +78,28 @@ pub enum Material {
     /// Mitsuba 3's `principledthin` (a thin sheet, the same from both
     /// sides).
     MiPrincipledThin(mitsuba::PrincipledThin),
+    /// Mitsuba 3's `blendbsdf`: a mixture of two of its BSDFs (see
+    /// [`super::blend`]); its sides are its parts'.
+    MiBlend(Blend),
+}
+
+impl From<BlendPart> for Material {
+    /// The part as the material it is on its own.
+    #[inline]
+    fn from(part: BlendPart) -> Material {
+        match part {
+            BlendPart::Diffuse(reflectance) => Material::Diffuse { reflectance },
+            BlendPart::Conductor(c) => Material::MiConductor(c),
+            BlendPart::RoughConductor(c) => Material::MiRoughConductor(c),
+            BlendPart::Dielectric(d) => Material::MiDielectric(d),
+            BlendPart::ThinDielectric(d) => Material::MiThinDielectric(d),
+            BlendPart::RoughDielectric(d) => Material::MiRoughDielectric(d),
+            BlendPart::Plastic(p) => Material::MiPlastic(p),
+            BlendPart::RoughPlastic(p) => Material::MiRoughPlastic(p),
+            BlendPart::Principled(p) => Material::MiPrincipled(p),
+            BlendPart::PrincipledThin(p) => Material::MiPrincipledThin(p),
+        }
+    }
 }
 
 /// A material seen from one direction `wo` ([`Material::at`]): its
@@ -178,8 +201,34 @@ impl Material {
             Material::MiRoughDielectric(d) => d.orient_anisotropy(frame, t),
             Material::MiPrincipled(p) => p.orient_anisotropy(frame, t),
             Material::MiPrincipledThin(p) => p.orient_anisotropy(frame, t),
+            Material::MiBlend(blend) => {
+                for part in &mut blend.parts {
+                    let mut m = Material::from(*part);
+                    m.orient_anisotropy(frame, t, b);
+                    *part = m.blend_part().unwrap_or(*part);
+                }
+            }
             _ => {}
         }
+    }
+
+    /// The material as a part of a [`Blend`] (Mitsuba's BSDFs other than a
+    /// blend; `None` for raylab's own and the glTF BSDF).
+    #[inline]
+    pub fn blend_part(&self) -> Option<BlendPart> {
+        Some(match *self {
+            Material::Diffuse { reflectance } => BlendPart::Diffuse(reflectance),
+            Material::MiConductor(c) => BlendPart::Conductor(c),
+            Material::MiRoughConductor(c) => BlendPart::RoughConductor(c),
+            Material::MiDielectric(d) => BlendPart::Dielectric(d),
+            Material::MiThinDielectric(d) => BlendPart::ThinDielectric(d),
+            Material::MiRoughDielectric(d) => BlendPart::RoughDielectric(d),
+            Material::MiPlastic(p) => BlendPart::Plastic(p),
+            Material::MiRoughPlastic(p) => BlendPart::RoughPlastic(p),
+            Material::MiPrincipled(p) => BlendPart::Principled(p),
+            Material::MiPrincipledThin(p) => BlendPart::PrincipledThin(p),
+            _ => return None,
+        })
     }
 
     /// Whether the BSDF's microfacets are anisotropic (a Mitsuba rough
@@ -194,6 +243,7 @@ impl Material {
             Material::MiRoughDielectric(d) => !d.distribution.is_isotropic(),
             Material::MiPrincipled(m) => m.anisotropic > 0.0,
             Material::MiPrincipledThin(m) => m.anisotropic > 0.0,
+            Material::MiBlend(b) => b.parts.iter().any(|p| Material::from(*p).is_anisotropic()),
             _ => false,
         }
     }
@@ -205,6 +255,12 @@ impl Material {
     /// [`Material::orient_anisotropy`].
     #[inline]
     pub fn set_param(&mut self, param: mitsuba::Param, value: f32) {
+        if param == mitsuba::Param::Weight {
+            if let Material::MiBlend(b) = self {
+                b.set_weight(value);
+            }
+            return;
+        }
         if let mitsuba::Param::Principled(p) = param {
             match self {
                 Material::MiPrincipled(m) => m.set(p, value),
@@ -222,7 +278,7 @@ impl Material {
         match param {
             mitsuba::Param::AlphaU => u = value,
             mitsuba::Param::AlphaV => v = value,
-            mitsuba::Param::Principled(_) => {}
+            mitsuba::Param::Principled(_) | mitsuba::Param::Weight => {}
         }
         *distribution = MicrofacetDistribution::new(distribution.kind, u, v);
     }
@@ -290,6 +346,7 @@ impl Material {
                 | Material::MiRoughPlastic(_)
                 | Material::MiPrincipled(_)
                 | Material::MiPrincipledThin(_)
+                | Material::MiBlend(_)
         )
     }
 
@@ -312,6 +369,7 @@ impl Material {
             | Material::MiRoughPlastic(_)
             | Material::MiPrincipled(_)
             | Material::MiPrincipledThin(_) => false,
+            Material::MiBlend(ref b) => b.parts.iter().all(|p| Material::from(*p).is_specular()),
         }
     }
 
@@ -339,6 +397,7 @@ impl Material {
             Material::MiRoughPlastic(ref p) => p.albedo(cos),
             Material::MiPrincipled(ref p) => p.albedo(cos),
             Material::MiPrincipledThin(ref p) => p.albedo(cos),
+            Material::MiBlend(ref b) => b.mix(|p| Material::from(*p).albedo(cos)),
         };
         finite_or_zero(a).clamp(Vec3A::ZERO, Vec3A::ONE)
     }
@@ -357,6 +416,7 @@ impl Material {
             }
             Material::MiPrincipled(ref p) => p.transmits(),
             Material::MiPrincipledThin(ref p) => p.transmits(),
+            Material::MiBlend(ref b) => b.parts.iter().any(|p| Material::from(*p).transmits()),
             _ => false,
         }
     }
@@ -419,6 +479,9 @@ impl Material {
             Material::MiRoughPlastic(ref p) => p.guide_lobes(wo),
             Material::MiPrincipled(ref p) => p.guide_lobes(wo),
             Material::MiPrincipledThin(ref p) => p.guide_lobes(wo),
+            Material::MiBlend(ref b) => {
+                b.mix_guides(b.parts.map(|p| Material::from(p).guide_lobes(wo)))
+            }
         }
     }
 
@@ -459,6 +522,7 @@ impl Material {
             Material::MiRoughPlastic(ref p) => p.eval(wo, wi),
             Material::MiPrincipled(ref p) => p.eval(wo, wi),
             Material::MiPrincipledThin(ref p) => p.eval(wo, wi),
+            Material::MiBlend(ref b) => blend_eval(b, wo, wi),
         }
     }
 
@@ -511,6 +575,7 @@ impl Material {
             Material::MiRoughPlastic(ref p) => p.pdf(wo, wi),
             Material::MiPrincipled(ref p) => p.pdf(wo, wi),
             Material::MiPrincipledThin(ref p) => p.pdf(wo, wi),
+            Material::MiBlend(ref b) => blend_pdf(b, wo, wi),
         }
     }
 
@@ -605,8 +670,32 @@ impl Material {
             Material::MiRoughPlastic(ref p) => p.sample(wo, u_lobe, u),
             Material::MiPrincipled(ref p) => p.sample(wo, u_lobe, u),
             Material::MiPrincipledThin(ref p) => p.sample(wo, u_lobe, u),
+            Material::MiBlend(ref b) => blend_sample(b, wo, u_lobe, u),
         }
     }
+}
+
+/// [`Material::eval`] of a blend: its parts' values mixed.
+#[inline(never)]
+fn blend_eval(b: &Blend, wo: Vec3A, wi: Vec3A) -> Vec3A {
+    b.mix(|p| Material::from(*p).eval(wo, wi))
+}
+
+/// [`Material::pdf`] of a blend: its parts' densities mixed.
+#[inline(never)]
+fn blend_pdf(b: &Blend, wo: Vec3A, wi: Vec3A) -> f32 {
+    b.mix_scalar(|p| Material::from(*p).pdf(wo, wi))
+}
+
+/// [`Material::sample`] of a blend ([`Blend::sample`]). (Out of line: the
+/// other materials' sampling stays as it was.)
+#[inline(never)]
+fn blend_sample(b: &Blend, wo: Vec3A, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
+    b.sample(
+        u_lobe,
+        |p, u_lobe| Material::from(*p).sample(wo, u_lobe, u),
+        |wi| (blend_eval(b, wo, wi), blend_pdf(b, wo, wi)),
+    )
 }
 
 #[cfg(test)]

@@ -29,6 +29,7 @@
 //!   not have their normal flipped; [`Material::MiPrincipled`] is one-sided
 //!   without transmission and such an interface with it, and
 //!   [`Material::MiPrincipledThin`] a sheet, the same from both sides.
+//!   [`Material::MiBlend`] (Mitsuba's `blendbsdf`) has its parts' sides.
 //!
 //! # Estimator
 //!
@@ -83,6 +84,8 @@
 //!   `dielectric`, `thindielectric`, `roughdielectric`, `plastic`,
 //!   `roughplastic`, `principled` and `principledthin`, a file each (Mitsuba's `diffuse` is
 //!   [`Material::Diffuse`]);
+//! * `blend.rs`: Mitsuba's `blendbsdf`, [`Blend`], the mixture of two of
+//!   its BSDFs ([`BlendPart`]);
 //! * `fresnel.rs`: the exact Fresnel terms, [`fresnel_dielectric`] and
 //!   [`fresnel_conductor`], and Mitsuba's [`fresnel_mitsuba`] and
 //!   [`fresnel_diffuse_reflectance`];
@@ -92,6 +95,7 @@
 //! * [`surface`]: the scene's material table (fixed BSDFs and glTF materials
 //!   with their textures).
 
+mod blend;
 mod bsdf;
 mod dielectric;
 mod disk;
@@ -109,6 +113,7 @@ pub mod surface;
 pub(crate) mod test_util;
 pub mod thin_film;
 
+pub use blend::{Blend, BlendPart};
 pub use bsdf::{BsdfSample, GUIDE_ALPHA, GuideLobes};
 pub(crate) use disk::concentric_disk;
 pub use frame::Frame;

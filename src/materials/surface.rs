@@ -468,6 +468,13 @@ pub struct TexturedBsdf {
     /// How the shading normal is perturbed (Mitsuba's `normalmap` and
     /// `bumpmap`), if it is.
     pub perturb: Option<Perturb>,
+    /// The textures of the two BSDFs of a [`Material::MiBlend`] (Mitsuba's
+    /// `blendbsdf`; its weight's texture is a [`Param::Weight`] in
+    /// `params`): each part's reflectance and scalar parameters, looked up
+    /// per hit into the blend's parts. `None` when no part is textured.
+    /// The parts' own sides, opacity, perturbation and parts are not
+    /// read (a blend's are the blend's).
+    pub parts: Option<Box<[TexturedBsdf; 2]>>,
 }
 
 /// A perturbation of the shading normal, in Mitsuba's shading frame (whose
@@ -517,6 +524,7 @@ impl TexturedBsdf {
             blend: None,
             params: Vec::new(),
             perturb: None,
+            parts: None,
         }
     }
 
@@ -524,7 +532,13 @@ impl TexturedBsdf {
     /// or a BSDF that is (or may be, by its textures) anisotropic.
     #[inline]
     pub fn needs_frame(&self) -> bool {
-        self.perturb.is_some() || !self.params.is_empty() || self.bsdf.is_anisotropic()
+        self.perturb.is_some()
+            || !self.params.is_empty()
+            || self.bsdf.is_anisotropic()
+            || self
+                .parts
+                .as_ref()
+                .is_some_and(|p| p.iter().any(|t| !t.params.is_empty()))
     }
 
     /// The reflectance at `attrs` (the pattern's, or the BSDF's own `fixed`).
@@ -538,10 +552,14 @@ impl TexturedBsdf {
         let Some(p) = &self.reflectance else {
             return fixed;
         };
-        let value = p.eval(attrs.uv[0], attrs.color, textures);
         match self.blend {
-            Some([a, b]) => a * (1.0 - value.x) + b * value.x,
-            None => Vec3A::from(value.xyz()),
+            // Mitsuba reads the weight with `eval_1`, clipped to [0, 1].
+            Some([a, b]) => {
+                let w = p.eval_1(attrs.uv[0], attrs.color, textures);
+                let w = if w.is_nan() { 0.0 } else { w.clamp(0.0, 1.0) };
+                a * (1.0 - w) + b * w
+            }
+            None => Vec3A::from(p.eval(attrs.uv[0], attrs.color, textures).xyz()),
         }
     }
 }
@@ -898,6 +916,14 @@ fn textured_bsdf(t: &TexturedBsdf, attrs: &HitAttributes, textures: &TextureStor
         Some(_) => with_reflectance(t.bsdf, t.reflectance_at(Vec3A::ZERO, attrs, textures)),
         None => t.bsdf,
     };
+    if let (Some(parts), Material::MiBlend(b)) = (&t.parts, &mut bsdf) {
+        for (part, textured) in b.parts.iter_mut().zip(parts.iter()) {
+            if textured.reflectance.is_some() || !textured.params.is_empty() {
+                let m = textured_bsdf(textured, attrs, textures);
+                *part = m.blend_part().unwrap_or(*part);
+            }
+        }
+    }
     for (param, pattern) in &t.params {
         bsdf.set_param(*param, pattern.eval_1(attrs.uv[0], attrs.color, textures));
     }
@@ -944,10 +970,20 @@ pub fn pattern_images_mut(m: &mut SurfaceMaterial) -> impl Iterator<Item = &mut 
         let perturb = t.perturb.as_mut().map(|p| match &mut p.map {
             PerturbMap::NormalMap(p) | PerturbMap::BumpMap { height: p, .. } => p,
         });
+        // A blend's parts (one level: a part is never a blend).
+        let parts = t.parts.as_deref_mut().into_iter().flat_map(|parts| {
+            parts.iter_mut().flat_map(|part| {
+                part.reflectance
+                    .as_mut()
+                    .into_iter()
+                    .chain(part.params.iter_mut().map(|(_, p)| p))
+            })
+        });
         [t.reflectance.as_mut(), t.opacity.as_mut(), perturb]
             .into_iter()
             .flatten()
             .chain(t.params.iter_mut().map(|(_, p)| p))
+            .chain(parts)
             .filter_map(Pattern::image_mut)
     })
 }

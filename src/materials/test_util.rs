@@ -30,6 +30,16 @@ pub(crate) fn sphere(r: &mut Rng) -> Vec3A {
     Vec3A::new(s * cp, s * sp, z)
 }
 
+/// A uniformly distributed `wo`, turned above the surface if `one_sided`;
+/// `None` within 1e-3 of the horizon.
+pub(crate) fn random_wo(r: &mut Rng, one_sided: bool) -> Option<Vec3A> {
+    let mut wo = sphere(r);
+    if one_sided {
+        wo.z = wo.z.abs();
+    }
+    (wo.z.abs() >= 1e-3).then_some(wo)
+}
+
 /// The direction at polar angle `theta_deg` and azimuth `phi` (radians).
 pub(crate) fn dir(theta_deg: f32, phi: f32) -> Vec3A {
     let (st, ct) = theta_deg.to_radians().sin_cos();
@@ -231,6 +241,36 @@ pub(crate) fn chi2_p_value_of(m: Material, claimed: Material, wo: Vec3A, key: u6
 
 /// The per-test p-value threshold of `tests` independent χ² tests whose
 /// family-wise false-rejection rate is 1 % (Šidák correction).
+/// The χ² test of every material of `materials` seen from each polar angle
+/// of `thetas` (at azimuth 0.4), from above and, for those not `one_sided`,
+/// from below, with keys from `key + 1` on; each must pass the Šidák
+/// threshold of all of them and `extra` tests more. The smallest p value.
+pub(crate) fn chi2_all(
+    materials: &[Material],
+    thetas: &[f32],
+    one_sided: impl Fn(&Material) -> bool,
+    mut key: u64,
+    extra: u32,
+) -> f64 {
+    let sides = |m: &Material| if one_sided(m) { 1 } else { 2 };
+    let tests = materials.iter().map(sides).sum::<u32>() * thetas.len() as u32 + extra;
+    let mut min_p = 1.0f64;
+    for m in materials {
+        let sides: &[f32] = if one_sided(m) { &[1.0] } else { &[1.0, -1.0] };
+        for &side in sides {
+            for &theta in thetas {
+                key += 1;
+                let wo = dir(theta, 0.4) * Vec3A::new(1.0, 1.0, side);
+                let p = chi2_p_value(*m, wo, key);
+                eprintln!("chi2 {m:?} wo {wo}: p = {p:.4}");
+                assert!(p > sidak_threshold(tests), "{m:?} wo {wo}: p = {p}");
+                min_p = min_p.min(p);
+            }
+        }
+    }
+    min_p
+}
+
 pub(crate) fn sidak_threshold(tests: u32) -> f64 {
     1.0 - (1.0 - 0.01f64).powf(1.0 / tests as f64)
 }

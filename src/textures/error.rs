@@ -84,6 +84,14 @@ pub enum TextureError {
         /// Why, in a few words.
         why: String,
     },
+    /// An OpenEXR file that could not be read as a texture.
+    #[error("{name}: cannot read it as an OpenEXR texture: {why}")]
+    Exr {
+        /// The image.
+        name: String,
+        /// Why, in a few words.
+        why: String,
+    },
     /// The decoder failed: a truncated or corrupt file, an unsupported variant.
     #[error("{name}: {}", one_line(.cause))]
     Decode {

@@ -1,7 +1,9 @@
 //! Textures: decoded images shared by materials, and their lookups.
 //!
 //! A [`TextureStore`] holds every [`Image`] of a scene, decoded from PNG,
-//! JPEG, WebP or KTX2 (Basis Universal) in parallel ([`TextureStore::decode_all`]) and named by `u32` ids; a
+//! JPEG, WebP or KTX2 (Basis Universal) in parallel ([`TextureStore::decode_all`]),
+//! or from OpenEXR as linear floats ([`Image::decode_exr`], for Mitsuba's
+//! `bitmap`), and named by `u32` ids; a
 //! material slot refers to one with a [`TextureRef`] (image, glTF sampler wrap
 //! modes, texture-coordinate set and `KHR_texture_transform`).
 //!
@@ -20,7 +22,8 @@
 //!
 //! # Storage
 //!
-//! Texels are kept as decoded, 8 or 16 bits per channel and 1 to 4 channels
+//! Texels are kept as decoded, 8 or 16 bits per channel (32-bit floats for
+//! OpenEXR images, read as they are in either colour space) and 1 to 4 channels
 //! (grey, grey + alpha, RGB, RGBA), and converted at lookup time through
 //! tables: 256 `f32`s for 8-bit sRGB and 256 for 8-bit linear (`x / 255`), and
 //! 65 536 for 16-bit sRGB, built once on first use (16-bit linear is a
@@ -31,6 +34,7 @@
 
 mod decode;
 mod error;
+mod exr;
 mod ktx2;
 mod pattern;
 mod srgb;

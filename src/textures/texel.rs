@@ -41,6 +41,8 @@ pub(super) enum Texels {
     U8(Vec<u8>),
     /// 16 bits per channel.
     U16(Vec<u16>),
+    /// Linear 32-bit floats (OpenEXR), whatever the colour space.
+    F32(Vec<f32>),
 }
 
 /// A decoded image: `width × height` texels of 1–4 channels (grey, grey + alpha,
@@ -92,6 +94,10 @@ impl Image {
                     f.update(&bytes[..2 * chunk.len()]);
                 }
             }
+            Texels::F32(t) => {
+                f.update(b"f32");
+                f.floats(t.iter().copied());
+            }
         }
     }
 }
@@ -142,6 +148,23 @@ impl Image {
         }
     }
 
+    /// An image of linear 32-bit float channel values (an OpenEXR image),
+    /// read as they are in either [`ColorSpace`]; as [`Image::from_u8`]
+    /// otherwise.
+    ///
+    /// # Panics
+    ///
+    /// As [`Image::from_u8`].
+    pub fn from_f32(width: u32, height: u32, channels: u8, texels: Vec<f32>) -> Self {
+        Self::checked(width, height, channels, texels.len());
+        Self {
+            width,
+            height,
+            channels,
+            texels: Texels::F32(texels),
+        }
+    }
+
     /// The image as [`Image::from_cache_bytes`] reads it (little-endian).
     pub(crate) fn to_cache_bytes(&self) -> Vec<u8> {
         let mut out = Vec::new();
@@ -152,6 +175,7 @@ impl Image {
         match &self.texels {
             Texels::U8(t) => out.extend_from_slice(t),
             Texels::U16(t) => out.extend(t.iter().flat_map(|v| v.to_le_bytes())),
+            Texels::F32(t) => out.extend(t.iter().flat_map(|v| v.to_le_bytes())),
         }
         out
     }
@@ -166,7 +190,7 @@ impl Image {
             && (1..=MAX_SIDE).contains(&height)
             && texels <= MAX_TEXELS
             && (1..=4).contains(&channels)
-            && (bits == 8 || bits == 16)
+            && (bits == 8 || bits == 16 || bits == 32)
             && r.0.len() as u64 == texels * u64::from(channels) * u64::from(bits / 8);
         if !sound {
             return None;
@@ -174,6 +198,11 @@ impl Image {
         let channels = channels as u8;
         Some(if bits == 8 {
             Self::from_u8(width, height, channels, r.0.to_vec())
+        } else if bits == 32 {
+            let values =
+                r.0.chunks_exact(4)
+                    .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]));
+            Self::from_f32(width, height, channels, values.collect())
         } else {
             let values =
                 r.0.chunks_exact(2)
@@ -197,11 +226,12 @@ impl Image {
         self.channels
     }
 
-    /// Bits per channel as stored: 8 or 16.
+    /// Bits per channel as stored: 8 or 16 (32: floats).
     pub fn bits_per_channel(&self) -> u8 {
         match self.texels {
             Texels::U8(_) => 8,
             Texels::U16(_) => 16,
+            Texels::F32(_) => 32,
         }
     }
 
@@ -210,6 +240,7 @@ impl Image {
         match &self.texels {
             Texels::U8(t) => t.len(),
             Texels::U16(t) => 2 * t.len(),
+            Texels::F32(t) => 4 * t.len(),
         }
     }
 
@@ -246,6 +277,10 @@ impl Image {
                         expand(c, |k| rgb[usize::from(t[k])], |k| linear16(t[k]))
                     }
                 }
+            }
+            Texels::F32(t) => {
+                let t = &t[base..base + c];
+                expand(c, |k| t[k], |k| t[k])
             }
         }
     }

@@ -802,9 +802,10 @@ pub fn power_heuristic(a: f32, b: f32) -> f32 {
 }
 
 /// Whether a BSDF tells the two sides of a surface apart itself (glass,
-/// Mitsuba's dielectrics and principled BSDFs that transmit, the glTF
-/// material, whose transmission refracts into the inside); the others are one-sided and face the side their normal
-/// points to.
+/// Mitsuba's dielectrics and principled BSDFs that transmit, a blend with
+/// such a part, the glTF material, whose transmission refracts into the
+/// inside); the others are one-sided and face the side their normal points
+/// to.
 #[inline]
 fn two_sided(material: &Material) -> bool {
     matches!(
@@ -816,6 +817,8 @@ fn two_sided(material: &Material) -> bool {
             | Material::MiRoughDielectric(_)
             | Material::MiPrincipledThin(_)
     ) || matches!(material, Material::MiPrincipled(p) if p.transmits())
+        || matches!(material, Material::MiBlend(b)
+            if b.parts.iter().any(|&p| two_sided(&Material::from(p))))
 }
 
 #[cfg(test)]

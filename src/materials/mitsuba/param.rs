@@ -13,4 +13,7 @@ pub enum Param {
     AlphaV,
     /// A scalar parameter of `principled` or `principledthin`.
     Principled(super::principled::PrincipledParam),
+    /// A `blendbsdf`'s `weight`, the share of its second BSDF
+    /// ([`Blend::set_weight`](super::super::Blend::set_weight)).
+    Weight,
 }

@@ -12,7 +12,6 @@ use super::super::error::MitsubaError;
 use super::super::tree::{Object, Tag};
 use super::color::Role;
 use super::props::{ColorProp, Props};
-use crate::materials::Material;
 use crate::materials::MicrofacetKind;
 use crate::materials::mitsuba::{
     Conductor, Plastic, Principled, PrincipledThin, RoughConductor, RoughDielectric, RoughPlastic,
@@ -22,8 +21,9 @@ use crate::materials::mitsuba::{Param, PrincipledParam};
 use crate::materials::surface::{
     AlphaMode, MaterialKind, Perturb, PerturbMap, SurfaceMaterial, TexturedBsdf,
 };
+use crate::materials::{Blend, Material};
 use crate::memory::Ledger;
-use crate::textures::{ColorSpace, Pattern, TextureStore, Wrap};
+use crate::textures::{ColorSpace, Image, Pattern, TextureStore, Wrap, mitsuba_luminance};
 
 /// Mitsuba's named indices of refraction (`include/mitsuba/render/ior.h`:
 /// Hecht's values at about 589 nm).
@@ -232,6 +232,13 @@ fn to_uv(m: Mat4) -> Affine2 {
     }
 }
 
+/// Whether `path` names an OpenEXR file (by its extension, as Mitsuba
+/// picks the format).
+fn is_exr(path: &std::path::Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("exr"))
+}
+
 /// Constant microfacet widths `(alpha_u, alpha_v)` and the textures that
 /// vary them.
 type Widths = ((f32, f32), Vec<(Param, Pattern)>);
@@ -277,6 +284,19 @@ impl<'l> Materials<'l> {
             path: path.clone(),
             cause,
         })?;
+        if is_exr(&path) {
+            // Linear floats, read as they are (Mitsuba's `raw` changes nothing).
+            let image = Image::decode_exr(
+                &bytes,
+                &path.display().to_string(),
+                self.ledger,
+                &self.scene,
+            )
+            .map_err(|e| t.error(e.to_string()))?;
+            let id = self.textures.push(image);
+            self.images.insert((path, false), id);
+            return Ok(id);
+        }
         let store = TextureStore::decode_all_within(
             vec![(path.display().to_string(), bytes)],
             self.ledger,
@@ -452,6 +472,48 @@ impl<'l> Materials<'l> {
         }
     }
 
+    /// A `blendbsdf`'s `weight` (Mitsuba's default 0.5): the constant (a
+    /// colour read as Mitsuba's `eval_1` reads it, its luminance), and the
+    /// pattern of a texture, whose mean then stands for it.
+    fn weight(
+        &mut self,
+        p: &Props,
+        resolve: &dyn Fn(&str) -> Option<PathBuf>,
+    ) -> Result<(f32, Option<Pattern>), MitsubaError> {
+        match p.color_opt("weight", Role::Unbounded)? {
+            None => Ok((0.5, None)),
+            Some(ColorProp::Value(c)) => Ok((mitsuba_luminance(c.into()), None)),
+            Some(ColorProp::Texture(t)) => {
+                let pattern = self.pattern(&t, resolve)?;
+                Ok((self.mean(&pattern), Some(pattern)))
+            }
+        }
+    }
+
+    /// One of a general `blendbsdf`'s two BSDFs: its textured BSDF (a
+    /// Mitsuba BSDF a [`Blend`] can hold, with its own textures) and its
+    /// reflectance for `flat` and `direct`.
+    fn blend_part(
+        &mut self,
+        o: &Arc<Object>,
+        resolve: &dyn Fn(&str) -> Option<PathBuf>,
+    ) -> Result<(TexturedBsdf, Vec3A), MitsubaError> {
+        let q = Props::new(o);
+        if let "blendbsdf" | "twosided" | "mask" | "normalmap" | "bumpmap" | "null" =
+            o.plugin.as_str()
+        {
+            return Err(q.error(format!(
+                "raylab's blendbsdf blends two plain BSDFs (diffuse, conductor, dielectric, plastic, principled and their variants); a '{}' inside a blend is not supported yet",
+                o.plugin
+            )));
+        }
+        let m = self.material(o, resolve)?;
+        match m.kind {
+            MaterialKind::Textured(t) if t.bsdf.blend_part().is_some() => Ok((*t, m.reflectance)),
+            _ => Err(q.error("this BSDF cannot be blended yet")),
+        }
+    }
+
     /// A `<bsdf>` as a material (no emission yet).
     pub fn material(
         &mut self,
@@ -475,31 +537,47 @@ impl<'l> Materials<'l> {
                 let [a, b] = inner.as_slice() else {
                     return Err(p.error("needs exactly two nested BSDFs"));
                 };
-                let rho = |o: &Arc<Object>| -> Result<Vec3A, MitsubaError> {
-                    let q = Props::new(o);
-                    if o.plugin != "diffuse" {
-                        return Err(q.error(
-                            "raylab's blendbsdf blends two diffuse BSDFs (exactly a diffuse BSDF); others are not supported yet",
-                        ));
+                // Two constant Lambertian BSDFs blend into one, exactly.
+                let lambertian =
+                    |o: &Arc<Object>| o.plugin == "diffuse" && o.child("reflectance").is_none();
+                if !(lambertian(a) && lambertian(b)) {
+                    let (weight, pattern) = self.weight(&p, resolve)?;
+                    let (t0, rho0) = self.blend_part(a, resolve)?;
+                    let (t1, rho1) = self.blend_part(b, resolve)?;
+                    let part = |t: &TexturedBsdf| t.bsdf.blend_part().expect("checked");
+                    let blend = Blend::new(weight, part(&t0), part(&t1));
+                    textured.bsdf = Material::MiBlend(blend);
+                    rho = rho0 * (1.0 - blend.weight) + rho1 * blend.weight;
+                    textured
+                        .params
+                        .extend(pattern.map(|pat| (Param::Weight, pat)));
+                    let textured_part =
+                        |t: &TexturedBsdf| t.reflectance.is_some() || !t.params.is_empty();
+                    if textured_part(&t0) || textured_part(&t1) {
+                        textured.parts = Some(Box::new([t0, t1]));
                     }
-                    let c =
-                        q.constant_color("reflectance", Role::Reflectance, Vec3A::splat(0.5))?;
-                    q.finish()?;
-                    Ok(c)
-                };
-                let (r0, r1) = (rho(a)?, rho(b)?);
-                let (w, pattern) = self.color(&p, "weight", Vec3A::splat(0.5), resolve)?;
-                let mixed = r0 * (1.0 - w.x) + r1 * w.x;
-                textured.bsdf = Material::Diffuse { reflectance: mixed };
-                if pattern.is_some() {
-                    textured.reflectance = pattern;
-                    textured.blend = Some([r0, r1]);
+                } else {
+                    let rho = |o: &Arc<Object>| -> Result<Vec3A, MitsubaError> {
+                        let q = Props::new(o);
+                        let c =
+                            q.constant_color("reflectance", Role::Reflectance, Vec3A::splat(0.5))?;
+                        q.finish()?;
+                        Ok(c)
+                    };
+                    let (r0, r1) = (rho(a)?, rho(b)?);
+                    let (w, pattern) = self.color(&p, "weight", Vec3A::splat(0.5), resolve)?;
+                    let mixed = r0 * (1.0 - w.x) + r1 * w.x;
+                    textured.bsdf = Material::Diffuse { reflectance: mixed };
+                    if pattern.is_some() {
+                        textured.reflectance = pattern;
+                        textured.blend = Some([r0, r1]);
+                    }
+                    p.finish()?;
+                    let mut m = SurfaceMaterial::fixed(mixed, textured.bsdf);
+                    m.name = bsdf.id.clone().unwrap_or_default();
+                    m.kind = MaterialKind::Textured(Box::new(textured));
+                    return Ok(m);
                 }
-                p.finish()?;
-                let mut m = SurfaceMaterial::fixed(mixed, textured.bsdf);
-                m.name = bsdf.id.clone().unwrap_or_default();
-                m.kind = MaterialKind::Textured(Box::new(textured));
-                return Ok(m);
             }
             "twosided" => {
                 let inner = p.children_of(Tag::Bsdf);
@@ -705,24 +783,11 @@ impl<'l> Materials<'l> {
 mod tests {
     use super::*;
     use crate::materials::mitsuba::PrincipledParam;
-    use std::path::Path;
 
     /// The material of the `<bsdf>` in `body` (a scene's only child), or
     /// the one-line error.
     fn bsdf(body: &str) -> Result<Material, String> {
-        let text = format!("<scene version=\"3.0.0\">{body}</scene>");
-        let tree = crate::load::mitsuba::read_str(&text, Path::new("/virtual/scene.xml"), &[])
-            .map_err(|e| e.to_string())?;
-        let ledger = Ledger::unlimited();
-        let mut materials = Materials::new(&ledger, "test".into());
-        let object = tree.root.children[0].object.clone();
-        let m = materials
-            .material(&object, &|_| None)
-            .map_err(|e| e.to_string())?;
-        match m.kind {
-            MaterialKind::Textured(t) => Ok(t.bsdf),
-            _ => Err("not a textured material".into()),
-        }
+        super::blend_and_exr_tests::read(body).map(|(t, _)| t.bsdf)
     }
 
     #[test]
@@ -882,5 +947,170 @@ mod tests {
             r#"<bsdf type="principledthin"><texture name="diff_trans" type="checkerboard"/></bsdf>"#,
         );
         assert!(matches!(m, Ok(Material::MiPrincipledThin(_))), "{m:?}");
+    }
+}
+
+#[cfg(test)]
+mod blend_and_exr_tests {
+    use super::*;
+    use glam::Vec2;
+    use std::path::Path;
+
+    /// The material of the `<bsdf>` in `body`, files found in
+    /// `tests/data/mitsuba/suite/textures`, with the texture store.
+    pub(super) fn read(body: &str) -> Result<(TexturedBsdf, TextureStore), String> {
+        let text = format!("<scene version=\"3.0.0\">{body}</scene>");
+        let tree = crate::load::mitsuba::read_str(&text, Path::new("/virtual/scene.xml"), &[])
+            .map_err(|e| e.to_string())?;
+        let ledger = Ledger::unlimited();
+        let mut materials = Materials::new(&ledger, "test".into());
+        let object = tree.root.children[0].object.clone();
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mitsuba/suite/textures");
+        let resolve = move |name: &str| Some(dir.join(name)).filter(|p| p.exists());
+        let m = materials
+            .material(&object, &resolve)
+            .map_err(|e| e.to_string())?;
+        match m.kind {
+            MaterialKind::Textured(t) => Ok((*t, materials.textures)),
+            _ => Err("not a textured material".into()),
+        }
+    }
+
+    #[test]
+    fn blendbsdf_blends_any_two_bsdfs() {
+        let (t, _) = read(
+            r#"<bsdf type="blendbsdf"><float name="weight" value="0.25"/>
+                <bsdf type="diffuse"><rgb name="reflectance" value="0.2, 0.4, 0.6"/></bsdf>
+                <bsdf type="roughconductor"><float name="alpha" value="0.3"/></bsdf></bsdf>"#,
+        )
+        .unwrap();
+        let Material::MiBlend(b) = t.bsdf else {
+            panic!("{:?}", t.bsdf)
+        };
+        assert_eq!(b.weight, 0.25);
+        assert_eq!(
+            b.parts[0],
+            crate::materials::BlendPart::Diffuse(Vec3A::new(0.2, 0.4, 0.6))
+        );
+        assert!(matches!(
+            b.parts[1],
+            crate::materials::BlendPart::RoughConductor(_)
+        ));
+        assert!(t.params.is_empty() && t.parts.is_none());
+        // A textured weight is a parameter; textured parts keep their
+        // textures (a checkerboard reflectance, a textured alpha).
+        let (t, _) = read(
+            r#"<bsdf type="blendbsdf">
+                <texture name="weight" type="checkerboard"/>
+                <bsdf type="diffuse"><texture name="reflectance" type="checkerboard"/></bsdf>
+                <bsdf type="roughconductor"><texture name="alpha" type="checkerboard"/></bsdf></bsdf>"#,
+        )
+        .unwrap();
+        assert_eq!(t.params.len(), 1);
+        assert_eq!(t.params[0].0, Param::Weight);
+        let parts = t.parts.expect("textured parts");
+        assert!(parts[0].reflectance.is_some() && parts[1].params.len() == 2);
+        // Two constant Lambertian BSDFs stay one exact Lambertian BSDF.
+        let (t, _) =
+            read(r#"<bsdf type="blendbsdf"><bsdf type="diffuse"/><bsdf type="diffuse"/></bsdf>"#)
+                .unwrap();
+        assert!(matches!(t.bsdf, Material::Diffuse { .. }), "{:?}", t.bsdf);
+    }
+
+    #[test]
+    fn blendbsdf_refuses_what_it_cannot_hold_in_one_line() {
+        for (body, says) in [
+            (
+                r#"<bsdf type="blendbsdf"><bsdf type="diffuse"/></bsdf>"#,
+                "exactly two nested BSDFs",
+            ),
+            (
+                r#"<bsdf type="blendbsdf"><bsdf type="diffuse"/><bsdf type="blendbsdf"><bsdf type="diffuse"/><bsdf type="conductor"/></bsdf></bsdf>"#,
+                "a 'blendbsdf' inside a blend is not supported yet",
+            ),
+            (
+                r#"<bsdf type="blendbsdf"><bsdf type="conductor"/><bsdf type="twosided"><bsdf type="diffuse"/></bsdf></bsdf>"#,
+                "a 'twosided' inside a blend",
+            ),
+            (
+                r#"<bsdf type="blendbsdf"><float name="weight" value="0.5"/><float name="wieght" value="0.5"/><bsdf type="conductor"/><bsdf type="diffuse"/></bsdf>"#,
+                "wieght",
+            ),
+        ] {
+            let e = read(body).map(|_| ()).expect_err(body);
+            assert!(e.contains(says) && !e.contains('\n'), "{body}: {e}");
+            assert!(e.contains("scene.xml:"), "{e}");
+        }
+    }
+
+    #[test]
+    fn exr_bitmaps_are_linear_floats_rgb_or_luminance() {
+        // weight.exr: one float channel Y, texel (i, j) = 0.5 + 0.45
+        // sin(2π i / 16) cos(2π j / 21); albedo.exr: RGB halves.
+        let (t, store) = read(
+            r#"<bsdf type="diffuse"><texture name="reflectance" type="bitmap">
+                <string name="filename" value="weight.exr"/>
+                <string name="filter_type" value="nearest"/></texture></bsdf>"#,
+        )
+        .unwrap();
+        let p = t.reflectance.expect("a pattern");
+        let image = store.get(p.image().unwrap());
+        assert_eq!(
+            (image.width(), image.height(), image.channels()),
+            (32, 32, 1)
+        );
+        assert_eq!(image.bits_per_channel(), 32);
+        let at = |i: f32, j: f32| Vec2::new((i + 0.5) / 32.0, (j + 0.5) / 32.0);
+        let want = |i: f32, j: f32| {
+            use std::f32::consts::TAU;
+            0.5 + 0.45 * (i * TAU / 16.0).sin() * (j * TAU / 21.0).cos()
+        };
+        for (i, j) in [(0.0, 0.0), (4.0, 0.0), (3.0, 7.0)] {
+            let v = p.eval(at(i, j), Vec4::ONE, &store);
+            assert!((v.x - want(i, j)).abs() < 1e-6 && v.x == v.y && v.y == v.z);
+            // As a number (eval_1), a grey value is itself.
+            assert!((p.eval_1(at(i, j), Vec4::ONE, &store) - v.x).abs() < 1e-6);
+        }
+        // raw changes nothing; RGB channels are read as they are.
+        let (t, store) = read(
+            r#"<bsdf type="diffuse"><texture name="reflectance" type="bitmap">
+                <string name="filename" value="albedo.exr"/><boolean name="raw" value="true"/>
+                <string name="filter_type" value="nearest"/></texture></bsdf>"#,
+        )
+        .unwrap();
+        let p = t.reflectance.unwrap();
+        assert_eq!(store.get(p.image().unwrap()).channels(), 3);
+        let v = p.eval(Vec2::new(0.5 / 16.0, 0.5 / 16.0), Vec4::ONE, &store);
+        // Texel (0, 0): R 0.15, G 0.7, B 0.8, as halves.
+        for (got, want) in [(v.x, 0.15f32), (v.y, 0.7), (v.z, 0.8)] {
+            assert!((got - want).abs() < 1e-3, "{v}");
+        }
+    }
+
+    #[test]
+    fn a_bad_exr_is_one_line_naming_it() {
+        let dir = std::env::temp_dir().join(format!("raylab-exr-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let bad = dir.join("bad.exr");
+        std::fs::write(&bad, b"not an OpenEXR file at all").unwrap();
+        let text = format!(
+            r#"<scene version="3.0.0"><bsdf type="diffuse"><texture name="reflectance" type="bitmap"><string name="filename" value="{}"/></texture></bsdf></scene>"#,
+            bad.display()
+        );
+        let tree =
+            crate::load::mitsuba::read_str(&text, Path::new("/virtual/scene.xml"), &[]).unwrap();
+        let ledger = Ledger::unlimited();
+        let mut materials = Materials::new(&ledger, "test".into());
+        let object = tree.root.children[0].object.clone();
+        let resolve = |name: &str| Some(PathBuf::from(name));
+        let e = materials
+            .material(&object, &resolve)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("bad.exr") && e.contains("OpenEXR") && !e.contains('\n'),
+            "{e}"
+        );
+        std::fs::remove_dir_all(&dir).ok();
     }
 }
