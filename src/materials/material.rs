@@ -79,7 +79,7 @@ pub enum Material {
     /// sides).
     MiPrincipledThin(mitsuba::PrincipledThin),
     /// Mitsuba 3's `blendbsdf`: a mixture of two of its BSDFs (see
-    /// [`super::blend`]); its sides are its parts'.
+    /// `materials::blend`); its sides are its parts'.
     MiBlend(Blend),
 }
 
