@@ -5,7 +5,10 @@
 //! Camera space has x to the right, y down and z forward, like the lab's image:
 //! the ray through image point `(px, py)` (pixel units, `(0, 0)` the top-left
 //! corner) has direction `R·(px − W/2, py − H/2, f)`; an orthographic camera's
-//! rays all go along `R·z` from `R·((px − W/2)·s, (py − H/2)·s, 0)`.
+//! rays all go along `R·z` from `R·((px − W/2)·s, (py − H/2)·s, 0)`. An image
+//! that is a window of a larger film ([`Camera::window`], Mitsuba's crop
+//! window) keeps the film's projection: `(W/2, H/2)` is then the film's centre
+//! in the window's pixel coordinates, `(cx, cy)`.
 //!
 //! A thin lens ([`ThinLens`]) in the plane `z = 0` of camera space, centred on
 //! the position, focuses at distance `F` along the view axis: the ray through
@@ -193,6 +196,9 @@ pub struct SceneCamera {
     pub aspect_ratio: Option<f32>,
     /// A thin lens the file asks for (glTF cameras are pinholes).
     pub depth_of_field: DepthOfField,
+    /// The window of the film the file renders (Mitsuba's crop window);
+    /// `None`: the whole film.
+    pub window: Option<FilmWindow>,
 }
 
 /// A camera producing rays for an image of `width × height` pixels.
@@ -213,6 +219,47 @@ pub struct Camera {
     /// The thin lens, `None` for a pinhole (or an orthographic camera's
     /// parallel rays).
     pub thin_lens: Option<ThinLens>,
+    /// Where the view axis meets the image, in its pixel coordinates: the
+    /// image's centre `(W/2, H/2)`, or for a window of a larger film
+    /// ([`Camera::window`]) the film's centre.
+    pub centre: Vec2,
+}
+
+/// A window of a camera's film: only its pixels are rendered, with the
+/// whole film's projection (Mitsuba's `hdrfilm` crop window).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct FilmWindow {
+    /// The film's size in pixels the window is given in.
+    pub film: [u32; 2],
+    /// The window's top-left pixel (column, row).
+    pub offset: [u32; 2],
+    /// The window's size in pixels, at least 1 each and within the film.
+    pub size: [u32; 2],
+}
+
+impl FilmWindow {
+    /// The window on a film of `width × height` pixels: the same pixels when
+    /// that is the film's size, else the window scaled with the film (each
+    /// edge rounded to the nearest pixel, at least one pixel wide).
+    pub fn at(&self, width: u32, height: u32) -> FilmWindow {
+        let scale = |v: u32, to: u32, from: u32| -> u32 {
+            // round(v · to / from) in integers: exact at to == from.
+            ((2 * u64::from(v) * u64::from(to) + u64::from(from)) / (2 * u64::from(from))) as u32
+        };
+        let axis = |k: usize, to: u32| {
+            let from = self.film[k];
+            let start = scale(self.offset[k], to, from).min(to - 1);
+            let end = scale(self.offset[k] + self.size[k], to, from).clamp(start + 1, to);
+            (start, end - start)
+        };
+        let (x, w) = axis(0, width);
+        let (y, h) = axis(1, height);
+        FilmWindow {
+            film: [width, height],
+            offset: [x, y],
+            size: [w, h],
+        }
+    }
 }
 
 impl Camera {
@@ -267,6 +314,21 @@ impl Camera {
             width,
             height,
             thin_lens: None,
+            centre: Vec2::new(0.5 * width as f32, 0.5 * height as f32),
+        }
+    }
+
+    /// This camera's image cut to `window` of its film (the window's offset
+    /// and size; [`FilmWindow::at`] fits a window to the film): the same
+    /// rays through the same film points, only those of the window's pixels,
+    /// and the image the window's size.
+    pub fn window(self, window: FilmWindow) -> Camera {
+        let [x, y] = window.offset;
+        Camera {
+            width: window.size[0],
+            height: window.size[1],
+            centre: self.centre - Vec2::new(x as f32, y as f32),
+            ..self
         }
     }
 
@@ -297,7 +359,7 @@ impl Camera {
     /// through a thin lens's centre (renders take [`Camera::lens_ray`]).
     #[inline]
     pub fn ray(&self, px: f32, py: f32) -> Ray {
-        let (x, y) = (px - 0.5 * self.width as f32, py - 0.5 * self.height as f32);
+        let (x, y) = (px - self.centre.x, py - self.centre.y);
         if let Some(s) = self.ortho_px {
             let origin = self.position + self.rotation * Vec3A::new(x * s, y * s, 0.0);
             return Ray::new(origin, self.rotation.z_axis);
@@ -316,7 +378,7 @@ impl Camera {
         let Some(thin) = self.thin_lens else {
             return self.ray(px, py);
         };
-        let (x, y) = (px - 0.5 * self.width as f32, py - 0.5 * self.height as f32);
+        let (x, y) = (px - self.centre.x, py - self.centre.y);
         let on_lens = thin.point(lens);
         let f = thin.focus_distance;
         // In camera space: where the pinhole ray meets the focus plane, and
@@ -349,8 +411,8 @@ impl Camera {
         if self.ortho_px.is_some() {
             return std::array::from_fn(|i| self.ray(px[i], py[i]));
         }
-        let x = Vec4::from_array(px) - Vec4::splat(0.5 * self.width as f32);
-        let y = Vec4::from_array(py) - Vec4::splat(0.5 * self.height as f32);
+        let x = Vec4::from_array(px) - Vec4::splat(self.centre.x);
+        let y = Vec4::from_array(py) - Vec4::splat(self.centre.y);
         let z = Vec4::splat(self.focal_px);
         // `Mat3A * Vec3A` (x·c0 + y·c1) + z·c2, and `normalize` (v / √((x² + y²) + z²)),
         // lane by lane with the same operations in the same order.
@@ -377,8 +439,8 @@ impl Camera {
         if self.ortho_px.is_some() || self.thin_lens.is_some() {
             return None;
         }
-        let x = F8::from_array(*px) - F8::splat(0.5 * self.width as f32);
-        let y = F8::from_array(*py) - F8::splat(0.5 * self.height as f32);
+        let x = F8::from_array(*px) - F8::splat(self.centre.x);
+        let y = F8::from_array(*py) - F8::splat(self.centre.y);
         let z = F8::splat(self.focal_px);
         let [c0, c1, c2] = [
             self.rotation.x_axis,
@@ -818,6 +880,61 @@ mod tests {
                 inside_half as f32 / total
             );
         }
+    }
+
+    /// A window of the film keeps the film's rays: its pixel `(x, y)` is the
+    /// film's `(x + ox, y + oy)`, for pinholes, thin lenses and parallel
+    /// rays; its four-ray path matches its one-ray path bit for bit.
+    #[test]
+    fn a_window_keeps_the_films_rays() {
+        let window = FilmWindow {
+            film: [320, 200],
+            offset: [211, 13],
+            size: [64, 48],
+        };
+        let ortho = Camera::with_lens(
+            Vec3A::new(1.0, 2.0, 3.0),
+            lab_rotation(-30.0, 12.0),
+            Lens::Orthographic { half_height: 2.5 },
+            320,
+            200,
+        );
+        for film in [lens_camera(0.0, 2.0, 0), lens_camera(0.1, 3.0, 0), ortho] {
+            let cut = film.window(window);
+            assert_eq!((cut.width, cut.height), (64, 48));
+            for (px, py) in [(0.0, 0.0), (31.5, 20.25), (63.9, 47.9)] {
+                for u in [Vec2::splat(0.5), Vec2::new(0.1, 0.8)] {
+                    let a = cut.lens_ray(px, py, u);
+                    let b = film.lens_ray(px + 211.0, py + 13.0, u);
+                    assert!((a.origin - b.origin).length() < 1e-5, "{px} {py}");
+                    assert!((a.dir - b.dir).length() < 1e-6, "{px} {py}");
+                }
+            }
+            let (px, py) = ([0.5, 10.25, 40.0, 63.75], [47.5, 3.0, 20.5, 0.25]);
+            let four = cut.rays4(px, py);
+            for i in 0..4 {
+                let one = cut.ray(px[i], py[i]);
+                assert_eq!(
+                    [four[i].origin, four[i].dir].map(|v| v.to_array().map(f32::to_bits)),
+                    [one.origin, one.dir].map(|v| v.to_array().map(f32::to_bits)),
+                );
+            }
+        }
+        // The whole film as a window is the camera itself.
+        let camera = lens_camera(0.1, 3.0, 0);
+        let whole = FilmWindow {
+            film: [320, 200],
+            offset: [0, 0],
+            size: [320, 200],
+        };
+        assert_eq!(camera.window(whole), camera);
+        // Fitted to a film of another size: the same part of it, each edge
+        // rounded, at least a pixel.
+        assert_eq!(window.at(320, 200), window);
+        let half = window.at(160, 100);
+        assert_eq!((half.offset, half.size), ([106, 7], [32, 24]));
+        let tiny = window.at(2, 1);
+        assert_eq!((tiny.offset, tiny.size), ([1, 0], [1, 1]));
     }
 
     #[test]

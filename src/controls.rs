@@ -3,7 +3,7 @@
 
 use glam::{Mat3A, Vec3A};
 
-use crate::camera::{Camera, FocusedLens, Lens, lab_rotation};
+use crate::camera::{Camera, FilmWindow, FocusedLens, Lens, lab_rotation};
 use crate::integrators::Integrator;
 
 /// Camera turn per key press, in degrees.
@@ -70,10 +70,15 @@ pub struct ViewState {
     pub lens: Lens,
     /// A thin lens in front of it, focused; `None`: a pinhole.
     pub thin_lens: Option<FocusedLens>,
+    /// The window of the film that is shown (a Mitsuba scene's crop
+    /// window), fitted to the image's size ([`FilmWindow::at`]); `None`:
+    /// the whole film.
+    pub window: Option<FilmWindow>,
 }
 
 impl ViewState {
-    /// The camera for an image of `width × height`.
+    /// The camera for a film of `width × height`: its window's pixels when
+    /// it has one (the camera's image is then the window's size).
     pub fn camera(&self, width: u32, height: u32) -> Camera {
         let pinhole = Camera::with_lens(
             self.camera_pos,
@@ -82,9 +87,13 @@ impl ViewState {
             width,
             height,
         );
-        match self.thin_lens {
+        let camera = match self.thin_lens {
             Some(lens) => pinhole.focused(lens),
             None => pinhole,
+        };
+        match self.window {
+            Some(window) => camera.window(window.at(width, height)),
+            None => camera,
         }
     }
 
@@ -154,6 +163,7 @@ mod tests {
             integrator: Integrator::Direct,
             lens: Lens::LAB,
             thin_lens: None,
+            window: None,
         }
     }
 

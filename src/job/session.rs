@@ -236,6 +236,7 @@ fn frame(
         integrator: args.integrator(kind),
         lens: initial.lens,
         thin_lens: None,
+        window: initial.window,
     };
     let pinhole = view.camera(size.0, size.1);
     view.thin_lens = focused_lens(args, initial.depth_of_field, &pinhole, scene)?;

@@ -24,7 +24,7 @@ use std::time::{Duration, Instant};
 
 use glam::{Mat3A, Vec3A};
 
-use crate::camera::{DepthOfField, Lens, SceneCamera, Y_UP_TOWARDS_MINUS_Z};
+use crate::camera::{DepthOfField, FilmWindow, Lens, SceneCamera, Y_UP_TOWARDS_MINUS_Z};
 use crate::geometry::triangle::Triangle;
 use crate::lights::environment::Environment;
 use crate::memory::{GEOMETRY_BYTES_PER_TRIANGLE, Ledger, MemoryBudget, MemoryError, Needs};
@@ -205,6 +205,9 @@ pub struct InitialView {
     pub aspect_ratio: Option<f32>,
     /// The thin lens the scene's camera asks for (a scene file's).
     pub depth_of_field: DepthOfField,
+    /// The window of the film the scene's camera renders (a Mitsuba
+    /// scene's crop window); `None`: the whole image.
+    pub window: Option<FilmWindow>,
     /// Viewer travel per key press.
     pub step: f32,
 }
@@ -414,6 +417,7 @@ pub fn load(name: &str, options: &LoadOptions) -> Result<Loaded, LoadError> {
                 lens: Lens::LAB,
                 aspect_ratio: None,
                 depth_of_field: DepthOfField::default(),
+                window: None,
                 step: cornell::LAB_STEP,
             };
             (scene, view)
@@ -452,6 +456,7 @@ pub fn load(name: &str, options: &LoadOptions) -> Result<Loaded, LoadError> {
                 lens: Lens::LAB,
                 aspect_ratio: None,
                 depth_of_field: DepthOfField::default(),
+                window: None,
                 step: framing.step,
             };
             (scene, view)
@@ -630,6 +635,7 @@ fn view_through(camera: Option<&SceneCamera>, framing: &framing::Framing) -> Ini
             lens: c.lens,
             aspect_ratio: c.aspect_ratio,
             depth_of_field: c.depth_of_field,
+            window: c.window,
             step: framing.step,
         },
         None => InitialView {
@@ -638,6 +644,7 @@ fn view_through(camera: Option<&SceneCamera>, framing: &framing::Framing) -> Ini
             lens: Lens::LAB,
             aspect_ratio: None,
             depth_of_field: DepthOfField::default(),
+            window: None,
             step: framing.step,
         },
     }

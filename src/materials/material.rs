@@ -350,6 +350,13 @@ impl Material {
         )
     }
 
+    /// Whether the material lets light through unchanged, as nothing were
+    /// there: a dielectric of index 1, which is how Mitsuba's `null` BSDF
+    /// is made (its `hide_emitters` tells it from other surfaces).
+    pub fn is_null(&self) -> bool {
+        matches!(*self, Material::Dielectric { ior } if ior == 1.0)
+    }
+
     /// Whether the material has only delta lobes (mirror, glass, smooth
     /// conductors, a smooth [`Material::Pbr`] without a diffuse part):
     /// next-event estimation cannot hit them, so an integrator should only follow

@@ -359,6 +359,7 @@ impl Tile<'_> {
             && self.active.is_none()
             && options.sampler == SamplerKind::Sobol
             && options.filter == crate::sampling::filter::PixelFilter::Box
+            && options.hide_emitters == path::HideEmitters::No
             && std::arch::is_x86_feature_detected!("avx2")
             && self.scene.path_lanes_apply()
         {

@@ -741,6 +741,7 @@ mod tests {
                     max_depth,
                     sampler: SamplerKind::Sobol,
                     filter: crate::sampling::filter::PixelFilter::Box,
+                    hide_emitters: path::HideEmitters::No,
                 };
                 let mut want_rays = 0;
                 for (start, (got_tag, v)) in starts.iter().zip(&got) {

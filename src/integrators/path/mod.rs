@@ -26,8 +26,8 @@ pub(crate) mod lanes;
 mod scalar;
 
 pub use scalar::{
-    PathEvent, PathOptions, PathSampler, PathTracer, RR_DEPTH, RR_SCALE, SOBOL_BOUNCES,
-    SOBOL_PAIRS, SamplerKind, SobolSampler, consistent_normal, power_heuristic, radiance,
-    radiance_from, radiance_observed, radiance_traced,
+    HideEmitters, PathEvent, PathOptions, PathSampler, PathTracer, RR_DEPTH, RR_SCALE,
+    SOBOL_BOUNCES, SOBOL_PAIRS, SamplerKind, SobolSampler, consistent_normal, power_heuristic,
+    radiance, radiance_from, radiance_observed, radiance_traced,
 };
 pub(crate) use scalar::{coat_normal, shading};

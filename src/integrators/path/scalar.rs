@@ -45,6 +45,28 @@ impl SamplerKind {
     }
 }
 
+/// Whether the camera sees emitters: Mitsuba's `hide_emitters`, as its
+/// `path` and `direct` integrators (3.7.1) define it. Hidden, the camera
+/// ray passes through every emitting surface it meets first (as through
+/// glass without refraction) and an environment it escapes to is black; a
+/// path's value then counts only once the path has met a surface that
+/// Mitsuba counts as the path's own.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum HideEmitters {
+    /// Emitters are seen (raylab's own integrators, Mitsuba's default).
+    #[default]
+    No,
+    /// Mitsuba's `path`: a path counts once it scatters off a surface other
+    /// than a `null` one (raylab's dielectric of index 1,
+    /// [`crate::materials::Material::is_null`]); seen only through `null`
+    /// surfaces, light and sky are black.
+    Path,
+    /// Mitsuba's `direct`: a path counts once the camera ray (past the
+    /// emitters) hits any surface; what a `null` surface lets through
+    /// stays seen.
+    Direct,
+}
+
 /// Options of the `path` integrator.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct PathOptions {
@@ -56,6 +78,8 @@ pub struct PathOptions {
     /// How each pixel weighs the image around it (its samples' image points
     /// are drawn from it; the box by default).
     pub filter: crate::sampling::filter::PixelFilter,
+    /// Whether the camera sees emitters (Mitsuba's `hide_emitters`).
+    pub hide_emitters: HideEmitters,
 }
 
 impl Default for PathOptions {
@@ -64,6 +88,7 @@ impl Default for PathOptions {
             max_depth: u32::MAX,
             sampler: SamplerKind::DEFAULT,
             filter: crate::sampling::filter::PixelFilter::Box,
+            hide_emitters: HideEmitters::No,
         }
     }
 }
@@ -314,6 +339,9 @@ pub fn radiance_traced(
     let mut wavelength: Option<f32> = None;
     let textures = scene.textures();
     let lights_need_samples = scene.light_needs_samples();
+    // Mitsuba's `hide_emitters`: whether the path's value counts (yet).
+    let hide = options.hide_emitters;
+    let mut counts = hide == HideEmitters::No;
     loop {
         let Some(hit) = next_hit else {
             // Escaped: the environment is seen, weighted against having
@@ -342,6 +370,17 @@ pub fn radiance_traced(
         }
         let surface = scene.surface(&hit);
         let material = &scene.materials()[surface.material as usize];
+        if hide != HideEmitters::No && depth == 0 {
+            if material.is_emissive() {
+                // Hidden emitters: the camera ray goes on past this one,
+                // from either side (Mitsuba's `skip_area_emitters`).
+                ray = Ray::new(surface.point.offset_origin(ray.dir), ray.dir);
+                *rays += 1;
+                next_hit = scene.intersect(&ray, f32::INFINITY);
+                continue;
+            }
+            counts |= hide == HideEmitters::Direct;
+        }
         let ng = surface.ng;
         let cos_out = -ng.dot(ray.dir);
         tracer.event(
@@ -392,6 +431,8 @@ pub fn radiance_traced(
         if depth == 0 {
             observe(&surface, &bsdf);
         }
+        // Mitsuba's `path` counts a path that scatters here, but off `null`.
+        counts |= !bsdf.is_null();
         // `KHR_materials_dispersion`: the first dispersive surface a path
         // meets draws the path's wavelength (from the path's own stream, so
         // that images stay the same on any number of threads) and weighs the
@@ -520,7 +561,7 @@ pub fn radiance_traced(
         *rays += 1;
         next_hit = scene.intersect(&ray, f32::INFINITY);
     }
-    l
+    if counts { l } else { Vec3A::ZERO }
 }
 
 /// The incident radiance over its pdf that a light sample brings

@@ -67,6 +67,7 @@ impl Loader<'_> {
             lens,
             aspect_ratio,
             depth_of_field: crate::camera::DepthOfField::default(),
+            window: None,
         });
         Ok(())
     }

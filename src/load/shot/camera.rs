@@ -55,6 +55,8 @@ pub(super) fn camera(
         }
         return Ok(SceneCamera {
             depth_of_field: depth_of_field(path, c)?,
+            // The scene file's [render] size is the film.
+            window: None,
             ..cameras[range.start + index].clone()
         });
     }
@@ -92,6 +94,7 @@ pub(super) fn camera(
         lens: Lens::from_yfov(fov.to_radians()),
         aspect_ratio: None,
         depth_of_field: depth_of_field(path, c)?,
+        window: None,
     })
 }
 

@@ -106,6 +106,7 @@ pub(super) fn load_model(
                 lens: Lens::LAB,
                 aspect_ratio: Some(1.0),
                 depth_of_field: DepthOfField::default(),
+                window: None,
             };
             parts.cameras.clear();
             // Turn the lab's y-down box to +y up: half a turn about z.

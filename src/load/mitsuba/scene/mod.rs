@@ -26,10 +26,10 @@ use glam::{Affine3A, Mat3A, Mat4, Vec3, Vec3A};
 
 use super::error::MitsubaError;
 use super::tree::{Object, SceneTree, Tag};
-use crate::camera::{DepthOfField, Lens, SceneCamera};
+use crate::camera::{Aperture, DepthOfField, FilmWindow, Focus, Lens, SceneCamera};
 use crate::geometry::triangle::Triangle;
 use crate::integrators::Integrator;
-use crate::integrators::path::PathOptions;
+use crate::integrators::path::{HideEmitters, PathOptions};
 use crate::lights::environment::{EnvMap, Environment};
 use crate::lights::{BeamShape, Light};
 use crate::load::shot::settings::ShotSettings;
@@ -532,6 +532,7 @@ fn sensor(sensor: &Object, settings: &mut ShotSettings) -> Result<SceneCamera, M
     let p = Props::new(sensor);
     let to_world = p.transform("to_world")?;
     let (mut width, mut height) = (768u32, 576u32);
+    let mut window = None;
     if let Some(film) = p.children_of(Tag::Film).first() {
         let f = Props::new(film);
         if film.plugin != "hdrfilm" {
@@ -543,13 +544,7 @@ fn sensor(sensor: &Object, settings: &mut ShotSettings) -> Result<SceneCamera, M
             return Err(f.error("width and height must be 1 to 65536"));
         }
         (width, height) = (w as u32, h as u32);
-        if f.has("crop_width")
-            || f.has("crop_height")
-            || f.has("crop_offset_x")
-            || f.has("crop_offset_y")
-        {
-            return Err(f.error("crop windows are not supported yet"));
-        }
+        window = film_window(&f, [width, height])?;
         let filters = f.children_of(Tag::Rfilter);
         settings.filter = Some(match filters.first() {
             // Mitsuba's default.
@@ -581,10 +576,11 @@ fn sensor(sensor: &Object, settings: &mut ShotSettings) -> Result<SceneCamera, M
     }
     let aspect = width as f32 / height as f32;
     let (position, rotation, sx, sy) = camera_frame(to_world);
+    let mut depth_of_field = DepthOfField::default();
     let lens = match sensor.plugin.as_str() {
         "perspective" | "thinlens" => {
             if sensor.plugin == "thinlens" {
-                return Err(p.error("the thin lens camera is not supported yet"));
+                depth_of_field = thin_lens(&p, to_world)?;
             }
             // tan of half the vertical field of view.
             let tan_y = (x_fov(&p, aspect)?.to_radians() * 0.5).tan() / aspect;
@@ -603,15 +599,9 @@ fn sensor(sensor: &Object, settings: &mut ShotSettings) -> Result<SceneCamera, M
         }
     };
     let _ = sx;
+    clip_planes(&p)?;
     // (A pinhole's `focus_distance` is read by Mitsuba and has no effect.)
-    p.ignore(&[
-        "near_clip",
-        "far_clip",
-        "focus_distance",
-        "shutter_open",
-        "shutter_close",
-        "srf",
-    ]);
+    p.ignore(&["focus_distance", "shutter_open", "shutter_close", "srf"]);
     p.finish()?;
     Ok(SceneCamera {
         name: sensor.id.clone().unwrap_or_default(),
@@ -619,7 +609,108 @@ fn sensor(sensor: &Object, settings: &mut ShotSettings) -> Result<SceneCamera, M
         rotation,
         lens,
         aspect_ratio: Some(aspect),
-        depth_of_field: DepthOfField::default(),
+        depth_of_field,
+        window,
+    })
+}
+
+/// The film's crop window (`crop_offset_x`, `crop_offset_y`, `crop_width`,
+/// `crop_height`, Mitsuba's `Film`: the whole film by default), checked to
+/// lie within the film of `size`; `None` when it is the whole film.
+fn film_window(f: &Props, size: [u32; 2]) -> Result<Option<FilmWindow>, MitsubaError> {
+    let names = [
+        ["crop_offset_x", "crop_width"],
+        ["crop_offset_y", "crop_height"],
+    ];
+    let mut offset = [0u32; 2];
+    let mut extent = size;
+    for (k, [at, len]) in names.into_iter().enumerate() {
+        let side = size[k];
+        let o = f.integer(at, 0)?;
+        if !(0..i64::from(side)).contains(&o) {
+            return Err(f.error_at(
+                at,
+                format!(
+                    "{o} is outside the film (0 to {} for its {side} pixels)",
+                    side - 1
+                ),
+            ));
+        }
+        let n = f.integer(len, i64::from(side) - o)?;
+        if !(1..=i64::from(side) - o).contains(&n) {
+            return Err(f.error_at(
+                len,
+                format!(
+                    "{n} does not fit the film: {at} {o} + {len} must be 1 to {side} pixels \
+                     (the film's {})",
+                    if k == 0 { "width" } else { "height" }
+                ),
+            ));
+        }
+        (offset[k], extent[k]) = (o as u32, n as u32);
+    }
+    Ok((offset != [0, 0] || extent != size).then_some(FilmWindow {
+        film: size,
+        offset,
+        size: extent,
+    }))
+}
+
+/// Checks a projective sensor's clip planes as Mitsuba does (`near_clip`
+/// above 0 and below `far_clip`; 0.01 and 10⁴ by default). raylab's cameras
+/// do not clip: they matter only for surfaces nearer than `near_clip` to the
+/// camera or farther than `far_clip`.
+fn clip_planes(p: &Props) -> Result<(f32, f32), MitsubaError> {
+    let near = p.float("near_clip", 1e-2)?;
+    let far = p.float("far_clip", 1e4)?;
+    if near <= 0.0 {
+        return Err(p.error_at("near_clip", "must be greater than zero"));
+    }
+    if near >= far {
+        return Err(p.error_at("far_clip", "must be greater than near_clip"));
+    }
+    Ok((near, far))
+}
+
+/// Mitsuba's `thinlens`: a lens of `aperture_radius` (a uniform disk, its
+/// points in the plane through the sensor's position across the view) that
+/// focuses at `focus_distance` along the view axis (default `far_clip`, as
+/// Mitsuba's `ProjectiveCamera`); raylab's [`crate::camera::ThinLens`] with
+/// the same radius and focus. A radius of 0 is a pinhole (Mitsuba takes its
+/// float epsilon then). Like Mitsuba, a `to_world` that scales is refused.
+fn thin_lens(p: &Props, to_world: Mat4) -> Result<DepthOfField, MitsubaError> {
+    // A length the lens takes: a radius (at least 0) or a distance (above 0).
+    let length = |name: &str, value: f32, positive: bool| {
+        if crate::camera::lens_length_is_valid(value, positive) {
+            return Ok(value);
+        }
+        let least = if positive { "above 0" } else { "at least 0" };
+        let most = crate::camera::MAX_LENS_LENGTH;
+        Err(p.error_at(name, format!("must be {least} and at most {most:e}")))
+    };
+    let radius = p
+        .float_opt("aperture_radius")?
+        .ok_or_else(|| p.error("needs an 'aperture_radius'"))?;
+    let radius = length("aperture_radius", radius, false)?;
+    let far = p.float_opt("far_clip")?.unwrap_or(1e4);
+    let focus = length("focus_distance", p.float("focus_distance", far)?, true)?;
+    // Mitsuba's `has_scale`: the rows of the 3 × 3 part orthonormal to 1e-3.
+    let m = Mat3A::from_mat4(to_world).transpose();
+    let gram = m.transpose() * m;
+    let scales = (gram - Mat3A::IDENTITY)
+        .to_cols_array()
+        .iter()
+        .any(|e| e.abs() > 1e-3);
+    if scales {
+        return Err(p.error_at(
+            "to_world",
+            "scale factors in the camera-to-world transformation are not allowed (as in Mitsuba)",
+        ));
+    }
+    Ok(DepthOfField {
+        aperture: Some(Aperture::Radius(radius)),
+        focus: Some(Focus::Distance(focus)),
+        blades: None,
     })
 }
 
@@ -643,9 +734,19 @@ fn integrator(obj: &Object, settings: &mut ShotSettings) -> Result<(), MitsubaEr
                     p.integer("max_depth", -1)?
                 }
             };
-            if p.boolean("hide_emitters", false)? {
-                return Err(p.error("hide_emitters is not supported yet"));
-            }
+            let hide_emitters = match (p.boolean("hide_emitters", false)?, obj.plugin.as_str()) {
+                (false, _) => HideEmitters::No,
+                // `direct` (rendered as a path of depth 2) by its own rule.
+                (true, "direct") => HideEmitters::Direct,
+                (true, "path") => HideEmitters::Path,
+                // (Its hidden emitters stay opaque: not `path`'s rule.)
+                (true, _) => {
+                    return Err(p.error_at(
+                        "hide_emitters",
+                        "is not supported for ptracer yet (path and direct take it)",
+                    ));
+                }
+            };
             let max_depth = match depth {
                 -1 => u32::MAX,
                 d if d >= 0 => u32::try_from(d).unwrap_or(u32::MAX),
@@ -654,6 +755,7 @@ fn integrator(obj: &Object, settings: &mut ShotSettings) -> Result<(), MitsubaEr
             settings.max_depth = Some(max_depth);
             settings.integrator = Some(Integrator::Path(PathOptions {
                 max_depth,
+                hide_emitters,
                 ..PathOptions::default()
             }));
         }

@@ -50,7 +50,7 @@ impl<'a> Props<'a> {
     }
 
     /// An error about property `name` (at its line, else the object's).
-    fn error_at(&self, name: &str, message: impl AsRef<str>) -> MitsubaError {
+    pub fn error_at(&self, name: &str, message: impl AsRef<str>) -> MitsubaError {
         let location = self
             .obj
             .prop(name)
