@@ -154,26 +154,34 @@ impl SceneParts {
         }
     }
 
-    /// Adds `mesh` placed by `to_world`: its world triangles (front normals
-    /// by their winding) and an instance.
+    /// Adds `mesh` and places it by `to_world` ([`SceneParts::place_instance`]).
     pub fn place_mesh(&mut self, mesh: super::mesh::MeshData, to_world: Affine3A) {
+        let index = self.meshes.len() as u32;
+        let material = mesh.material;
+        self.meshes.push(mesh);
+        self.place_instance(index, to_world, material);
+    }
+
+    /// Places mesh `mesh` (an index into `meshes`) by `to_world` with
+    /// material `material`: its world triangles (front normals by their
+    /// winding) and an instance.
+    pub fn place_instance(&mut self, mesh: u32, to_world: Affine3A, material: u32) {
         let first = self.triangles.len() as u32;
         if self.instance_of.is_empty() && first > 0 {
             self.instance_of = vec![NO_INSTANCE; first as usize];
         }
         let instance = self.instances.len() as u32;
-        for tri in &mesh.indices {
-            let v = tri.map(|i| to_world.transform_point3a(mesh.positions[i as usize].into()));
+        let data = &self.meshes[mesh as usize];
+        for tri in &data.indices {
+            let v = tri.map(|i| to_world.transform_point3a(data.positions[i as usize].into()));
             let n = (v[1] - v[0]).cross(v[2] - v[0]).normalize_or_zero();
             self.triangles
                 .push(crate::geometry::triangle::Triangle::new(v[0], v[1], v[2]));
             self.normals.push(n);
-            self.material_of.push(mesh.material);
+            self.material_of.push(material);
             self.instance_of.push(instance);
         }
-        self.instances
-            .push(Instance::new(self.meshes.len() as u32, first, to_world));
-        self.meshes.push(mesh);
+        self.instances.push(Instance::new(mesh, first, to_world));
     }
 }
 

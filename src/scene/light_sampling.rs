@@ -408,8 +408,8 @@ impl Scene {
     fn sphere_sample(&self, prim: u32, u: Vec2, probability: f32, p: Vec3A) -> Option<LightSample> {
         let s = self.sphere_of(prim)?;
         let (uv, pdf) = s.sphere.sample_from(p, u)?;
-        let point = s.sphere.point_at(uv);
-        let normal = if s.flip { -point.n } else { point.n };
+        let point = s.front_point(uv);
+        let normal = point.n;
         let d = point.p - p;
         let r2 = d.length_squared();
         let cos = normal.dot(d).abs() / r2.sqrt();

@@ -22,6 +22,19 @@ pub struct SceneSphere {
     pub material: u32,
 }
 
+impl SceneSphere {
+    /// The point at spherical coordinates `uv` with its error bound and its
+    /// front normal (outwards, inwards when flipped).
+    #[inline]
+    pub fn front_point(&self, uv: glam::Vec2) -> crate::geometry::ray::SurfacePoint {
+        let mut point = self.sphere.point_at(uv);
+        if self.flip {
+            point.n = -point.n;
+        }
+        point
+    }
+}
+
 /// A node of the spheres' hierarchy: a box and either two children (`count
 /// == 0`: `first` and `first + 1`) or `count` spheres from `first` in order.
 #[derive(Clone, Copy, Debug)]

@@ -159,10 +159,7 @@ impl Scene {
                 n: Vec3A::Z,
             };
         };
-        let mut point = s.sphere.point_at(Vec2::new(hit.b1, hit.b2));
-        if s.flip {
-            point.n = -point.n;
-        }
+        let mut point = s.front_point(Vec2::new(hit.b1, hit.b2));
         if self.two_sided && point.n.dot(dir) > 0.0 {
             point.n = -point.n;
         }
@@ -335,10 +332,7 @@ impl Scene {
                 material,
             };
         };
-        let mut point = sphere.sphere.point_at(uv);
-        if sphere.flip {
-            point.n = -point.n;
-        }
+        let point = sphere.front_point(uv);
         let ng = point.n;
         let attrs = sphere_attributes(hit);
         let (mut ns, mut tangent, mut bitangent) = (ng, Vec3A::ZERO, Vec3A::ZERO);

@@ -27,7 +27,6 @@ use glam::{Affine3A, Mat3A, Mat4, Vec3, Vec3A};
 use super::error::MitsubaError;
 use super::tree::{Object, SceneTree, Tag};
 use crate::camera::{Aperture, DepthOfField, FilmWindow, Focus, Lens, SceneCamera};
-use crate::geometry::triangle::Triangle;
 use crate::integrators::Integrator;
 use crate::integrators::path::{HideEmitters, PathOptions};
 use crate::lights::environment::{EnvMap, Environment};
@@ -37,7 +36,7 @@ use crate::materials::surface::SurfaceMaterial;
 use crate::memory::Ledger;
 use crate::sampling::filter::PixelFilter;
 use crate::scene::SceneParts;
-use crate::scene::mesh::{Instance, MeshData};
+use crate::scene::mesh::MeshData;
 use crate::textures::{ColorSpace, Pattern, TextureRef};
 use bsdfs::Materials;
 use color::Role;
@@ -393,21 +392,8 @@ impl Builder<'_, '_> {
 
     /// World triangles and an instance of a mesh.
     fn place(&mut self, placed: Placed) {
-        let mesh = &self.parts.meshes[placed.mesh as usize];
-        let to_world = affine(placed.to_world);
-        let first = self.parts.triangles.len() as u32;
-        let instance = self.parts.instances.len() as u32;
-        for tri in &mesh.indices {
-            let v = tri.map(|i| to_world.transform_point3a(mesh.positions[i as usize].into()));
-            let n = (v[1] - v[0]).cross(v[2] - v[0]).normalize_or_zero();
-            self.parts.triangles.push(Triangle::new(v[0], v[1], v[2]));
-            self.parts.normals.push(n);
-            self.parts.material_of.push(placed.material);
-            self.parts.instance_of.push(instance);
-        }
         self.parts
-            .instances
-            .push(Instance::new(placed.mesh, first, to_world));
+            .place_instance(placed.mesh, affine(placed.to_world), placed.material);
     }
 }
 

@@ -18,7 +18,7 @@ use crate::load::obj::parse_obj_file;
 use crate::scene::MeshData;
 
 /// Segments around a tessellated sphere, disk or cylinder (rings: half).
-pub(super) const SEGMENTS: u32 = 256;
+pub(super) const SEGMENTS: u32 = crate::scene::compose::SPHERE_SEGMENTS;
 
 /// Mitsuba's vertex normals of a mesh without them: each face's unit normal
 /// added to its corners' positions weighted by the corner's angle
