@@ -36,6 +36,7 @@ impl Integrator {
             sampler: path::SamplerKind::DEFAULT,
             filter: crate::sampling::filter::PixelFilter::Box,
             hide_emitters: path::HideEmitters::No,
+            direct: path::DirectSamples::ONE_EACH,
         }),
     ];
 

@@ -360,6 +360,7 @@ impl Tile<'_> {
             && options.sampler == SamplerKind::Sobol
             && options.filter == crate::sampling::filter::PixelFilter::Box
             && options.hide_emitters == path::HideEmitters::No
+            && !options.counts_direct()
             && std::arch::is_x86_feature_detected!("avx2")
             && self.scene.path_lanes_apply()
         {

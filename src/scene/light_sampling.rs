@@ -11,7 +11,7 @@ use glam::{Vec2, Vec3A};
 use rayon::prelude::*;
 
 use super::light_table::{AreaLights, LightRef, LightSelection, LightTable};
-use super::light_tree::{self, Facing, LightBounds, LightTree, TreeLight};
+use super::light_tree::{self, Facing, LightBounds, LightTree, ONE_BELOW_F64, TreeLight};
 use super::model::Scene;
 use crate::geometry::ray::Hit;
 use crate::lights::environment::SkyRadiance;
@@ -284,15 +284,15 @@ impl Scene {
         // Walk the kinds in order (key light, tree, environment, directional
         // lights) to the one `target` falls in; rounding past the end takes
         // the last one with weight.
-        let target = u_select.x * total;
+        let target = select_number(u.x, u_select.x) * f64::from(total);
         let mut chosen = None;
-        let mut start = 0.0f32;
+        let mut start = 0.0f64;
         let mut consider = |kind: TopLevel, w: f32| {
             if w <= 0.0 {
                 return false;
             }
             chosen = Some((kind, start, w));
-            start += w;
+            start += f64::from(w);
             target < start
         };
         let _ = consider(TopLevel::Key, weights.key)
@@ -306,21 +306,25 @@ impl Scene {
             });
         let (kind, start, w) = chosen?;
         let probability = w / total;
+        // Where the choice fell inside the chosen kind's share, uniform in
+        // [0, 1): the chosen light's own first number (see `select_number`).
+        let rest = ((target - start) / f64::from(w)).clamp(0.0, ONE_BELOW_F64);
         match kind {
             TopLevel::Key => Some(self.key_sample(probability)),
             TopLevel::Tree => {
-                let u_tree = ((target - start) / w).clamp(0.0, ONE_BELOW);
-                let (light, pmf) = self
-                    .light_table
-                    .tree
-                    .sample(weights.root, p, facing, u_tree)?;
+                let (light, pmf, rest) =
+                    self.light_table
+                        .tree
+                        .sample(weights.root, p, facing, rest)?;
                 let probability = pmf * probability;
                 match light {
                     TreeLight::Punctual(i) => self.punctual_sample(i, p, probability),
-                    TreeLight::Triangle(prim) => self.triangle_sample(prim, u, probability, p),
+                    TreeLight::Triangle(prim) => {
+                        self.triangle_sample(prim, with_first(u, rest), probability, p)
+                    }
                 }
             }
-            TopLevel::Environment => self.environment_sample(p, u, probability),
+            TopLevel::Environment => self.environment_sample(p, with_first(u, rest), probability),
             TopLevel::Directional(i) => self.punctual_sample(i, p, probability),
         }
     }
@@ -477,8 +481,11 @@ impl Scene {
     /// see [`Scene::set_light_selection`]), then a point or direction on it with
     /// `u` (uniform by area on a triangle, by the map's importance on the
     /// environment), to light the point `p`. `u_select.x` chooses, `u_select.y`
-    /// settles the alias table's coin. `None` when the scene has no light or the
-    /// chosen one sends nothing to `p`.
+    /// settles the alias table's coin. With the light tree
+    /// ([`LightSelection::Tree`]) `u.x` chooses instead, `u_select.x` filling
+    /// in below its last bit, and what is left of it after the choice places
+    /// the point (so Sobol' points stay stratified over each light). `None`
+    /// when the scene has no light or the chosen one sends nothing to `p`.
     ///
     /// Punctual lights other than the key light, as a group, are picked as
     /// often as their power says; which one of them, though, goes by what each
@@ -669,6 +676,30 @@ impl Scene {
     pub fn emitter_count(&self) -> usize {
         self.area_lights.prims.len()
     }
+}
+
+/// The number that chooses a light in the tree's sampling: the light
+/// sample's own first number `u` (a multiple of 2⁻²⁴ in `[0, 1)`, as the
+/// samplers make them) with `jitter` (another, independent one) filling the
+/// cell of width 2⁻²⁴ below it, in double precision: uniform in `[0, 1)`.
+/// Choosing with the number that then places the point on the chosen light
+/// (the leftover of the choice, [`LightTree::sample`]) keeps the sampler's
+/// two-dimensional stratification across the lights: with several lights a
+/// Sobol' pattern's points spread over each light as over one, where an
+/// independent choice would leave each light a random subset of them.
+#[inline]
+fn select_number(u: f32, jitter: f32) -> f64 {
+    (f64::from(u) + f64::from(jitter) * SELECT_CELL).min(ONE_BELOW_F64)
+}
+
+/// The spacing of the samplers' numbers, 2⁻²⁴.
+const SELECT_CELL: f64 = 1.0 / (1u32 << 24) as f64;
+
+/// `u` with its first number replaced by `x` (a leftover of a light's choice
+/// in `[0, 1)`, rounded to `f32` below 1).
+#[inline]
+fn with_first(u: Vec2, x: f64) -> Vec2 {
+    Vec2::new((x as f32).min(ONE_BELOW), u.y)
 }
 
 /// Barycentrics `(b1, b2)` of a point distributed uniformly by area over a

@@ -475,40 +475,44 @@ impl LightTree {
     }
 
     /// A light chosen with `u` in `[0, 1)` for a surface at `p` (as `facing`
-    /// says), and the probability of that choice; `None` when no light can
+    /// says), the probability of that choice, and what is left of `u`: where
+    /// it fell inside the chosen light's share, again uniform in `[0, 1)`, so
+    /// that the caller can reuse it to pick a point on the light and keep
+    /// the stratification of `u` across the lights. `None` when no light can
     /// send anything there. `root` is [`LightTree::root_importances`] at `p`.
+    /// (`u` is in double precision: each level spends some of its bits.)
     #[inline]
     pub(super) fn sample(
         &self,
         root: Vec4,
         p: Vec3A,
         facing: Facing,
-        mut u: f32,
-    ) -> Option<(TreeLight, f32)> {
+        mut u: f64,
+    ) -> Option<(TreeLight, f32, f64)> {
         let mut index = 0usize;
         let mut pmf = 1.0f32;
         loop {
             let node = self.nodes.get(index)?;
             let (w, total) = Self::weights(node, (index == 0).then_some(root), p, facing)?;
-            let target = u * total;
-            let mut start = 0.0f32;
+            let target = u * f64::from(total);
+            let mut start = 0.0f64;
             let mut chosen = None;
             for (k, &wk) in w.iter().enumerate() {
                 if wk <= 0.0 {
                     continue;
                 }
                 chosen = Some((k, start, wk));
-                start += wk;
+                start += f64::from(wk);
                 if target < start {
                     break;
                 }
             }
             // (Rounding may leave `target` past the end: the last with weight.)
             let (k, start, wk) = chosen?;
-            u = ((target - start) / wk).clamp(0.0, ONE_BELOW);
+            u = ((target - start) / f64::from(wk)).clamp(0.0, ONE_BELOW_F64);
             pmf *= wk / total;
             if node.leaves >> k & 1 != 0 {
-                return Some((self.lights[node.child[k] as usize], pmf));
+                return Some((self.lights[node.child[k] as usize], pmf, u));
             }
             index = node.child[k] as usize;
         }
@@ -706,8 +710,8 @@ fn split(
     mid
 }
 
-/// The largest `f32` below 1.
-const ONE_BELOW: f32 = 1.0 - f32::EPSILON / 2.0;
+/// The largest `f64` below 1.
+pub(super) const ONE_BELOW_F64: f64 = 1.0 - f64::EPSILON / 2.0;
 
 #[cfg(test)]
 mod tests {
@@ -779,14 +783,17 @@ mod tests {
             // the lights with an expected count of at least 5).
             let draws = 20_000;
             let mut counts = vec![0u32; n];
+            let mut rests = vec![Vec::new(); n];
             for k in 0..draws {
-                let u = (k as f32 + 0.5) / draws as f32;
-                let (light, pmf) = tree
+                let u = (k as f64 + 0.5) / draws as f64;
+                let (light, pmf, rest) = tree
                     .sample(tree.root_importances(p, facing), p, facing, u)
                     .expect("a light");
                 let TreeLight::Triangle(i) = light else {
                     unreachable!()
                 };
+                assert!((0.0..1.0).contains(&rest), "leftover {rest}");
+                rests[i as usize].push(rest);
                 assert_eq!(
                     pmf,
                     tree.triangle_pmf(tree.root_importances(p, facing), i, p, facing),
@@ -816,6 +823,19 @@ mod tests {
             // Stratified draws: far below the χ² bound of `cells` degrees.
             let bound = cells as f64 + 5.0 * (2.0 * cells as f64).sqrt();
             assert!(chi2 < bound, "χ² {chi2} over {cells} cells at {p}");
+            // Each light's share of `u` is one interval, mapped onto [0, 1):
+            // the evenly spaced draws that chose it leave evenly spaced
+            // leftovers, c of them at (j + ½)/c within two steps.
+            for r in rests.iter_mut().filter(|r| r.len() >= 20) {
+                r.sort_by(f64::total_cmp);
+                let c = r.len() as f64;
+                let worst = r
+                    .iter()
+                    .enumerate()
+                    .map(|(j, &x)| (x - (j as f64 + 0.5) / c).abs())
+                    .fold(0.0, f64::max);
+                assert!(worst <= 2.0 / c, "leftovers off by {worst} over {c}");
+            }
         }
     }
 

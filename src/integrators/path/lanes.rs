@@ -27,7 +27,9 @@ use std::f32::consts::{FRAC_1_PI, FRAC_PI_4};
 
 use glam::{Vec2, Vec3A};
 
-use super::scalar::{PathSampler, RR_DEPTH, RR_SCALE, SobolSampler, light_terms, power_heuristic};
+use super::samples::{PathSampler, SobolSampler};
+use super::scalar::{RR_DEPTH, RR_SCALE};
+use super::vertex::{light_terms, power_heuristic};
 use crate::geometry::bvh::Singles8;
 use crate::geometry::packet::Closest8;
 use crate::geometry::ray::{Hit, Ray};
@@ -741,7 +743,7 @@ mod tests {
                     max_depth,
                     sampler: SamplerKind::Sobol,
                     filter: crate::sampling::filter::PixelFilter::Box,
-                    hide_emitters: path::HideEmitters::No,
+                    ..PathOptions::default()
                 };
                 let mut want_rays = 0;
                 for (start, (got_tag, v)) in starts.iter().zip(&got) {

@@ -22,12 +22,17 @@
 //! paths at once in AVX2 registers where the scene allows, with the same
 //! values bit for bit.
 
+mod direct;
 pub(crate) mod lanes;
+mod samples;
 mod scalar;
+mod vertex;
 
+pub use direct::DirectSamples;
+pub use samples::{PathSampler, SOBOL_BOUNCES, SOBOL_PAIRS, SamplerKind, SobolSampler};
 pub use scalar::{
-    HideEmitters, PathEvent, PathOptions, PathSampler, PathTracer, RR_DEPTH, RR_SCALE,
-    SOBOL_BOUNCES, SOBOL_PAIRS, SamplerKind, SobolSampler, consistent_normal, power_heuristic,
-    radiance, radiance_from, radiance_observed, radiance_traced,
+    HideEmitters, PathOptions, RR_DEPTH, RR_SCALE, radiance, radiance_from, radiance_observed,
+    radiance_traced,
 };
-pub(crate) use scalar::{coat_normal, shading};
+pub use vertex::{PathEvent, PathTracer, consistent_normal, power_heuristic};
+pub(crate) use vertex::{coat_normal, shading};

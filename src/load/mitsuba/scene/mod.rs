@@ -28,7 +28,7 @@ use super::error::MitsubaError;
 use super::tree::{Object, SceneTree, Tag};
 use crate::camera::{Aperture, DepthOfField, FilmWindow, Focus, Lens, SceneCamera};
 use crate::integrators::Integrator;
-use crate::integrators::path::{HideEmitters, PathOptions};
+use crate::integrators::path::{DirectSamples, HideEmitters, PathOptions};
 use crate::lights::environment::{EnvMap, Environment};
 use crate::lights::{BeamShape, Light};
 use crate::load::shot::settings::ShotSettings;
@@ -700,6 +700,35 @@ fn thin_lens(p: &Props, to_world: Mat4) -> Result<DepthOfField, MitsubaError> {
     })
 }
 
+/// `direct`'s sample counts: `emitter_samples` and `bsdf_samples`, each
+/// `shading_samples` (1) unless given (not both ways, as in Mitsuba).
+fn direct_samples(p: &Props) -> Result<DirectSamples, MitsubaError> {
+    if p.has("shading_samples") && (p.has("emitter_samples") || p.has("bsdf_samples")) {
+        return Err(p.error(
+            "give either shading_samples or emitter_samples/bsdf_samples, not both (as in Mitsuba)",
+        ));
+    }
+    let count = |name: &str, default: u32| -> Result<u32, MitsubaError> {
+        let n = p.integer(name, i64::from(default))?;
+        u32::try_from(n)
+            .ok()
+            .filter(|&n| n <= DirectSamples::MAX)
+            .ok_or_else(|| {
+                p.error_at(
+                    name,
+                    format!("must be from 0 to {} (it is {n})", DirectSamples::MAX),
+                )
+            })
+    };
+    let shading = count("shading_samples", 1)?;
+    let (emitter, bsdf) = (
+        count("emitter_samples", shading)?,
+        count("bsdf_samples", shading)?,
+    );
+    DirectSamples::new(emitter, bsdf)
+        .ok_or_else(|| p.error("needs at least one emitter or BSDF sample (as in Mitsuba)"))
+}
+
 /// The integrator as raylab's `path` with its depth.
 fn integrator(obj: &Object, settings: &mut ShotSettings) -> Result<(), MitsubaError> {
     let p = Props::new(obj);
@@ -710,9 +739,10 @@ fn integrator(obj: &Object, settings: &mut ShotSettings) -> Result<(), MitsubaEr
             }
         }
         "path" | "ptracer" | "direct" => {
+            let mut direct = DirectSamples::ONE_EACH;
             let depth = match obj.plugin.as_str() {
                 "direct" => {
-                    p.ignore(&["emitter_samples", "bsdf_samples", "shading_samples"]);
+                    direct = direct_samples(&p)?;
                     2
                 }
                 _ => {
@@ -742,6 +772,7 @@ fn integrator(obj: &Object, settings: &mut ShotSettings) -> Result<(), MitsubaEr
             settings.integrator = Some(Integrator::Path(PathOptions {
                 max_depth,
                 hide_emitters,
+                direct,
                 ..PathOptions::default()
             }));
         }
