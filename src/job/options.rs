@@ -65,6 +65,13 @@ pub struct SceneOptions {
     /// each light's power) or `uniform` (for comparisons).
     #[arg(long, value_name = "HOW", default_value = "tree", value_parser = parse_light_selection)]
     pub light_selection: crate::scene::LightSelection,
+    /// How the light tree's choice gets its number: `stratified` (the light
+    /// sample's own, so that Sobol' points stay stratified across the
+    /// lights: less noise with several lights) or `independent` (as raylab
+    /// always chose) [default: stratified for Mitsuba scenes, independent
+    /// for the rest, whose images stay as they were].
+    #[arg(long, value_name = "HOW", value_parser = parse_light_numbers)]
+    pub light_numbers: Option<crate::scene::LightNumbers>,
     /// Tone mapping of PNG output and the viewer: `clamp`, `aces` or
     /// `khronos-pbr-neutral` [default: khronos-pbr-neutral for glTF, clamp otherwise].
     #[arg(long, value_name = "OP", value_parser = parse_tonemap)]
@@ -465,6 +472,7 @@ impl SceneOptions {
             camera: self.camera,
             default_light: self.default_light,
             light_selection: self.light_selection,
+            light_numbers: self.light_numbers,
             variant: self.variant.clone(),
             defines: self.define.clone(),
             environment: crate::load::EnvironmentOptions {
@@ -699,6 +707,15 @@ fn parse_light_selection(s: &str) -> Result<crate::scene::LightSelection, String
         "power" => Ok(LightSelection::Power),
         "uniform" => Ok(LightSelection::Uniform),
         _ => Err(format!("expected tree, power or uniform, not {s:?}")),
+    }
+}
+
+fn parse_light_numbers(s: &str) -> Result<crate::scene::LightNumbers, String> {
+    use crate::scene::LightNumbers;
+    match s {
+        "stratified" => Ok(LightNumbers::Stratified),
+        "independent" => Ok(LightNumbers::Independent),
+        _ => Err(format!("expected stratified or independent, not {s:?}")),
     }
 }
 

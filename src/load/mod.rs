@@ -90,6 +90,10 @@ pub struct LoadOptions {
     pub max_memory: MemoryBudget,
     /// How `path` chooses among the lights (default: the light tree).
     pub light_selection: crate::scene::LightSelection,
+    /// How the light tree's choice gets its number (default: stratified for
+    /// Mitsuba scenes, independent for the rest, whose images stay as they
+    /// were).
+    pub light_numbers: Option<crate::scene::LightNumbers>,
     /// The glTF material variant (`KHR_materials_variants`) to show: a glTF
     /// file without it is refused; in a scene file, the models that have it
     /// show it (at least one must).
@@ -613,6 +617,10 @@ pub fn load(name: &str, options: &LoadOptions) -> Result<Loaded, LoadError> {
     if options.light_selection != scene.light_selection() {
         scene.set_light_selection(options.light_selection);
     }
+    scene.set_light_numbers(options.light_numbers.unwrap_or(match kind {
+        SceneKind::Mitsuba => crate::scene::LightNumbers::Stratified,
+        _ => crate::scene::LightNumbers::Independent,
+    }));
     Ok(Loaded {
         scene,
         kind,

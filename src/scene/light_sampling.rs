@@ -10,8 +10,8 @@ use std::f32::consts::PI;
 use glam::{Vec2, Vec3A};
 use rayon::prelude::*;
 
-use super::light_table::{AreaLights, LightRef, LightSelection, LightTable};
-use super::light_tree::{self, Facing, LightBounds, LightTree, ONE_BELOW_F64, TreeLight};
+use super::light_table::{AreaLights, LightNumbers, LightRef, LightSelection, LightTable};
+use super::light_tree::{self, Facing, Fraction, LightBounds, LightTree, TreeLight};
 use super::model::Scene;
 use crate::geometry::ray::Hit;
 use crate::lights::environment::SkyRadiance;
@@ -30,6 +30,17 @@ impl Scene {
     pub fn set_light_selection(&mut self, selection: LightSelection) {
         self.selection = selection;
         self.rebuild_light_table();
+    }
+
+    /// How the light tree's choice gets its number ([`LightNumbers`]); the
+    /// same expected image either way.
+    pub fn set_light_numbers(&mut self, numbers: LightNumbers) {
+        self.numbers = numbers;
+    }
+
+    /// How the light tree's choice gets its number.
+    pub fn light_numbers(&self) -> LightNumbers {
+        self.numbers
     }
 
     /// Radiance arriving from the environment along `dir` (unit, away from the
@@ -267,7 +278,9 @@ impl Scene {
         }
     }
 
-    /// [`Scene::sample_light`] by the light tree.
+    /// [`Scene::sample_light`] by the light tree: the choice made with
+    /// `u_select.x`, or, with [`LightNumbers::Stratified`], with `u.x`
+    /// ([`select_number`]), whose leftover then places the point.
     #[inline]
     fn sample_light_by_tree(
         &self,
@@ -275,6 +288,25 @@ impl Scene {
         facing: Facing,
         u_select: Vec2,
         u: Vec2,
+    ) -> Option<LightSample> {
+        match self.numbers {
+            LightNumbers::Independent => self.sample_light_with(p, facing, u_select.x, u, false),
+            LightNumbers::Stratified => {
+                self.sample_light_with(p, facing, select_number(u.x, u_select.x), u, true)
+            }
+        }
+    }
+
+    /// [`Scene::sample_light_by_tree`] with the choosing number `select`;
+    /// `reuse`: whether its leftover replaces `u.x` on the chosen light.
+    #[inline(always)]
+    fn sample_light_with<U: Fraction>(
+        &self,
+        p: Vec3A,
+        facing: Facing,
+        select: U,
+        u: Vec2,
+        reuse: bool,
     ) -> Option<LightSample> {
         let weights = self.top_level(p, facing);
         let total = weights.total;
@@ -284,15 +316,15 @@ impl Scene {
         // Walk the kinds in order (key light, tree, environment, directional
         // lights) to the one `target` falls in; rounding past the end takes
         // the last one with weight.
-        let target = select_number(u.x, u_select.x) * f64::from(total);
+        let target = select * U::from(total);
         let mut chosen = None;
-        let mut start = 0.0f64;
+        let mut start = U::ZERO;
         let mut consider = |kind: TopLevel, w: f32| {
             if w <= 0.0 {
                 return false;
             }
             chosen = Some((kind, start, w));
-            start += f64::from(w);
+            start = start + U::from(w);
             target < start
         };
         let _ = consider(TopLevel::Key, weights.key)
@@ -306,9 +338,15 @@ impl Scene {
             });
         let (kind, start, w) = chosen?;
         let probability = w / total;
-        // Where the choice fell inside the chosen kind's share, uniform in
-        // [0, 1): the chosen light's own first number (see `select_number`).
-        let rest = ((target - start) / f64::from(w)).clamp(0.0, ONE_BELOW_F64);
+        // Where the choice fell inside the chosen kind's share, in [0, 1).
+        let rest = ((target - start) / U::from(w)).clamp_unit();
+        let on_light = |rest: U| {
+            if reuse {
+                Vec2::new(rest.to_unit_f32(), u.y)
+            } else {
+                u
+            }
+        };
         match kind {
             TopLevel::Key => Some(self.key_sample(probability)),
             TopLevel::Tree => {
@@ -320,11 +358,11 @@ impl Scene {
                 match light {
                     TreeLight::Punctual(i) => self.punctual_sample(i, p, probability),
                     TreeLight::Triangle(prim) => {
-                        self.triangle_sample(prim, with_first(u, rest), probability, p)
+                        self.triangle_sample(prim, on_light(rest), probability, p)
                     }
                 }
             }
-            TopLevel::Environment => self.environment_sample(p, with_first(u, rest), probability),
+            TopLevel::Environment => self.environment_sample(p, on_light(rest), probability),
             TopLevel::Directional(i) => self.punctual_sample(i, p, probability),
         }
     }
@@ -678,29 +716,23 @@ impl Scene {
     }
 }
 
-/// The number that chooses a light in the tree's sampling: the light
-/// sample's own first number `u` (a multiple of 2⁻²⁴ in `[0, 1)`, as the
-/// samplers make them) with `jitter` (another, independent one) filling the
-/// cell of width 2⁻²⁴ below it, in double precision: uniform in `[0, 1)`.
-/// Choosing with the number that then places the point on the chosen light
-/// (the leftover of the choice, [`LightTree::sample`]) keeps the sampler's
-/// two-dimensional stratification across the lights: with several lights a
-/// Sobol' pattern's points spread over each light as over one, where an
-/// independent choice would leave each light a random subset of them.
+/// The number that chooses a light in the tree's stratified sampling: the
+/// light sample's own first number `u` (a multiple of 2⁻²⁴ in `[0, 1)`, as
+/// the samplers make them) with `jitter` (another, independent one) filling
+/// the cell of width 2⁻²⁴ below it, in double precision: uniform in
+/// `[0, 1)`. Choosing with the number that then places the point on the
+/// chosen light (the leftover of the choice, [`LightTree::sample`]) keeps
+/// the sampler's two-dimensional stratification across the lights: with
+/// several lights a Sobol' pattern's points spread over each light as over
+/// one, where an independent choice would leave each light a random subset
+/// of them.
 #[inline]
 fn select_number(u: f32, jitter: f32) -> f64 {
-    (f64::from(u) + f64::from(jitter) * SELECT_CELL).min(ONE_BELOW_F64)
+    (f64::from(u) + f64::from(jitter) * SELECT_CELL).min(<f64 as Fraction>::ONE_BELOW)
 }
 
 /// The spacing of the samplers' numbers, 2⁻²⁴.
 const SELECT_CELL: f64 = 1.0 / (1u32 << 24) as f64;
-
-/// `u` with its first number replaced by `x` (a leftover of a light's choice
-/// in `[0, 1)`, rounded to `f32` below 1).
-#[inline]
-fn with_first(u: Vec2, x: f64) -> Vec2 {
-    Vec2::new((x as f32).min(ONE_BELOW), u.y)
-}
 
 /// Barycentrics `(b1, b2)` of a point distributed uniformly by area over a
 /// triangle, from `u` in `[0, 1)²`.
@@ -836,9 +868,6 @@ fn directional_importance(light: &Light, facing: Facing) -> f32 {
     let w = e * facing.cosine(-direction);
     if w.is_finite() { w.max(0.0) } else { 0.0 }
 }
-
-/// The largest `f32` below 1.
-const ONE_BELOW: f32 = 1.0 - f32::EPSILON / 2.0;
 
 /// Points per triangle at which a textured emitter's radiance is averaged to
 /// estimate its power.

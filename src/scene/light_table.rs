@@ -6,6 +6,19 @@
 use super::light_tree::LightTree;
 use crate::sampling::distribution::AliasTable;
 
+/// How the light tree's choice gets its number (`Scene::set_light_numbers`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum LightNumbers {
+    /// A number of its own, independent of the point's on the light (the
+    /// images of glTF, OBJ, scene files and the lab as they always were).
+    #[default]
+    Independent,
+    /// The light sample's own first number (with an independent number filling in below its last bit), whose
+    /// leftover then places the point: Sobol' points stay stratified across
+    /// the lights (the default for Mitsuba scenes).
+    Stratified,
+}
+
 /// How [`Scene::sample_light`](crate::scene::Scene::sample_light) chooses among the lights.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum LightSelection {

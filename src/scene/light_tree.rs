@@ -480,37 +480,25 @@ impl LightTree {
     /// that the caller can reuse it to pick a point on the light and keep
     /// the stratification of `u` across the lights. `None` when no light can
     /// send anything there. `root` is [`LightTree::root_importances`] at `p`.
-    /// (`u` is in double precision: each level spends some of its bits.)
+    /// (`u` is an `f64` when its leftover is reused: each level spends some
+    /// of its bits; as an `f32` the walk is the one images were made with
+    /// before, bit for bit.)
     #[inline]
-    pub(super) fn sample(
+    pub(super) fn sample<U: Fraction>(
         &self,
         root: Vec4,
         p: Vec3A,
         facing: Facing,
-        mut u: f64,
-    ) -> Option<(TreeLight, f32, f64)> {
+        mut u: U,
+    ) -> Option<(TreeLight, f32, U)> {
         let mut index = 0usize;
         let mut pmf = 1.0f32;
         loop {
             let node = self.nodes.get(index)?;
             let (w, total) = Self::weights(node, (index == 0).then_some(root), p, facing)?;
-            let target = u * f64::from(total);
-            let mut start = 0.0f64;
-            let mut chosen = None;
-            for (k, &wk) in w.iter().enumerate() {
-                if wk <= 0.0 {
-                    continue;
-                }
-                chosen = Some((k, start, wk));
-                start += f64::from(wk);
-                if target < start {
-                    break;
-                }
-            }
-            // (Rounding may leave `target` past the end: the last with weight.)
-            let (k, start, wk) = chosen?;
-            u = ((target - start) / f64::from(wk)).clamp(0.0, ONE_BELOW_F64);
-            pmf *= wk / total;
+            let (k, rest) = choose(&w, total, u)?;
+            u = rest;
+            pmf *= w[k] / total;
             if node.leaves >> k & 1 != 0 {
                 return Some((self.lights[node.child[k] as usize], pmf, u));
             }
@@ -710,8 +698,76 @@ fn split(
     mid
 }
 
-/// The largest `f64` below 1.
-pub(super) const ONE_BELOW_F64: f64 = 1.0 - f64::EPSILON / 2.0;
+/// A number in `[0, 1)` that chooses among weights ([`choose`]): `f32`, or
+/// `f64` where what is left of it after the choice is used again.
+pub(super) trait Fraction:
+    Copy
+    + PartialOrd
+    + From<f32>
+    + std::ops::Add<Output = Self>
+    + std::ops::Sub<Output = Self>
+    + std::ops::Mul<Output = Self>
+    + std::ops::Div<Output = Self>
+{
+    /// Zero.
+    const ZERO: Self;
+    /// The largest value below 1.
+    const ONE_BELOW: Self;
+    /// The value as an `f32` in `[0, 1)`.
+    fn to_unit_f32(self) -> f32;
+    /// The value clamped to `[0, ONE_BELOW]` (as `clamp`: a NaN stays).
+    #[inline(always)]
+    fn clamp_unit(self) -> Self {
+        if self < Self::ZERO {
+            Self::ZERO
+        } else if self > Self::ONE_BELOW {
+            Self::ONE_BELOW
+        } else {
+            self
+        }
+    }
+}
+
+impl Fraction for f32 {
+    const ZERO: Self = 0.0;
+    const ONE_BELOW: Self = 1.0 - f32::EPSILON / 2.0;
+    #[inline(always)]
+    fn to_unit_f32(self) -> f32 {
+        self
+    }
+}
+
+impl Fraction for f64 {
+    const ZERO: Self = 0.0;
+    const ONE_BELOW: Self = 1.0 - f64::EPSILON / 2.0;
+    #[inline(always)]
+    fn to_unit_f32(self) -> f32 {
+        (self as f32).min(<f32 as Fraction>::ONE_BELOW)
+    }
+}
+
+/// Which of `weights` (summing to `total` > 0) the number `u` in `[0, 1)`
+/// falls in, walking them in order (rounding past the end takes the last
+/// one with weight), and where it fell inside that one's share, in `[0, 1)`.
+/// `None` when no weight is positive.
+#[inline(always)]
+pub(super) fn choose<U: Fraction>(weights: &[f32], total: f32, u: U) -> Option<(usize, U)> {
+    let target = u * U::from(total);
+    let mut start = U::ZERO;
+    let mut chosen = None;
+    for (k, &wk) in weights.iter().enumerate() {
+        if wk <= 0.0 {
+            continue;
+        }
+        chosen = Some((k, start, wk));
+        start = start + U::from(wk);
+        if target < start {
+            break;
+        }
+    }
+    let (k, start, wk) = chosen?;
+    Some((k, ((target - start) / U::from(wk)).clamp_unit()))
+}
 
 #[cfg(test)]
 mod tests {

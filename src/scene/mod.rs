@@ -29,7 +29,7 @@ pub mod spheres;
 mod surface;
 
 pub use light_sampling::{LightSample, MAX_IMPORTANCE_LIGHTS};
-pub use light_table::LightSelection;
+pub use light_table::{LightNumbers, LightSelection};
 pub use light_tree::Facing;
 pub use mesh::{Instance, MeshData, Tangents};
 pub use model::{MAX_ALPHA_LAYERS, Scene};

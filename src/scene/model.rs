@@ -7,7 +7,7 @@
 use glam::Vec3A;
 use rayon::prelude::*;
 
-use super::light_table::{AreaLights, LightSelection, LightTable};
+use super::light_table::{AreaLights, LightNumbers, LightSelection, LightTable};
 use super::mesh::{Instance, MeshData, Tangents};
 use super::parts::{PointLight, SceneError, SceneParts};
 use super::spheres::Spheres;
@@ -45,6 +45,8 @@ pub struct Scene {
     pub(super) has_unlit: bool,
     pub(super) environment: Environment,
     pub(super) selection: LightSelection,
+    /// How the light tree's choice gets its number.
+    pub(super) numbers: LightNumbers,
     /// The lights other than the key light, for choosing one.
     pub(super) light_table: LightTable,
     pub(super) bounds: (Vec3A, Vec3A),
@@ -117,6 +119,9 @@ impl Scene {
         // was a choice stay the same.)
         if self.selection != LightSelection::default() {
             let _ = write!(f, "|light selection {:?}", self.selection);
+        }
+        if self.numbers != LightNumbers::default() {
+            let _ = write!(f, "|light numbers {:?}", self.numbers);
         }
         if !self.spheres.is_empty() {
             let _ = write!(f, "|spheres {:?}", self.spheres.in_order());
@@ -273,6 +278,7 @@ impl Scene {
             has_unlit,
             environment: Environment::none(),
             selection: LightSelection::Tree,
+            numbers: LightNumbers::Independent,
             light_table: LightTable::default(),
             bounds,
             bvh,
