@@ -1,9 +1,15 @@
 //! Geometry: rays, the watertight ray–triangle test and the eight-wide BVH that
-//! answers the scene's ray queries.
+//! answers the scene's ray queries, and the analytic shapes (spheres, disks
+//! and cylinders, the last two placed by an affine map).
 
 pub mod bvh;
+pub mod cylinder;
+pub mod disk;
 pub(crate) mod packet;
+pub mod placement;
 pub mod ray;
+#[cfg(test)]
+mod shape_checks;
 pub mod sphere;
 pub mod triangle;
 

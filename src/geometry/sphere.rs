@@ -4,7 +4,7 @@
 //! do the same: a uniform direction inside the cone from the shading point
 //! that touches the sphere, uniform area from inside it).
 
-use glam::{DVec3, Mat3A, Vec2, Vec3A};
+use glam::{Mat3A, Vec2, Vec3A};
 use std::f32::consts::PI;
 
 use super::ray::{Ray, SurfacePoint, gamma};
@@ -45,23 +45,8 @@ impl Sphere {
         if disc < 0.0 {
             return None;
         }
-        let root = disc.sqrt();
-        let q = if b > 0.0 { -b - root } else { -b + root };
         let c = o.length_squared() - r * r;
-        let (mut t0, mut t1) = (q / a, if q != 0.0 { c / q } else { q / a });
-        if t0 > t1 {
-            std::mem::swap(&mut t0, &mut t1);
-        }
-        let t_max = f64::from(t_max);
-        for t in [t0, t1] {
-            if t > 0.0 && t <= t_max {
-                let t32 = t as f32;
-                if t32 > 0.0 {
-                    return Some(t32);
-                }
-            }
-        }
-        None
+        first_root(a, b, c, disc, t_max, |_| true)
     }
 
     /// The object-frame unit direction of world point `p`'s projection, as
@@ -171,7 +156,7 @@ impl Sphere {
         let cos_t = 1.0 - f64::from(u.x) * (1.0 - cos_max);
         let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
         let phi = 2.0 * std::f64::consts::PI * f64::from(u.y);
-        let (t, b) = orthonormal(axis);
+        let (t, b) = super::placement::coordinate_system(axis);
         let dir = axis * cos_t + (t * phi.cos() + b * phi.sin()) * sin_t;
         // The first crossing along `dir` (the nearest root; rounding near
         // the cone's edge may miss, then the closest point of the line).
@@ -207,15 +192,30 @@ impl Sphere {
     }
 }
 
-/// Two unit vectors completing `n` to an orthonormal frame (Duff et al.).
-fn orthonormal(n: DVec3) -> (DVec3, DVec3) {
-    let sign = 1f64.copysign(n.z);
-    let a = -1.0 / (sign + n.z);
-    let b = n.x * n.y * a;
-    (
-        DVec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x),
-        DVec3::new(b, sign + n.y * n.y * a, -n.y),
-    )
+/// The first root in `(0, t_max]` that `keep` accepts of `a t² + 2b t + c`
+/// whose discriminant `b² − ac` (≥ 0) is `disc`, by the cancellation-free
+/// form (`q = −b ∓ √disc`, roots `q/a` and `c/q`); as `f32`, never 0.
+#[inline]
+pub(crate) fn first_root(
+    a: f64,
+    b: f64,
+    c: f64,
+    disc: f64,
+    t_max: f32,
+    keep: impl Fn(f64) -> bool,
+) -> Option<f32> {
+    let root = disc.sqrt();
+    let q = if b > 0.0 { -b - root } else { -b + root };
+    let (mut t0, mut t1) = (q / a, if q != 0.0 { c / q } else { q / a });
+    if t0 > t1 {
+        std::mem::swap(&mut t0, &mut t1);
+    }
+    let t_max = f64::from(t_max);
+    [t0, t1]
+        .into_iter()
+        .filter(|&t| t > 0.0 && t <= t_max && keep(t))
+        .map(|t| t as f32)
+        .find(|&t| t > 0.0)
 }
 
 #[cfg(test)]
@@ -284,12 +284,7 @@ mod tests {
             let exact = s.center.as_dvec3() + dir.as_dvec3() * 3.5;
             let uv = s.uv_of(exact.as_vec3a());
             let sp = s.point_at(uv);
-            let err = (sp.p.as_dvec3() - exact).abs();
-            assert!(
-                err.cmple(sp.error.as_dvec3()).all(),
-                "{err} beyond {}",
-                sp.error
-            );
+            crate::geometry::shape_checks::assert_within_bound(&sp, exact);
             assert!((sp.n - dir).length() < 1e-5);
         }
     }
@@ -302,13 +297,11 @@ mod tests {
         assert!((s.uv_of(Vec3A::Z) - Vec2::ZERO).length() < 1e-6);
         // ∂p/∂u by finite differences.
         let uv = Vec2::new(0.3, 0.4);
-        let (du, dv) = s.derivatives(uv);
-        let h = 1e-3;
-        let fd = |a: Vec2, b: Vec2| (s.point_at(a).p - s.point_at(b).p) / (2.0 * h);
-        let fdu = fd(uv + Vec2::new(h, 0.0), uv - Vec2::new(h, 0.0));
-        let fdv = fd(uv + Vec2::new(0.0, h), uv - Vec2::new(0.0, h));
-        assert!((du - fdu).length() < 1e-3 * du.length(), "{du} {fdu}");
-        assert!((dv - fdv).length() < 1e-3 * dv.length(), "{dv} {fdv}");
+        crate::geometry::shape_checks::assert_derivatives(
+            |uv| s.point_at(uv),
+            s.derivatives(uv),
+            uv,
+        );
     }
 
     /// The sampled directions' density is `pdf_from`: the estimate of the

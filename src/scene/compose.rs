@@ -3,28 +3,27 @@
 
 use glam::{Affine3A, Mat3A, Vec3A};
 
+use super::analytic::AnalyticShape;
 use super::mesh::Instance;
 use super::parts::{NO_INSTANCE, SceneParts};
+use crate::geometry::cylinder::Cylinder;
+use crate::geometry::disk::Disk;
 use crate::lights::Light;
 use crate::materials::surface::{pattern_images_mut, texture_refs_mut};
 
 impl SceneParts {
     /// Moves everything by `to_world`: triangles, their front normals,
-    /// instances, lights and cameras. A mirroring transform keeps each front
-    /// normal on the side it was (as glTF's node transforms do).
+    /// instances, analytic shapes, lights and cameras. A mirroring transform
+    /// keeps each front normal on the side it was (as glTF's node transforms
+    /// do).
     pub fn transform(&mut self, to_world: Affine3A) {
         let linear = to_world.matrix3;
-        match similarity(linear) {
-            Some(scale) => {
-                for s in &mut self.spheres {
-                    s.sphere.center = to_world.transform_point3a(s.sphere.center);
-                    s.sphere.radius *= scale;
-                    s.sphere.frame = linear * (1.0 / scale) * s.sphere.frame;
-                }
-            }
+        if similarity(linear).is_none() {
             // An ellipsoid is not a sphere: as triangles.
-            None => self.spheres_to_meshes(),
+            self.spheres_to_meshes();
         }
+        self.shapes
+            .retain_mut(|s| transform_shape(&mut s.shape, to_world));
         let normal_matrix = linear.inverse().transpose();
         for t in &mut self.triangles {
             for v in &mut t.v {
@@ -133,7 +132,7 @@ impl SceneParts {
         self.lights.extend(other.lights);
         self.cameras.extend(other.cameras);
         self.two_sided |= other.two_sided;
-        self.spheres.extend(other.spheres.into_iter().map(|mut s| {
+        self.shapes.extend(other.shapes.into_iter().map(|mut s| {
             s.material += material_offset;
             s
         }));
@@ -141,14 +140,19 @@ impl SceneParts {
 
     /// Replaces the analytic spheres by meshes (Mitsuba's parametrisation,
     /// [`SPHERE_SEGMENTS`] around), for transforms that would make them
-    /// ellipsoids.
+    /// ellipsoids. (Disks and cylinders stay: an affine map keeps them
+    /// what they are.)
     pub fn spheres_to_meshes(&mut self) {
-        for s in std::mem::take(&mut self.spheres) {
-            let mut mesh = super::spheres::unit_sphere_mesh(SPHERE_SEGMENTS, s.flip);
+        for s in std::mem::take(&mut self.shapes) {
+            let AnalyticShape::Sphere(sphere) = s.shape else {
+                self.shapes.push(s);
+                continue;
+            };
+            let mut mesh = super::mesh::unit_sphere_mesh(SPHERE_SEGMENTS, s.flip);
             mesh.material = s.material;
             let to_world = Affine3A::from_mat3_translation(
-                (s.sphere.frame * s.sphere.radius).into(),
-                s.sphere.center.into(),
+                (sphere.frame * sphere.radius).into(),
+                sphere.center.into(),
             );
             self.place_mesh(mesh, to_world);
         }
@@ -183,6 +187,32 @@ impl SceneParts {
         }
         self.instances.push(Instance::new(mesh, first, to_world));
     }
+}
+
+/// Moves an analytic shape by `to_world` (a sphere only by a similarity);
+/// `false` when the result is degenerate (a disk or cylinder squashed flat:
+/// it is dropped, as its triangles would be).
+fn transform_shape(shape: &mut AnalyticShape, to_world: Affine3A) -> bool {
+    let linear = to_world.matrix3;
+    match shape {
+        AnalyticShape::Sphere(s) => {
+            let Some(scale) = similarity(linear) else {
+                return false;
+            };
+            s.center = to_world.transform_point3a(s.center);
+            s.radius *= scale;
+            s.frame = linear * (1.0 / scale) * s.frame;
+        }
+        AnalyticShape::Disk(d) => match d.placement.then(to_world) {
+            Some(p) => *d = Disk::new(p),
+            None => return false,
+        },
+        AnalyticShape::Cylinder(c) => match c.placement.then(to_world) {
+            Some(p) => *c = Cylinder::new(p),
+            None => return false,
+        },
+    }
+    true
 }
 
 /// Segments around a sphere made into triangles (256: within 2e-4 of its area).

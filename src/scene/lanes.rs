@@ -31,14 +31,14 @@ pub(crate) struct Points8 {
 
 impl Scene {
     /// Whether the lab's blocks can be shaded in lanes: no alpha masks (the
-    /// packets would pass through them), no spheres (the packets hold
-    /// triangles), every material's base colour its
+    /// packets would pass through them), no analytic shapes (the packets
+    /// hold triangles), every material's base colour its
     /// fixed reflectance (no textures), and the gathers' byte offsets within
     /// `i32`.
     pub(crate) fn lab_lanes_apply(&self) -> bool {
         let fits = |bytes: usize| i32::try_from(bytes).is_ok();
         !self.has_alpha
-            && self.spheres.is_empty()
+            && self.shapes.is_empty()
             && self
                 .materials
                 .iter()

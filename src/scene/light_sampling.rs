@@ -10,6 +10,7 @@ use std::f32::consts::PI;
 use glam::{Vec2, Vec3A};
 use rayon::prelude::*;
 
+use super::analytic::{AnalyticShape, SceneShape};
 use super::light_table::{AreaLights, LightNumbers, LightRef, LightSelection, LightTable};
 use super::light_tree::{self, Facing, Fraction, LightBounds, LightTree, TreeLight};
 use super::model::Scene;
@@ -115,7 +116,7 @@ impl Scene {
         }
         let mut prim_entry = Vec::new();
         if !self.area_lights.prims.is_empty() {
-            prim_entry = vec![u32::MAX; self.triangles.len() + self.spheres.len()];
+            prim_entry = vec![u32::MAX; self.triangles.len() + self.shapes.len()];
             for &prim in &self.area_lights.prims {
                 prim_entry[prim as usize] = entries.len() as u32;
                 entries.push(LightRef::Triangle(prim));
@@ -218,11 +219,9 @@ impl Scene {
         for &prim in &self.area_lights.prims {
             let power = self.area_lights.per_prim[prim as usize].0;
             let two_sided = self.material(prim).emits_both_sides;
-            if let Some(s) = self.sphere_of(prim) {
-                // `power = π·4πr²·Le`: the intensity `πr²·Le` every way.
-                let (lo, hi) = s.sphere.bounds();
+            if let Some(s) = self.shape_of(prim) {
                 lights.push((
-                    LightBounds::sphere(lo, hi, power / (4.0 * PI)),
+                    analytic_bounds(s, power, two_sided),
                     TreeLight::Triangle(prim),
                 ));
                 continue;
@@ -245,7 +244,7 @@ impl Scene {
             0.0
         };
         (
-            LightTree::build(lights, self.triangles.len() + self.spheres.len()),
+            LightTree::build(lights, self.triangles.len() + self.shapes.len()),
             directional,
             env_importance,
         )
@@ -414,7 +413,7 @@ impl Scene {
 
     /// A point on emitting triangle `prim`, uniform by area with `u`, chosen
     /// with `probability`, for the shading point `p` (towards which a clear
-    /// coat dims it); for a sphere, [`Scene::sphere_sample`].
+    /// coat dims it); for an analytic shape, [`Scene::shape_sample`].
     #[inline]
     fn triangle_sample(
         &self,
@@ -424,7 +423,7 @@ impl Scene {
         p: Vec3A,
     ) -> Option<LightSample> {
         if prim as usize >= self.triangles.len() {
-            return self.sphere_sample(prim, u, probability, p);
+            return self.shape_sample(prim, u, probability, p);
         }
         let v = &self.triangles[prim as usize].v;
         let (b1, b2) = uniform_barycentrics(u);
@@ -440,16 +439,24 @@ impl Scene {
         })
     }
 
-    /// A point of emitting sphere `prim` for the shading point `p`, chosen
-    /// with `probability`: by the solid angle it subtends from `p`
+    /// A point of emitting analytic shape `prim` for the shading point `p`,
+    /// chosen with `probability`: a sphere's by the solid angle it subtends
+    /// from `p`
     /// ([`Sphere::sample_from`](crate::geometry::sphere::Sphere::sample_from)),
     /// its density stated per unit area at the point (as the integrators
-    /// read an area light's).
+    /// read an area light's); a disk's or cylinder's uniformly by area.
     #[cold]
     #[inline(never)]
-    fn sphere_sample(&self, prim: u32, u: Vec2, probability: f32, p: Vec3A) -> Option<LightSample> {
-        let s = self.sphere_of(prim)?;
-        let (uv, pdf) = s.sphere.sample_from(p, u)?;
+    fn shape_sample(&self, prim: u32, u: Vec2, probability: f32, p: Vec3A) -> Option<LightSample> {
+        let s = self.shape_of(prim)?;
+        let (uv, solid_angle_pdf) = match &s.shape {
+            AnalyticShape::Sphere(sphere) => {
+                let (uv, pdf) = sphere.sample_from(p, u)?;
+                (uv, Some(pdf))
+            }
+            AnalyticShape::Disk(d) => (d.sample_uv(u), None),
+            AnalyticShape::Cylinder(c) => (c.sample_uv(u), None),
+        };
         let point = s.front_point(uv);
         let normal = point.n;
         let d = point.p - p;
@@ -458,13 +465,17 @@ impl Scene {
         if !(cos > 0.0 && r2 > 0.0) {
             return None;
         }
+        let pdf_area = match solid_angle_pdf {
+            Some(pdf) => probability * pdf * cos / r2,
+            None => probability / self.area_lights.per_prim[prim as usize].1,
+        };
         Some(LightSample::Area {
             position: point.p,
             normal,
             radiance: self.emission_at(prim, uv.x, uv.y)
                 * self.coat_dimming(prim, uv.x, uv.y, p - point.p),
             two_sided: self.material(prim).emits_both_sides,
-            pdf_area: probability * pdf * cos / r2,
+            pdf_area,
         })
     }
 
@@ -678,30 +689,33 @@ impl Scene {
     /// a surface at `from` that `facing` describes, picks the direction of
     /// `hit` (a ray's from `from`, with unit direction, meeting an emitter
     /// whose normal makes cosine `cos_out` with it): for a triangle its area
-    /// density times `t²/|cos|`, for a sphere the density of its solid-angle
-    /// sampling.
+    /// density times `t²/|cos|` (so for a disk or cylinder too), for a
+    /// sphere the density of its solid-angle sampling.
     #[inline]
     pub fn light_pdf_hit(&self, hit: &Hit, from: Vec3A, facing: Facing, cos_out: f32) -> f32 {
         if (hit.prim as usize) < self.triangles.len() {
             return self.light_pdf_area(hit.prim, from, facing) * hit.t * hit.t / cos_out.abs();
         }
-        self.sphere_light_pdf(hit, from, facing, cos_out)
+        self.analytic_light_pdf(hit, from, facing, cos_out)
     }
 
-    /// [`Scene::light_pdf_hit`] of a sphere.
+    /// [`Scene::light_pdf_hit`] of an analytic shape.
     #[cold]
     #[inline(never)]
-    fn sphere_light_pdf(&self, hit: &Hit, from: Vec3A, facing: Facing, cos_out: f32) -> f32 {
-        let Some(s) = self.sphere_of(hit.prim) else {
+    fn analytic_light_pdf(&self, hit: &Hit, from: Vec3A, facing: Facing, cos_out: f32) -> f32 {
+        let Some(s) = self.shape_of(hit.prim) else {
             return 0.0;
         };
+        let AnalyticShape::Sphere(sphere) = &s.shape else {
+            return self.light_pdf_area(hit.prim, from, facing) * hit.t * hit.t / cos_out.abs();
+        };
         // The selection probability: the area density times the area.
-        let choice = self.light_pdf_area(hit.prim, from, facing) * s.sphere.area();
+        let choice = self.light_pdf_area(hit.prim, from, facing) * sphere.area();
         if choice <= 0.0 {
             return 0.0;
         }
-        let q = s.sphere.point_at(Vec2::new(hit.b1, hit.b2)).p;
-        choice * s.sphere.pdf_from(from, q, cos_out)
+        let q = sphere.point_at(Vec2::new(hit.b1, hit.b2)).p;
+        choice * sphere.pdf_from(from, q, cos_out)
     }
 
     /// Total power emitted by the emitting triangles (the estimate they are
@@ -733,6 +747,24 @@ fn select_number(u: f32, jitter: f32) -> f64 {
 
 /// The spacing of the samplers' numbers, 2⁻²⁴.
 const SELECT_CELL: f64 = 1.0 / (1u32 << 24) as f64;
+
+/// The light tree's bounds of an emitting analytic shape of power `power`
+/// (`π A Le`, per side): a sphere sends `πr²Le = power/4π` every way; a
+/// disk `A Le` along its front normal (from the front, or both sides); a
+/// cylinder at most its projected area `2rℓ` times `Le`, `power/π²`, in
+/// directions all round (a bound, as the tree needs).
+fn analytic_bounds(s: &SceneShape, power: f32, two_sided: bool) -> LightBounds {
+    let (lo, hi) = s.shape.bounds();
+    match &s.shape {
+        AnalyticShape::Sphere(_) => LightBounds::sphere(lo, hi, power / (4.0 * PI)),
+        AnalyticShape::Disk(d) => {
+            let n = if s.flip { -d.normal() } else { d.normal() };
+            let phi = power / (PI * if two_sided { 2.0 } else { 1.0 });
+            LightBounds::flat(lo, hi, n, phi, two_sided)
+        }
+        AnalyticShape::Cylinder(_) => LightBounds::sphere(lo, hi, power / (PI * PI)),
+    }
+}
 
 /// Barycentrics `(b1, b2)` of a point distributed uniformly by area over a
 /// triangle, from `u` in `[0, 1)²`.
@@ -884,15 +916,15 @@ impl AreaLights {
             return Self::default();
         }
         let n_tri = scene.triangles.len();
-        let per_prim: Vec<(f32, f32)> = (0..n_tri + scene.spheres.len())
+        let per_prim: Vec<(f32, f32)> = (0..n_tri + scene.shapes.len())
             .into_par_iter()
             .map(|i| {
                 let m = scene.material_of[i] as usize;
                 if !emissive[m] {
                     return (0.0, 0.0);
                 }
-                let area = match scene.sphere_of(i as u32) {
-                    Some(s) => s.sphere.area(),
+                let area = match scene.shape_of(i as u32) {
+                    Some(s) => s.shape.area(),
                     None => scene.triangles[i].area(),
                 };
                 let le = mean_emission(scene, i as u32);

@@ -122,9 +122,17 @@ impl LightBounds {
     /// A triangle with vertices `v`, unit front normal `n`, emitting intensity
     /// `phi` along its normal, from the front or from both sides.
     pub(super) fn triangle(v: &[Vec3A; 3], n: Vec3A, phi: f32, two_sided: bool) -> Self {
+        let (lo, hi) = (v[0].min(v[1]).min(v[2]), v[0].max(v[1]).max(v[2]));
+        Self::flat(lo, hi, n, phi, two_sided)
+    }
+
+    /// A flat emitter (a triangle, a disk) in the box `lo`–`hi` with unit
+    /// front normal `n`, emitting intensity `phi` along its normal, from the
+    /// front or from both sides.
+    pub(super) fn flat(lo: Vec3A, hi: Vec3A, n: Vec3A, phi: f32, two_sided: bool) -> Self {
         Self {
-            lo: v[0].min(v[1]).min(v[2]),
-            hi: v[0].max(v[1]).max(v[2]),
+            lo,
+            hi,
             phi,
             axis: n,
             cos_o: 1.0,

@@ -132,3 +132,31 @@ pub fn grid(cols: u32, rows: u32, at: impl Fn(f32, f32) -> (Vec3, Vec3, Vec2)) -
     }
     mesh
 }
+
+/// Mitsuba's unit sphere as a mesh of `segments` around and `segments / 2`
+/// from pole to pole: (u, v) = (φ/2π, θ/π) of `(sin θ cos φ, sin θ sin φ,
+/// cos θ)`, normals outwards (inwards, and wound so, when `flip`).
+pub fn unit_sphere_mesh(segments: u32, flip: bool) -> MeshData {
+    use std::f32::consts::PI;
+    let mut mesh = grid(segments, segments / 2, |s, t| {
+        let phi = 2.0 * PI * s;
+        // The poles exactly (sin π is not 0 in f32): their triangles are
+        // then exactly degenerate and left out.
+        let (sin_t, cos_t) = match t {
+            0.0 => (0.0, 1.0),
+            1.0 => (0.0, -1.0),
+            _ => (PI * t).sin_cos(),
+        };
+        let p = glam::Vec3::new(sin_t * phi.cos(), sin_t * phi.sin(), cos_t);
+        (p, p, glam::Vec2::new(s, t))
+    });
+    if flip {
+        for t in &mut mesh.indices {
+            t.swap(1, 2);
+        }
+        for n in &mut mesh.normals {
+            *n = -*n;
+        }
+    }
+    mesh
+}

@@ -3,12 +3,13 @@
 //! each; meshes whose vertex attributes (shading normals, two UV sets, tangents,
 //! colours) are looked up from a hit; a material table; a texture store shared
 //! by the materials; lights (the key point light, other punctual lights,
-//! emitting triangles); cameras. Rays see it through one query seam
+//! emitting triangles); cameras; analytic spheres, disks and cylinders. Rays see it through one query seam
 //! ([`Scene::intersect`], [`Scene::occluded`]), which also makes alpha-masked
 //! surfaces holes. The loaders that make scenes from files are in
 //! [`crate::load`], above this model.
 //!
 //! The files, from the bottom up: `mesh.rs` (meshes and their instances),
+//! `analytic.rs` (the analytic shapes and their hierarchy),
 //! `parts.rs` (what a scene is made of, [`SceneParts`]) with `compose.rs`
 //! (placing and appending parts), `light_tree.rs` (the light tree, and
 //! [`Facing`]), `light_table.rs` (the light tables a scene keeps), `model.rs`
@@ -17,6 +18,7 @@
 //! (choosing lights, their densities) and `lanes.rs` (eight rays in AVX2
 //! lanes).
 
+pub mod analytic;
 pub mod compose;
 mod lanes;
 mod light_sampling;
@@ -25,14 +27,13 @@ mod light_tree;
 pub mod mesh;
 mod model;
 mod parts;
-pub mod spheres;
 mod surface;
 
+pub use analytic::{AnalyticShape, SceneShape};
 pub use light_sampling::{LightSample, MAX_IMPORTANCE_LIGHTS};
 pub use light_table::{LightNumbers, LightSelection};
 pub use light_tree::Facing;
 pub use mesh::{Instance, MeshData, Tangents};
 pub use model::{MAX_ALPHA_LAYERS, Scene};
 pub use parts::{NO_INSTANCE, PointLight, SceneError, SceneParts};
-pub use spheres::SceneSphere;
 pub use surface::SurfaceHit;

@@ -7,10 +7,10 @@
 use glam::Vec3A;
 use rayon::prelude::*;
 
+use super::analytic::{AnalyticShapes, SceneShape};
 use super::light_table::{AreaLights, LightNumbers, LightSelection, LightTable};
 use super::mesh::{Instance, MeshData, Tangents};
 use super::parts::{PointLight, SceneError, SceneParts};
-use super::spheres::Spheres;
 use crate::camera::SceneCamera;
 use crate::geometry::bvh::Bvh;
 use crate::geometry::ray::{Hit, Ray, SurfacePoint};
@@ -51,9 +51,10 @@ pub struct Scene {
     pub(super) light_table: LightTable,
     pub(super) bounds: (Vec3A, Vec3A),
     pub(super) bvh: Bvh,
-    /// Analytic spheres: primitive `triangles.len() + k` is sphere `k`
-    /// (`material_of` holds their materials after the triangles').
-    pub(super) spheres: Spheres,
+    /// Analytic spheres, disks and cylinders: primitive `triangles.len() +
+    /// k` is shape `k` (`material_of` holds their materials after the
+    /// triangles').
+    pub(super) shapes: AnalyticShapes,
     /// The key point light: the lab's light, `direct`'s light and the one the
     /// viewer moves (power 0 when the scene has none).
     pub light: PointLight,
@@ -123,8 +124,8 @@ impl Scene {
         if self.numbers != LightNumbers::default() {
             let _ = write!(f, "|light numbers {:?}", self.numbers);
         }
-        if !self.spheres.is_empty() {
-            let _ = write!(f, "|spheres {:?}", self.spheres.in_order());
+        if !self.shapes.is_empty() {
+            let _ = write!(f, "|analytic shapes {:?}", self.shapes.in_order());
         }
         f.value()
     }
@@ -221,17 +222,16 @@ impl Scene {
                 });
             }
         }
-        for (k, s) in parts.spheres.iter().enumerate() {
-            let r = s.sphere.radius;
-            if !(s.sphere.center.is_finite() && r.is_finite() && r > 0.0) {
+        for (k, s) in parts.shapes.iter().enumerate() {
+            if !s.shape.is_finite() {
                 return Err(SceneError::BadReference {
-                    what: format!("sphere {k} has centre {} and radius {r}", s.sphere.center),
+                    what: format!("analytic shape {k} is degenerate: {:?}", s.shape),
                 });
             }
             if s.material as usize >= parts.materials.len() {
                 return Err(SceneError::BadReference {
                     what: format!(
-                        "sphere {k} has material {} of {}",
+                        "analytic shape {k} has material {} of {}",
                         s.material,
                         parts.materials.len()
                     ),
@@ -252,17 +252,17 @@ impl Scene {
                 |a, b| (a.0.min(b.0), a.1.max(b.1)),
             );
         let bounds = parts
-            .spheres
+            .shapes
             .iter()
-            .map(|s| s.sphere.bounds())
+            .map(|s| s.shape.bounds())
             .fold((n > 0).then_some(bounds), |all, (a, b)| {
                 Some(all.map_or((a, b), |(lo, hi)| (lo.min(a), hi.max(b))))
             })
             .unwrap_or((Vec3A::ZERO, Vec3A::ZERO));
         let bvh = Bvh::build(&parts.triangles);
-        let spheres = Spheres::build(&parts.spheres);
+        let shapes = AnalyticShapes::build(&parts.shapes);
         let mut material_of = parts.material_of;
-        material_of.extend(parts.spheres.iter().map(|s| s.material));
+        material_of.extend(parts.shapes.iter().map(|s| s.material));
         let mut scene = Self {
             triangles: parts.triangles,
             normals: parts.normals,
@@ -282,7 +282,7 @@ impl Scene {
             light_table: LightTable::default(),
             bounds,
             bvh,
-            spheres,
+            shapes,
             light: parts.light,
             ambient: parts.ambient,
             two_sided: parts.two_sided,
@@ -305,26 +305,25 @@ impl Scene {
     }
 
     /// The closest hit along `ray` in `(0, t_max]`, holes counted as solid:
-    /// the triangles', or a sphere's when the scene has spheres.
+    /// the triangles', or an analytic shape's when the scene has them.
     #[inline(always)]
     fn intersect_solid(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
-        if self.spheres.is_empty() {
+        if self.shapes.is_empty() {
             self.bvh.intersect(ray, t_max)
         } else {
-            self.intersect_with_spheres(ray, t_max)
+            self.intersect_with_shapes(ray, t_max)
         }
     }
 
-    /// [`Scene::intersect_solid`] in a scene with spheres: the triangles'
-    /// closest hit, then any sphere nearer than it.
+    /// [`Scene::intersect_solid`] in a scene with analytic shapes: the
+    /// triangles' closest hit, then any shape nearer than it.
     #[inline(never)]
-    fn intersect_with_spheres(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
+    fn intersect_with_shapes(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
         let triangle = self.bvh.intersect(ray, t_max);
         let limit = triangle.map_or(t_max, |h| h.t);
-        match self.spheres.intersect(ray, limit) {
+        match self.shapes.intersect(ray, limit) {
             Some((t, k)) if triangle.is_none_or(|h| t < h.t) => {
-                let s = self.spheres.get(k);
-                let uv = s.sphere.uv_of(ray.origin + t * ray.dir);
+                let uv = self.shapes.get(k).shape.uv_at(ray, t);
                 Some(Hit {
                     t,
                     prim: self.triangles.len() as u32 + k,
@@ -336,17 +335,17 @@ impl Scene {
         }
     }
 
-    /// Sphere `k` of primitive `prim`, if `prim` is a sphere.
+    /// Analytic shape `k` of primitive `prim`, if `prim` is one.
     #[inline]
-    pub(super) fn sphere_of(&self, prim: u32) -> Option<&super::spheres::SceneSphere> {
+    pub(super) fn shape_of(&self, prim: u32) -> Option<&SceneShape> {
         let k = (prim as usize).checked_sub(self.triangles.len())?;
-        (k < self.spheres.len()).then(|| self.spheres.get(k as u32))
+        (k < self.shapes.len()).then(|| self.shapes.get(k as u32))
     }
 
-    /// Whether the scene has analytic spheres.
+    /// Whether the scene has analytic shapes (spheres, disks, cylinders).
     #[inline]
-    pub fn has_spheres(&self) -> bool {
-        !self.spheres.is_empty()
+    pub fn has_analytic_shapes(&self) -> bool {
+        !self.shapes.is_empty()
     }
 
     /// Whether anything blocks `ray` for `t` in `(0, t_max]` (holes do not).
@@ -356,7 +355,7 @@ impl Scene {
             return self.occluded_through_holes(ray, t_max);
         }
         self.bvh.occluded(ray, t_max)
-            || (!self.spheres.is_empty() && self.spheres.occluded(ray, t_max))
+            || (!self.shapes.is_empty() && self.shapes.occluded(ray, t_max))
     }
 
     /// [`Scene::occluded`] in a scene with alpha holes.
@@ -371,7 +370,7 @@ impl Scene {
     /// which triangle is reported at an exact tie.
     #[inline]
     pub fn intersect4(&self, rays: &[Ray; 4], t_max: f32) -> [Option<Hit>; 4] {
-        if self.has_alpha || !self.spheres.is_empty() {
+        if self.has_alpha || !self.shapes.is_empty() {
             return self.intersect4_one_by_one(rays, t_max);
         }
         self.bvh.intersect4(rays, t_max)
@@ -389,7 +388,7 @@ impl Scene {
     /// not `active` answer `false`.
     #[inline]
     pub fn occluded4(&self, rays: &[Ray; 4], t_max: [f32; 4], active: [bool; 4]) -> [bool; 4] {
-        if self.has_alpha || !self.spheres.is_empty() {
+        if self.has_alpha || !self.shapes.is_empty() {
             return self.occluded4_one_by_one(rays, t_max, active);
         }
         self.bvh.occluded4(rays, t_max, active)
@@ -411,7 +410,7 @@ impl Scene {
     /// together where the CPU has AVX2; as [`Scene::intersect4`] otherwise.
     #[inline]
     pub fn intersect8(&self, rays: &[Ray; 8], t_max: f32) -> [Option<Hit>; 8] {
-        if self.has_alpha || !self.spheres.is_empty() {
+        if self.has_alpha || !self.shapes.is_empty() {
             return self.intersect8_one_by_one(rays, t_max);
         }
         self.bvh.intersect8(rays, t_max)
@@ -427,7 +426,7 @@ impl Scene {
     /// not `active` answer `false`.
     #[inline]
     pub fn occluded8(&self, rays: &[Ray; 8], t_max: [f32; 8], active: [bool; 8]) -> [bool; 8] {
-        if self.has_alpha || !self.spheres.is_empty() {
+        if self.has_alpha || !self.shapes.is_empty() {
             return self.occluded8_one_by_one(rays, t_max, active);
         }
         self.bvh.occluded8(rays, t_max, active)
@@ -472,8 +471,8 @@ impl Scene {
     /// The point of a hit, reconstructed from its barycentrics.
     #[inline]
     fn hit_point(&self, hit: &Hit) -> SurfacePoint {
-        if let Some(s) = self.sphere_of(hit.prim) {
-            return s.sphere.point_at(glam::Vec2::new(hit.b1, hit.b2));
+        if let Some(s) = self.shape_of(hit.prim) {
+            return s.shape.point_at(glam::Vec2::new(hit.b1, hit.b2));
         }
         let prim = hit.prim as usize;
         SurfacePoint::on_triangle(&self.triangles[prim].v, hit.b1, hit.b2, self.normals[prim])
@@ -500,7 +499,7 @@ impl Scene {
 
     /// Front normal of triangle `prim` (for the built-in boxes the lab's
     /// convention; for glTF the counter-clockwise side after the transform);
-    /// zero for a sphere (whose normal varies: see [`Scene::surface`]).
+    /// zero for an analytic shape (see [`Scene::surface`]).
     #[inline]
     pub fn normal(&self, prim: u32) -> Vec3A {
         self.normals
@@ -678,7 +677,7 @@ impl Scene {
                 .map(MeshData::memory_bytes)
                 .sum::<usize>()
             + self.bvh.memory_bytes()
-            + self.spheres.len() * std::mem::size_of::<super::spheres::SceneSphere>()
+            + self.shapes.len() * std::mem::size_of::<SceneShape>()
     }
 }
 

@@ -7,8 +7,8 @@ use std::collections::HashMap;
 use glam::Vec3A;
 use thiserror::Error;
 
+use super::analytic::SceneShape;
 use super::mesh::{Instance, MeshData};
-use super::spheres::SceneSphere;
 use crate::camera::SceneCamera;
 use crate::geometry::triangle::Triangle;
 use crate::lights::Light;
@@ -98,8 +98,9 @@ pub struct SceneParts {
     pub two_sided: bool,
     /// Cameras from the file.
     pub cameras: Vec<SceneCamera>,
-    /// Analytic spheres (primitives `triangles.len() + k` of the scene).
-    pub spheres: Vec<SceneSphere>,
+    /// Analytic spheres, disks and cylinders (primitives `triangles.len() +
+    /// k` of the scene).
+    pub shapes: Vec<SceneShape>,
 }
 
 impl SceneParts {

@@ -53,7 +53,7 @@ impl Scene {
     pub fn surface_point(&self, hit: &Hit, dir: Vec3A) -> SurfacePoint {
         let prim = hit.prim as usize;
         if prim >= self.triangles.len() {
-            return self.sphere_point(hit, dir);
+            return self.analytic_point(hit, dir);
         }
         let mut n = self.normals[prim];
         if self.two_sided && n.dot(dir) > 0.0 {
@@ -70,7 +70,7 @@ impl Scene {
     /// a tenth of a `direct` frame).
     #[inline(always)]
     pub fn surface_points4(&self, hits: [&Hit; 4], dirs: [Vec3A; 4]) -> [[Vec4; 3]; 3] {
-        if !self.spheres.is_empty() {
+        if !self.shapes.is_empty() {
             return self.surface_points4_one_by_one(hits, dirs);
         }
         let prims = [
@@ -127,7 +127,8 @@ impl Scene {
         [p, n, error]
     }
 
-    /// [`Scene::surface_points4`] in a scene with spheres: point by point.
+    /// [`Scene::surface_points4`] in a scene with analytic shapes: point by
+    /// point.
     #[cold]
     #[inline(never)]
     fn surface_points4_one_by_one(&self, hits: [&Hit; 4], dirs: [Vec3A; 4]) -> [[Vec4; 3]; 3] {
@@ -147,12 +148,12 @@ impl Scene {
         ]
     }
 
-    /// [`Scene::surface_point`] of a sphere's hit: its front normal (outward,
-    /// or inward when flipped) turned towards the ray in a two-sided scene.
+    /// [`Scene::surface_point`] of an analytic shape's hit: its front normal
+    /// turned towards the ray in a two-sided scene.
     #[cold]
     #[inline(never)]
-    fn sphere_point(&self, hit: &Hit, dir: Vec3A) -> SurfacePoint {
-        let Some(s) = self.sphere_of(hit.prim) else {
+    fn analytic_point(&self, hit: &Hit, dir: Vec3A) -> SurfacePoint {
+        let Some(s) = self.shape_of(hit.prim) else {
             return SurfacePoint {
                 p: Vec3A::ZERO,
                 error: Vec3A::ZERO,
@@ -193,7 +194,7 @@ impl Scene {
     pub fn attributes(&self, hit: &Hit) -> HitAttributes {
         match self.mesh_of(hit.prim) {
             Some((_, mesh, idx)) => attributes_of(mesh, idx, barycentrics(hit)),
-            None if hit.prim as usize >= self.triangles.len() => sphere_attributes(hit),
+            None if hit.prim as usize >= self.triangles.len() => analytic_attributes(hit),
             None => HitAttributes::default(),
         }
     }
@@ -218,7 +219,7 @@ impl Scene {
     pub fn surface(&self, hit: &Hit) -> SurfaceHit {
         let prim = hit.prim as usize;
         if prim >= self.triangles.len() {
-            return self.sphere_surface(hit);
+            return self.analytic_surface(hit);
         }
         let ng = self.normals[prim];
         let point = SurfacePoint::on_triangle(&self.triangles[prim].v, hit.b1, hit.b2, ng);
@@ -302,19 +303,19 @@ impl Scene {
 }
 
 impl Scene {
-    /// [`Scene::surface`] of a sphere's hit: the point and normal from its
-    /// spherical coordinates, which are also its texture coordinates, and
-    /// Mitsuba's frame from the sphere's `∂p/∂u`.
+    /// [`Scene::surface`] of an analytic shape's hit: the point and normal
+    /// from its coordinates `(u, v)`, which are also its texture
+    /// coordinates, and Mitsuba's frame from the shape's `∂p/∂u`.
     #[cold]
     #[inline(never)]
-    fn sphere_surface(&self, hit: &Hit) -> SurfaceHit {
+    fn analytic_surface(&self, hit: &Hit) -> SurfaceHit {
         let uv = Vec2::new(hit.b1, hit.b2);
         let material = self
             .material_of
             .get(hit.prim as usize)
             .copied()
             .unwrap_or(0);
-        let Some(sphere) = self.sphere_of(hit.prim) else {
+        let Some(shape) = self.shape_of(hit.prim) else {
             let point = SurfacePoint {
                 p: Vec3A::ZERO,
                 error: Vec3A::ZERO,
@@ -332,15 +333,15 @@ impl Scene {
                 material,
             };
         };
-        let point = sphere.front_point(uv);
+        let point = shape.front_point(uv);
         let ng = point.n;
-        let attrs = sphere_attributes(hit);
+        let attrs = analytic_attributes(hit);
         let (mut ns, mut tangent, mut bitangent) = (ng, Vec3A::ZERO, Vec3A::ZERO);
         if let Some(m) = self.materials.get(material as usize)
             && let MaterialKind::Textured(t) = &m.kind
             && t.needs_frame()
         {
-            let (dp_du, dp_dv) = sphere.sphere.derivatives(uv);
+            let (dp_du, dp_dv) = shape.shape.derivatives(uv);
             (ns, tangent, bitangent) =
                 mitsuba_frame(t, dp_du, dp_dv, ng, ng, &attrs, &self.textures);
         }
@@ -358,10 +359,10 @@ impl Scene {
     }
 }
 
-/// A sphere hit's attributes: its spherical coordinates as texture
-/// coordinates (both sets), white.
+/// An analytic shape's hit's attributes: its coordinates `(u, v)` as
+/// texture coordinates (both sets), white.
 #[inline]
-fn sphere_attributes(hit: &Hit) -> HitAttributes {
+fn analytic_attributes(hit: &Hit) -> HitAttributes {
     let uv = Vec2::new(hit.b1, hit.b2);
     HitAttributes {
         uv: [uv, uv],

@@ -229,16 +229,9 @@ impl Builder<'_, '_> {
             }
             "rectangle" => shapes::rectangle(),
             "cube" => shapes::cube(),
-            // (Made into triangles only where it cannot stay analytic: see
+            // (Made into triangles only where they cannot stay analytic: see
             // `shape`.)
-            "sphere" => MeshData::default(),
-            "disk" | "cylinder" => {
-                self.approximated.push(shape.plugin.clone());
-                match shape.plugin.as_str() {
-                    "disk" => shapes::disk(),
-                    _ => shapes::cylinder(),
-                }
-            }
+            "sphere" | "disk" | "cylinder" => MeshData::default(),
             other => {
                 return Err(p.error(format!(
                     "the shape '{}' is not supported yet (see docs/mitsuba-scenes.md)",
@@ -263,9 +256,10 @@ impl Builder<'_, '_> {
                 if len <= 0.0 {
                     return Err(p.error("p0 and p1 are the same point"));
                 }
+                // Mitsuba's frame about the axis (which fixes where u = 0).
                 let z = axis / len;
-                let x = z.any_orthonormal_vector();
-                let y = z.cross(x);
+                let (x, y) = crate::geometry::placement::coordinate_system(z.as_dvec3());
+                let (x, y) = (x.as_vec3(), y.as_vec3());
                 let frame = Mat4::from_cols(
                     (x * r).extend(0.0),
                     (y * r).extend(0.0),
@@ -348,33 +342,24 @@ impl Builder<'_, '_> {
         p.ignore(&["id"]);
         p.finish()?;
         mesh.material = material;
-        if shape.plugin == "sphere" {
-            // An analytic sphere where its placement is a similarity and it
-            // is not in a shape group (whose instances may scale unevenly);
-            // else the triangles.
-            let linear = Mat3A::from_mat4(to_world);
-            match crate::scene::compose::similarity(linear) {
-                Some(scale) if within.is_none() => {
-                    self.parts.spheres.push(crate::scene::SceneSphere {
-                        sphere: crate::geometry::sphere::Sphere {
-                            center: Vec3A::from(to_world.w_axis.truncate()),
-                            radius: scale,
-                            frame: linear * (1.0 / scale),
-                        },
-                        flip: p.boolean("flip_normals", false)?,
-                        material,
-                    });
-                    return Ok(());
-                }
-                _ => {
-                    self.approximated.push(shape.plugin.clone());
-                    let material = mesh.material;
-                    mesh = shapes::sphere();
-                    mesh.material = material;
-                    if p.boolean("flip_normals", false)? {
-                        shapes::flip(&mut mesh);
-                    }
-                }
+        if matches!(shape.plugin.as_str(), "sphere" | "disk" | "cylinder") {
+            // An analytic shape where it is not in a shape group (whose
+            // instances may scale unevenly) and its placement suits it (a
+            // sphere's a similarity); else the triangles.
+            let flip = p.boolean("flip_normals", false)?;
+            if within.is_none()
+                && let Some(s) = shapes::analytic(&shape.plugin, affine(to_world), flip)
+            {
+                self.parts
+                    .shapes
+                    .push(crate::scene::SceneShape { material, ..s });
+                return Ok(());
+            }
+            self.approximated.push(shape.plugin.clone());
+            mesh = shapes::tessellated(&shape.plugin);
+            mesh.material = material;
+            if flip {
+                shapes::flip(&mut mesh);
             }
         }
         let mesh_index = self.parts.meshes.len() as u32;
@@ -972,7 +957,7 @@ fn build(tree: &SceneTree, ledger: &Ledger) -> Result<MitsubaScene, MitsubaError
         }
         let list: Vec<String> = counts.iter().map(|(p, n)| format!("{p} ×{n}")).collect();
         warnings.push(format!(
-            "shapes approximated by triangles ({} segments around; disks and cylinders are not analytic yet, nor spheres in shape groups or under uneven scales): {}",
+            "shapes approximated by triangles ({} segments around; spheres, disks and cylinders in shape groups, spheres under uneven scales): {}",
             shapes::SEGMENTS,
             list.join(", ")
         ));

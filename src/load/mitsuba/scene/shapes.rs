@@ -1,21 +1,26 @@
 //! Mitsuba's shapes as triangle meshes in their own space: `obj` (Mitsuba's
 //! vertex merging, `flip_tex_coords`, `face_normals`, and its angle-weighted
 //! normals where the file has none), `rectangle`, `cube` (Mitsuba's vertex
-//! order and texture coordinates), and `sphere`, `disk` and `cylinder`
-//! tessellated finely with their exact normals and Mitsuba's
-//! parametrisation (an approximation: raylab's BVH holds triangles only,
-//! so their silhouettes are polygons; the load says so).
+//! order and texture coordinates); `sphere`, `disk` and `cylinder` as
+//! raylab's analytic shapes, or, where they cannot be (in shape groups, a
+//! sphere under an uneven scale), tessellated finely with their exact
+//! normals and Mitsuba's parametrisation (an approximation: their
+//! silhouettes are polygons; the load says so).
 
 use std::collections::HashMap;
 use std::f32::consts::PI;
 use std::path::Path;
 
-use glam::{Vec2, Vec3, Vec4};
+use glam::{Affine3A, Vec2, Vec3, Vec4};
 
 use super::super::error::MitsubaError;
 use super::super::mesh::MitsubaMesh;
+use crate::geometry::cylinder::Cylinder;
+use crate::geometry::disk::Disk;
+use crate::geometry::placement::Placement;
+use crate::geometry::sphere::Sphere;
 use crate::load::obj::parse_obj_file;
-use crate::scene::MeshData;
+use crate::scene::{AnalyticShape, MeshData, SceneShape};
 
 /// Segments around a tessellated sphere, disk or cylinder (rings: half).
 pub(super) const SEGMENTS: u32 = crate::scene::compose::SPHERE_SEGMENTS;
@@ -268,10 +273,47 @@ pub(super) fn cube() -> MeshData {
     mesh
 }
 
+/// The analytic shape of plugin `sphere`, `disk` or `cylinder` placed by
+/// `to_world` (its own parameters applied: see `mesh`), its front flipped
+/// by `flip` (material 0), or `None` where it cannot be one: a sphere
+/// under anything but a similarity, a degenerate placement.
+pub(super) fn analytic(plugin: &str, to_world: Affine3A, flip: bool) -> Option<SceneShape> {
+    let shape = match plugin {
+        "sphere" => {
+            let linear = to_world.matrix3;
+            let scale = crate::scene::compose::similarity(linear)?;
+            AnalyticShape::Sphere(Sphere {
+                center: to_world.translation,
+                radius: scale,
+                frame: linear * (1.0 / scale),
+            })
+        }
+        "disk" => AnalyticShape::Disk(Disk::new(Placement::from_affine(to_world)?)),
+        "cylinder" => AnalyticShape::Cylinder(Cylinder::new(Placement::from_affine(to_world)?)),
+        _ => return None,
+    };
+    Some(SceneShape {
+        shape,
+        flip,
+        material: 0,
+    })
+}
+
+/// The unit mesh of an analytic plugin (`sphere`, `disk`, `cylinder`), for
+/// where it cannot stay analytic (empty for other plugins).
+pub(super) fn tessellated(plugin: &str) -> MeshData {
+    match plugin {
+        "sphere" => sphere(),
+        "disk" => disk(),
+        "cylinder" => cylinder(),
+        _ => MeshData::default(),
+    }
+}
+
 /// Mitsuba's unit `sphere` tessellated (where it cannot stay analytic):
-/// see [`crate::scene::spheres::unit_sphere_mesh`].
+/// see [`crate::scene::mesh::unit_sphere_mesh`].
 pub(super) fn sphere() -> MeshData {
-    crate::scene::spheres::unit_sphere_mesh(SEGMENTS, false)
+    crate::scene::mesh::unit_sphere_mesh(SEGMENTS, false)
 }
 
 /// Mitsuba's unit `disk` at z = 0 facing +z tessellated: (u, v) = (r, φ/2π).
