@@ -103,3 +103,57 @@ fn in_a_shape_group_they_are_tessellated_and_the_load_says_so() {
         loaded.warnings
     );
 }
+
+/// A mesh's front under a placement that mirrors (here x ↦ −x) is the side
+/// its shading normals point to, as in Mitsuba (a one-sided BSDF shows it,
+/// an area light emits to it): a mesh's own normals (the file's) are carried
+/// by the inverse transpose and keep pointing up (+z) while the mirrored
+/// triangles' winding turns down; normals Mitsuba makes for a mesh without
+/// them come from the placed triangles, so that mesh's front turns down
+/// with its winding. (Mitsuba's `various_shapes` test places three
+/// rectangles so.)
+#[test]
+fn a_mirrored_mesh_faces_where_its_normals_point() {
+    let dir = tempfile::tempdir().unwrap();
+    let quad = "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\n";
+    std::fs::write(
+        dir.path().join("with.obj"),
+        format!("{quad}vn 0 0 1\nf 1//1 2//1 3//1\nf 1//1 3//1 4//1\n"),
+    )
+    .unwrap();
+    std::fs::write(
+        dir.path().join("without.obj"),
+        format!("{quad}f 1 2 3\nf 1 3 4\n"),
+    )
+    .unwrap();
+    let path = dir.path().join("mirrored.xml");
+    std::fs::write(
+        &path,
+        r#"<scene version="3.0.0">
+    <emitter type="constant"/>
+    <shape type="obj">
+        <string name="filename" value="with.obj"/>
+        <transform name="to_world"><scale x="-1"/><translate x="-3"/></transform>
+    </shape>
+    <shape type="obj">
+        <string name="filename" value="without.obj"/>
+        <transform name="to_world"><scale x="-1"/><translate x="3"/></transform>
+    </shape>
+</scene>"#,
+    )
+    .unwrap();
+    let loaded = raylab::load::load(path.to_str().unwrap(), &Default::default()).unwrap();
+    let scene = &loaded.scene;
+    let front = |x: f32| {
+        let ray = Ray::new(Vec3A::new(x, 0.2, 5.0), -Vec3A::Z);
+        let hit = scene.intersect(&ray, f32::INFINITY).expect("a hit");
+        let s = scene.surface(&hit);
+        (s.ng.z, s.ns.z)
+    };
+    assert_eq!(front(-3.0), (1.0, 1.0), "the file's normals");
+    assert_eq!(
+        front(3.0),
+        (-1.0, -1.0),
+        "normals made from the placed triangles"
+    );
+}

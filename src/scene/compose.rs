@@ -170,6 +170,20 @@ impl SceneParts {
     /// material `material`: its world triangles (front normals by their
     /// winding) and an instance.
     pub fn place_instance(&mut self, mesh: u32, to_world: Affine3A, material: u32) {
+        self.place_instance_turned(mesh, to_world, material, false);
+    }
+
+    /// [`SceneParts::place_instance`], the front normals turned against the
+    /// winding where `turned` (a Mitsuba mesh whose own normals a mirroring
+    /// placement carries to the other side).
+    pub fn place_instance_turned(
+        &mut self,
+        mesh: u32,
+        to_world: Affine3A,
+        material: u32,
+        turned: bool,
+    ) {
+        let sign = if turned { -1.0 } else { 1.0 };
         let first = self.triangles.len() as u32;
         if self.instance_of.is_empty() && first > 0 {
             self.instance_of = vec![NO_INSTANCE; first as usize];
@@ -178,7 +192,7 @@ impl SceneParts {
         let data = &self.meshes[mesh as usize];
         for tri in &data.indices {
             let v = tri.map(|i| to_world.transform_point3a(data.positions[i as usize].into()));
-            let n = (v[1] - v[0]).cross(v[2] - v[0]).normalize_or_zero();
+            let n = sign * (v[1] - v[0]).cross(v[2] - v[0]).normalize_or_zero();
             self.triangles
                 .push(crate::geometry::triangle::Triangle::new(v[0], v[1], v[2]));
             self.normals.push(n);

@@ -80,6 +80,8 @@ struct Placed {
     mesh: u32,
     to_world: Mat4,
     material: u32,
+    /// Whether the mesh's normals are its own (see `Builder::place`).
+    own_normals: bool,
 }
 
 struct Builder<'t, 'l> {
@@ -89,7 +91,7 @@ struct Builder<'t, 'l> {
     /// Material table index by (BSDF object, emitter object) pointers.
     material_of: HashMap<(usize, usize), u32>,
     /// Meshes of shape groups, by the group object's pointer.
-    groups: HashMap<usize, Vec<(u32, Mat4, u32)>>,
+    groups: HashMap<usize, Vec<(u32, Mat4, u32, bool)>>,
     /// The mesh attribute each material reads (its shapes' colours).
     attribute_of: HashMap<u32, Option<String>>,
     approximated: Vec<String>,
@@ -178,7 +180,7 @@ impl Builder<'_, '_> {
         shape: &Object,
         p: &Props,
         attribute: Option<&str>,
-    ) -> Result<(MeshData, Mat4), MitsubaError> {
+    ) -> Result<(MeshData, Mat4, bool), MitsubaError> {
         let no_attributes = |p: &Props| {
             match attribute {
             Some(a) => Err(p.error(format!(
@@ -197,6 +199,11 @@ impl Builder<'_, '_> {
                 .resolve(name)
                 .ok_or_else(|| p.error(format!("cannot find '{}'", crate::guard::quote(name))))
         };
+        // Whether the mesh's normals are its own (a file's, or a built-in
+        // shape's), which Mitsuba carries to the world by the inverse
+        // transpose, rather than made from the placed triangles (see
+        // `place`).
+        let mut own_normals = true;
         let mut mesh = match shape.plugin.as_str() {
             "obj" => {
                 let file = p
@@ -205,7 +212,9 @@ impl Builder<'_, '_> {
                 let file = resolve(p, file)?;
                 let flip_uv = p.boolean("flip_tex_coords", true)?;
                 let face_normals = p.boolean("face_normals", false)?;
-                shapes::obj_mesh(&file, flip_uv, face_normals)?
+                let (mesh, file_normals) = shapes::obj_mesh(&file, flip_uv, face_normals)?;
+                own_normals = file_normals;
+                mesh
             }
             "ply" => {
                 let file = p
@@ -215,6 +224,7 @@ impl Builder<'_, '_> {
                 let flip_uv = p.boolean("flip_tex_coords", false)?;
                 let face_normals = p.boolean("face_normals", false)?;
                 let m = super::ply::read_ply(&file, flip_uv, self.materials.ledger())?;
+                own_normals = m.normals.is_some();
                 shapes::from_mitsuba_mesh(m, face_normals, attribute).map_err(|e| p.error(e))?
             }
             "serialized" => {
@@ -225,6 +235,7 @@ impl Builder<'_, '_> {
                 let index = p.integer("shape_index", 0)?;
                 let face_normals = p.boolean("face_normals", false)?;
                 let m = super::serialized::read_serialized(&file, index, self.materials.ledger())?;
+                own_normals = m.normals.is_some();
                 shapes::from_mitsuba_mesh(m, face_normals, attribute).map_err(|e| p.error(e))?
             }
             "rectangle" => shapes::rectangle(),
@@ -273,7 +284,8 @@ impl Builder<'_, '_> {
         if p.boolean("flip_normals", false)? {
             shapes::flip(&mut mesh);
         }
-        Ok((mesh, to_world))
+        let own_normals = own_normals && !mesh.normals.is_empty();
+        Ok((mesh, to_world, own_normals))
     }
 
     /// Adds a shape (and what it holds) to the scene; shape groups are
@@ -281,7 +293,7 @@ impl Builder<'_, '_> {
     fn shape(
         &mut self,
         shape: &Arc<Object>,
-        within: Option<&mut Vec<(u32, Mat4, u32)>>,
+        within: Option<&mut Vec<(u32, Mat4, u32, bool)>>,
     ) -> Result<(), MitsubaError> {
         let p = Props::new(shape);
         match shape.plugin.as_str() {
@@ -312,11 +324,12 @@ impl Builder<'_, '_> {
                 }
                 p.finish()?;
                 let members = self.groups[&(Arc::as_ptr(group) as usize)].clone();
-                for (mesh, m, material) in members {
+                for (mesh, m, material, own_normals) in members {
                     self.place(Placed {
                         mesh,
                         to_world: to_world * m,
                         material,
+                        own_normals,
                     });
                 }
                 return Ok(());
@@ -330,7 +343,7 @@ impl Builder<'_, '_> {
         }
         let material = self.material(bsdfs.first(), emitters.first())?;
         let attribute = self.attribute_of.get(&material).cloned().flatten();
-        let (mut mesh, to_world) = self.mesh(shape, &p, attribute.as_deref())?;
+        let (mut mesh, to_world, mut own_normals) = self.mesh(shape, &p, attribute.as_deref())?;
         for tag in [Tag::Medium, Tag::Sensor] {
             if let Some(o) = p.children_of(tag).first() {
                 return Err(p.error(format!(
@@ -357,6 +370,7 @@ impl Builder<'_, '_> {
             }
             self.approximated.push(shape.plugin.clone());
             mesh = shapes::tessellated(&shape.plugin);
+            own_normals = true;
             mesh.material = material;
             if flip {
                 shapes::flip(&mut mesh);
@@ -365,20 +379,30 @@ impl Builder<'_, '_> {
         let mesh_index = self.parts.meshes.len() as u32;
         self.parts.meshes.push(mesh);
         match within {
-            Some(members) => members.push((mesh_index, to_world, material)),
+            Some(members) => members.push((mesh_index, to_world, material, own_normals)),
             None => self.place(Placed {
                 mesh: mesh_index,
                 to_world,
                 material,
+                own_normals,
             }),
         }
         Ok(())
     }
 
-    /// World triangles and an instance of a mesh.
+    /// World triangles and an instance of a mesh. Its front (the side a
+    /// one-sided BSDF shows and an area light emits to) is, as in Mitsuba,
+    /// the side its shading normals point to: normals of its own are
+    /// carried to the world by the inverse transpose, so under a placement
+    /// that mirrors (negative determinant) they point against the placed
+    /// triangles' winding, and the front turns with them; normals Mitsuba
+    /// makes (a mesh without them) come from the placed triangles and keep
+    /// their winding's side, as do face normals.
     fn place(&mut self, placed: Placed) {
+        let to_world = affine(placed.to_world);
+        let by_normals = placed.own_normals && to_world.matrix3.determinant() < 0.0;
         self.parts
-            .place_instance(placed.mesh, affine(placed.to_world), placed.material);
+            .place_instance_turned(placed.mesh, to_world, placed.material, by_normals);
     }
 }
 

@@ -61,12 +61,12 @@ fn angle_weighted_normals(mesh: &mut MeshData, position_of: &[u32], positions: u
 /// An OBJ file as Mitsuba's `obj` reads it: one vertex per distinct
 /// (position, texture coordinate, normal) corner, `v` flipped to `1 − v`
 /// if `flip_tex_coords`, no normals if `face_normals`, else the file's or
-/// Mitsuba's angle-weighted ones.
+/// Mitsuba's angle-weighted ones; and whether the normals are the file's.
 pub(super) fn obj_mesh(
     path: &Path,
     flip_tex_coords: bool,
     face_normals: bool,
-) -> Result<MeshData, MitsubaError> {
+) -> Result<(MeshData, bool), MitsubaError> {
     let text = std::fs::read_to_string(path).map_err(|cause| MitsubaError::Io {
         path: path.to_owned(),
         cause,
@@ -117,7 +117,7 @@ pub(super) fn obj_mesh(
     if !face_normals && !has_normals {
         angle_weighted_normals(&mut mesh, &position_of, obj.positions.len());
     }
-    Ok(mesh)
+    Ok((mesh, has_normals))
 }
 
 /// A mesh read by the `ply` or `serialized` reader as raylab's, with
