@@ -83,6 +83,7 @@ def render(
     define: Union[None, str, Mapping[str, object], Sequence[str]] = None,
     default_light: Literal["auto", "on", "off"] = "auto",
     light_selection: Literal["tree", "power", "uniform"] = "tree",
+    light_numbers: Optional[Literal["stratified", "independent"]] = None,
     tonemap: Optional[Literal["clamp", "aces", "khronos-pbr-neutral"]] = None,
     max_depth: Optional[int] = None,
     sampler: Literal["sobol", "independent"] = "sobol",

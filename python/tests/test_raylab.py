@@ -149,6 +149,7 @@ def valid_values(tmp_path):
         "default_light": ("on", {"scene": HELMET}),
         "variant": ("Peacock Velvet", {"scene": ASSETS / "models/SheenChair/SheenChair.gltf"}),
         "light_selection": ("power", {"scene": ROOT / "scenes/showcase/showcase.gltf"}),
+        "light_numbers": ("stratified", {"scene": ROOT / "scenes/showcase/showcase.gltf"}),
         "tonemap": ("aces", {}),
         "max_depth": (3, {}),
         "sampler": ("independent", {}),

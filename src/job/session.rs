@@ -144,8 +144,17 @@ pub fn load_session(
         } else {
             plural(s.punctual_lights, "light")
         };
+        // Analytic shapes (Mitsuba's spheres, disks, cylinders) only where
+        // there are any.
+        let (shapes, emitting_shapes) = match s.analytic_shapes {
+            0 => (String::new(), String::new()),
+            n => (
+                format!(", {}", plural(n, "analytic shape")),
+                format!(", {}", plural(s.emitting_shapes, "emitting analytic shape")),
+            ),
+        };
         hooks.say(&format!(
-            "loaded {}: {}, {}, {} ({:.1} MiB), {}, {}, geometry {:.1} MiB, {:.0} ms",
+            "loaded {}: {}{shapes}, {}, {} ({:.1} MiB), {}, {}{emitting_shapes}, geometry {:.1} MiB, {:.0} ms",
             args.scene,
             plural(s.triangles, "triangle"),
             plural(s.materials, "material"),

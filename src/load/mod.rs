@@ -233,6 +233,10 @@ pub struct LoadSummary {
     pub punctual_lights: usize,
     /// Emitting triangles.
     pub emitters: usize,
+    /// Analytic shapes (spheres, disks, cylinders).
+    pub analytic_shapes: usize,
+    /// Emitting analytic shapes.
+    pub emitting_shapes: usize,
     /// The environment map's size in texels, if the environment is a map.
     pub environment_size: Option<[usize; 2]>,
     /// Bytes of the environment map and its sampling tables.
@@ -599,6 +603,8 @@ pub fn load(name: &str, options: &LoadOptions) -> Result<Loaded, LoadError> {
         geometry_bytes: scene.geometry_bytes(),
         punctual_lights: scene.lights().len() + usize::from(scene.point_power() > 0.0),
         emitters: scene.emitter_count(),
+        analytic_shapes: scene.analytic_shape_count(),
+        emitting_shapes: scene.emitting_shape_count(),
         environment_size: scene
             .environment()
             .env_map()

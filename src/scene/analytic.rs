@@ -445,7 +445,11 @@ mod tests {
             ..SceneParts::default()
         };
         let scene = Scene::from_parts(parts).unwrap();
-        assert!(scene.has_analytic_shapes() && scene.emitter_count() == 1);
+        assert!(
+            scene.has_analytic_shapes()
+                && scene.emitting_shape_count() == 1
+                && scene.emitter_count() == 0
+        );
         let p = Vec3A::new(0.0, 1e-4, 0.0);
         let facing = Facing::Side(Vec3A::Y);
         let mut rng = Rng::new(3, 3);

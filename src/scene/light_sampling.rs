@@ -724,9 +724,19 @@ impl Scene {
         self.area_lights.total
     }
 
-    /// How many triangles emit light.
+    /// How many triangles emit light (analytic shapes not counted).
     pub fn emitter_count(&self) -> usize {
-        self.area_lights.prims.len()
+        self.area_lights.prims.len() - self.emitting_shape_count()
+    }
+
+    /// How many analytic shapes (spheres, disks, cylinders) emit light.
+    pub fn emitting_shape_count(&self) -> usize {
+        let triangles = self.triangles.len();
+        self.area_lights
+            .prims
+            .iter()
+            .filter(|&&p| p as usize >= triangles)
+            .count()
     }
 }
 

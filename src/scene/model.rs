@@ -348,6 +348,11 @@ impl Scene {
         !self.shapes.is_empty()
     }
 
+    /// How many analytic shapes (spheres, disks, cylinders) the scene has.
+    pub fn analytic_shape_count(&self) -> usize {
+        self.shapes.len()
+    }
+
     /// Whether anything blocks `ray` for `t` in `(0, t_max]` (holes do not).
     #[inline]
     pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {

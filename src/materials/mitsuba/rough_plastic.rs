@@ -57,14 +57,26 @@ impl RoughPlasticTable {
     /// Computes the table (Mitsuba's `eval_transmittance` and
     /// `eval_reflectance`, in f32 with f64 sums).
     pub fn compute(kind: MicrofacetKind, alpha: f32, eta: f32) -> RoughPlasticTable {
+        use rayon::prelude::*;
         let distr = MicrofacetDistribution::new(kind, alpha, alpha);
+        // The 64 cosines' quadratures in parallel (about 1.1 million BSDF
+        // evaluations: half a second on one core), summed in order.
+        let columns: Vec<(f32, f64)> = (0..TRANSMITTANCE_RES)
+            .into_par_iter()
+            .map(|j| {
+                let mu = (j as f32 / (TRANSMITTANCE_RES - 1) as f32).max(1e-6);
+                let wi = Vec3A::new((1.0 - mu * mu).sqrt(), 0.0, mu);
+                (
+                    quadrature(&distr, wi, eta, false) as f32,
+                    quadrature(&distr, wi, 1.0 / eta, true) * mu as f64,
+                )
+            })
+            .collect();
         let mut external_transmittance = [0.0; TRANSMITTANCE_RES];
         let mut internal = 0.0f64;
-        for (j, t) in external_transmittance.iter_mut().enumerate() {
-            let mu = (j as f32 / (TRANSMITTANCE_RES - 1) as f32).max(1e-6);
-            let wi = Vec3A::new((1.0 - mu * mu).sqrt(), 0.0, mu);
-            *t = quadrature(&distr, wi, eta, false) as f32;
-            internal += quadrature(&distr, wi, 1.0 / eta, true) * mu as f64;
+        for (t, &(transmittance, reflected)) in external_transmittance.iter_mut().zip(&columns) {
+            *t = transmittance;
+            internal += reflected;
         }
         RoughPlasticTable {
             external_transmittance,
