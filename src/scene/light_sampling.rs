@@ -312,33 +312,24 @@ impl Scene {
         if !(total > 0.0 && total.is_finite()) {
             return None;
         }
-        // Walk the kinds in order (key light, tree, environment, directional
-        // lights) to the one `target` falls in; rounding past the end takes
-        // the last one with weight.
-        let target = select * U::from(total);
-        let mut chosen = None;
-        let mut start = U::ZERO;
-        let mut consider = |kind: TopLevel, w: f32| {
-            if w <= 0.0 {
-                return false;
-            }
-            chosen = Some((kind, start, w));
-            start = start + U::from(w);
-            target < start
+        // The kinds in order: key light, tree, environment, directional
+        // lights (whose weights are worked out only up to the one chosen).
+        let directional = &self.light_table.directional;
+        let kinds = [weights.key, weights.tree, weights.environment]
+            .into_iter()
+            .chain(
+                directional
+                    .iter()
+                    .map(|&i| directional_importance(&self.lights[i as usize], facing)),
+            );
+        let (k, w, rest) = light_tree::choose(kinds, total, select)?;
+        let kind = match k {
+            0 => TopLevel::Key,
+            1 => TopLevel::Tree,
+            2 => TopLevel::Environment,
+            _ => TopLevel::Directional(directional[k - 3]),
         };
-        let _ = consider(TopLevel::Key, weights.key)
-            || consider(TopLevel::Tree, weights.tree)
-            || consider(TopLevel::Environment, weights.environment)
-            || self.light_table.directional.iter().any(|&i| {
-                consider(
-                    TopLevel::Directional(i),
-                    directional_importance(&self.lights[i as usize], facing),
-                )
-            });
-        let (kind, start, w) = chosen?;
         let probability = w / total;
-        // Where the choice fell inside the chosen kind's share, in [0, 1).
-        let rest = ((target - start) / U::from(w)).clamp_unit();
         let on_light = |rest: U| {
             if reuse {
                 Vec2::new(rest.to_unit_f32(), u.y)

@@ -504,9 +504,9 @@ impl LightTree {
         loop {
             let node = self.nodes.get(index)?;
             let (w, total) = Self::weights(node, (index == 0).then_some(root), p, facing)?;
-            let (k, rest) = choose(&w, total, u)?;
+            let (k, wk, rest) = choose(w, total, u)?;
             u = rest;
-            pmf *= w[k] / total;
+            pmf *= wk / total;
             if node.leaves >> k & 1 != 0 {
                 return Some((self.lights[node.child[k] as usize], pmf, u));
             }
@@ -755,15 +755,19 @@ impl Fraction for f64 {
 }
 
 /// Which of `weights` (summing to `total` > 0) the number `u` in `[0, 1)`
-/// falls in, walking them in order (rounding past the end takes the last
-/// one with weight), and where it fell inside that one's share, in `[0, 1)`.
-/// `None` when no weight is positive.
+/// falls in, walking them in order and no further (rounding past the end
+/// takes the last one with weight): its index, its weight, and where `u`
+/// fell inside its share, in `[0, 1)`. `None` when no weight is positive.
 #[inline(always)]
-pub(super) fn choose<U: Fraction>(weights: &[f32], total: f32, u: U) -> Option<(usize, U)> {
+pub(super) fn choose<U: Fraction>(
+    weights: impl IntoIterator<Item = f32>,
+    total: f32,
+    u: U,
+) -> Option<(usize, f32, U)> {
     let target = u * U::from(total);
     let mut start = U::ZERO;
     let mut chosen = None;
-    for (k, &wk) in weights.iter().enumerate() {
+    for (k, wk) in weights.into_iter().enumerate() {
         if wk <= 0.0 {
             continue;
         }
@@ -774,7 +778,7 @@ pub(super) fn choose<U: Fraction>(weights: &[f32], total: f32, u: U) -> Option<(
         }
     }
     let (k, start, wk) = chosen?;
-    Some((k, ((target - start) / U::from(wk)).clamp_unit()))
+    Some((k, wk, ((target - start) / U::from(wk)).clamp_unit()))
 }
 
 #[cfg(test)]

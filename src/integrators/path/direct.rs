@@ -14,9 +14,10 @@
 use glam::{Vec2, Vec3A};
 
 use super::samples::PathSampler;
-use super::vertex::{NeeWeights, PathEvent, PathTracer, next_event, power_heuristic, vertex_frame};
+use super::vertex::{
+    NeeWeights, PathEvent, PathTracer, emission, next_event, power_heuristic, vertex_frame,
+};
 use crate::geometry::ray::{Hit, Ray};
-use crate::materials::surface::SurfaceMaterial;
 use crate::materials::{Material, spectrum};
 use crate::scene::{Scene, SurfaceHit};
 
@@ -78,10 +79,10 @@ pub(super) fn direct_counted(
             if hide || scene.environment().is_black() {
                 return Vec3A::ZERO;
             }
-            let env = scene.environment_radiance(ray.dir);
-            let (radiance, weight) = (env, 1.0);
+            let radiance = scene.environment_radiance(ray.dir);
+            let weight = 1.0;
             tracer.event(0, Vec3A::ONE, PathEvent::Environment { radiance, weight });
-            return env;
+            return radiance;
         };
         let surface = scene.surface(&hit);
         if !(hide && scene.materials()[surface.material as usize].is_emissive()) {
@@ -104,9 +105,10 @@ pub(super) fn direct_counted(
             uv: surface.attrs.uv[0],
         },
     );
-    let mut l = emission(scene, &surface, material, ray.dir, cos_out);
-    if l != Vec3A::ZERO {
-        tracer.event(0, Vec3A::ONE, PathEvent::Emission { le: l, weight: 1.0 });
+    let mut l = Vec3A::ZERO;
+    if let Some(le) = emission(scene, &surface, material, ray.dir, cos_out) {
+        tracer.event(0, Vec3A::ONE, PathEvent::Emission { le, weight: 1.0 });
+        l = le;
     }
     let mut bsdf = material.bsdf(&surface.attrs, textures);
     observe(&surface, &bsdf);
@@ -212,8 +214,7 @@ pub(super) fn direct_counted(
         } else {
             Vec3A::ONE
         };
-        let le = emission(scene, &found, emitter, wi, cos_found);
-        if le != Vec3A::ZERO {
+        if let Some(le) = emission(scene, &found, emitter, wi, cos_found) {
             let mis = if bs.specular {
                 share
             } else {
@@ -231,26 +232,4 @@ pub(super) fn direct_counted(
         }
     }
     l
-}
-
-/// What the surface `surface` (of `material`, met by a ray along `dir`
-/// whose cosine with its geometric normal is `-cos_out`) emits towards the
-/// ray's origin: zero unless it emits on that side.
-#[inline]
-fn emission(
-    scene: &Scene,
-    surface: &SurfaceHit,
-    material: &SurfaceMaterial,
-    dir: Vec3A,
-    cos_out: f32,
-) -> Vec3A {
-    if !(material.is_emissive() && (cos_out > 0.0 || material.emits_both_sides)) {
-        return Vec3A::ZERO;
-    }
-    let textures = scene.textures();
-    let mut le = material.emitted(&surface.attrs, textures);
-    if material.has_coat() {
-        le *= material.coat_dimming(&surface.attrs, textures, surface.nc, dir);
-    }
-    le
 }

@@ -5,7 +5,9 @@ use glam::{Vec2, Vec3A};
 
 use super::direct::{DirectSamples, direct_counted};
 use super::samples::{PathSampler, SamplerKind};
-use super::vertex::{NeeWeights, PathEvent, PathTracer, next_event, power_heuristic, vertex_frame};
+use super::vertex::{
+    NeeWeights, PathEvent, PathTracer, emission, next_event, power_heuristic, vertex_frame,
+};
 use crate::geometry::ray::{Hit, Ray};
 use crate::materials::{Material, spectrum};
 use crate::scene::{Facing, Scene, SurfaceHit};
@@ -230,11 +232,7 @@ pub fn radiance_traced(
         );
 
         // Emission from the front side of an area light (or either side).
-        if material.is_emissive() && (cos_out > 0.0 || material.emits_both_sides) {
-            let mut le = material.emitted(&surface.attrs, textures);
-            if material.has_coat() {
-                le *= material.coat_dimming(&surface.attrs, textures, surface.nc, ray.dir);
-            }
+        if let Some(le) = emission(scene, &surface, material, ray.dir, cos_out) {
             let weight = if specular {
                 1.0
             } else {

@@ -99,6 +99,29 @@ pub(crate) fn vertex_frame(
     (shading, frame, frame.to_local(wo_world), facing)
 }
 
+/// What the surface `surface` (of `material`, met by a ray along `dir`
+/// whose cosine with its geometric normal is `-cos_out`) emits towards the
+/// ray's origin (a clear coat dimming it); `None` unless it emits on that
+/// side.
+#[inline(always)]
+pub(crate) fn emission(
+    scene: &Scene,
+    surface: &SurfaceHit,
+    material: &SurfaceMaterial,
+    dir: Vec3A,
+    cos_out: f32,
+) -> Option<Vec3A> {
+    if !(material.is_emissive() && (cos_out > 0.0 || material.emits_both_sides)) {
+        return None;
+    }
+    let textures = scene.textures();
+    let mut le = material.emitted(&surface.attrs, textures);
+    if material.has_coat() {
+        le *= material.coat_dimming(&surface.attrs, textures, surface.nc, dir);
+    }
+    Some(le)
+}
+
 /// How next-event estimation weighs a light sample: the power heuristic of
 /// its density times `light` against the BSDF's times `bsdf`, times
 /// `share`; a punctual light (which BSDF sampling cannot find) gets `share`
