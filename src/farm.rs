@@ -412,11 +412,17 @@ pub fn read_part_within(
     for v in 0..stride {
         read_sums(&aov_channel(v), &mut |i, x| aov_sums[i * stride + v] = x)?;
     }
-    // Nothing outside its rows, and nothing a sum of its samples cannot be.
+    // Nothing outside its rows and the tiles beside them (into which a
+    // splatting filter reaches, at most `MAX_SPLAT_BORDER` ≤ `TILE_ROWS`
+    // rows), and nothing a sum of its samples cannot be.
+    const _: () = assert!(crate::sampling::filter::MAX_SPLAT_BORDER <= TILE_ROWS);
     let limit = crate::fixed::fixed(crate::fixed::MAX_SAMPLE) * (samples.len() as i128);
     let width_px = width as usize;
     for (row, chunk) in sums.chunks(width_px).enumerate() {
-        let inside = split.has_tile((row / TILE_ROWS) as u32);
+        let tile = (row / TILE_ROWS) as u32;
+        let inside = split.has_tile(tile)
+            || tile > 0 && split.has_tile(tile - 1)
+            || split.has_tile(tile + 1) && tile + 1 < Split::row_tiles(height);
         let bad = chunk
             .iter()
             .flatten()

@@ -189,6 +189,43 @@ fn tiles_and_sample_ranges_merge_into_the_single_render_byte_for_byte() {
     refused(&["junk.part.exr"], d, "junk.part.exr: not an OpenEXR file");
 }
 
+/// Splatted samples reach the rows of the tiles beside their own: parts
+/// cut by tiles and by samples still merge into the single render byte for
+/// byte (the gaussian reaches 2 rows beyond a sample's pixel, a tent of
+/// radius 4 reaches 4, a whole tile).
+#[test]
+fn splatted_parts_merge_into_the_single_render_byte_for_byte() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    for filter in ["gaussian", "tent:4"] {
+        let splat = ["--filter", filter, "--reconstruction", "splat"];
+        render(d, &splat, "whole.exr");
+        let mut parts = Vec::new();
+        for k in 0..3 {
+            let name = format!("t{k}.part.exr");
+            let tile = format!("{k}/3");
+            let mut args = splat.to_vec();
+            args.extend_from_slice(&["--samples", "0..5", "--tile", &tile]);
+            render(d, &args, &name);
+            parts.push(name);
+        }
+        let mut args = splat.to_vec();
+        args.extend_from_slice(&["--samples", "5..12"]);
+        render(d, &args, "rest.part.exr");
+        parts.push("rest.part.exr".to_string());
+        let mut args = vec!["merge", "-q", "-o", "merged.exr"];
+        args.extend(parts.iter().map(String::as_str));
+        ok(&args, d);
+        same_bytes(&d.join("whole.exr"), &d.join("merged.exr"));
+        // And it is not the sampled image.
+        let mut args = vec!["--filter", filter];
+        args.extend_from_slice(&["--reconstruction", "sample"]);
+        render(d, &args, "sampled.exr");
+        let bytes = |name: &str| std::fs::read(d.join(name)).unwrap();
+        assert_ne!(bytes("whole.exr"), bytes("sampled.exr"));
+    }
+}
+
 #[test]
 fn parts_need_an_exr_and_a_valid_split() {
     let dir = tempfile::tempdir().unwrap();

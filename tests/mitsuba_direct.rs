@@ -9,7 +9,9 @@
 
 use std::path::Path;
 
-use raylab::job::{Hooks, Job, JobOptions};
+mod common;
+
+use raylab::job::JobOptions;
 
 /// Writes `xml` as `name` in `dir`; its path.
 fn write(dir: &Path, name: &str, xml: &str) -> String {
@@ -43,17 +45,7 @@ fn render(dir: &Path, name: &str, counts: &str, lights: &str, spp: u32) -> Vec<[
     let mut options = JobOptions::new(&path);
     options.spp = Some(spp);
     options.quiet = true;
-    let image = Job::new(options)
-        .unwrap()
-        .render_with(&Hooks::default())
-        .unwrap()
-        .finished
-        .image;
-    let (w, h) = (image.width, image.height);
-    (0..h)
-        .flat_map(|y| (0..w).map(move |x| (x, y)))
-        .map(|(x, y)| image.get(x, y).to_array())
-        .collect()
+    common::job_pixels(options)
 }
 
 /// The mean of each channel over the image.

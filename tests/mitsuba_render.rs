@@ -83,7 +83,8 @@ fn a_flat_emission_spectrum_has_mitsubas_tint_and_rgb_does_not() {
             r#"<scene version="3.0.0">
     <integrator type="path"><integer name="max_depth" value="1"/></integrator>
     <sensor type="perspective"><float name="fov" value="30"/>
-        <film type="hdrfilm"><integer name="width" value="4"/><integer name="height" value="4"/></film>
+        <film type="hdrfilm"><integer name="width" value="4"/><integer name="height" value="4"/>
+            <rfilter type="box"/></film>
     </sensor>
     <emitter type="constant">{value}</emitter>
 </scene>"#

@@ -88,6 +88,7 @@ def render(
     max_depth: Optional[int] = None,
     sampler: Literal["sobol", "independent"] = "sobol",
     filter: Optional[str] = None,
+    reconstruction: Optional[Literal["sample", "splat"]] = None,
     material: Union[None, str, Mapping[str, str], Sequence[str]] = None,
     exposure: Optional[float] = None,
     camera_pos: Optional[_Vec3] = None,

@@ -154,6 +154,7 @@ def valid_values(tmp_path):
         "max_depth": (3, {}),
         "sampler": ("independent", {}),
         "filter": ("gaussian:0.5", {"integrator": "path"}),
+        "reconstruction": ("splat", {"integrator": "path", "filter": "gaussian:0.5"}),
         "define": ({"spp": 2}, {"scene": ROOT / "tests/data/mitsuba/suite/checker_ortho_path.xml"}),
         "material": ({"tall": "mirror"}, {}),
         "exposure": (-1.5, {}),

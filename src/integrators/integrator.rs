@@ -35,6 +35,7 @@ impl Integrator {
             max_depth: u32::MAX,
             sampler: path::SamplerKind::DEFAULT,
             filter: crate::sampling::filter::PixelFilter::Box,
+            reconstruction: crate::sampling::filter::Reconstruction::Sample,
             hide_emitters: path::HideEmitters::No,
             direct: path::DirectSamples::ONE_EACH,
         }),

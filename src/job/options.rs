@@ -90,6 +90,14 @@ pub struct SceneOptions {
     /// pixels stay plain means [default: the scene file's, else box].
     #[arg(long, value_name = "FILTER", value_parser = parse_filter)]
     pub filter: Option<crate::sampling::filter::PixelFilter>,
+    /// How `path` uses a filter other than the box: `sample` (each sample's
+    /// point drawn from the filter, counted in its own pixel) or `splat`
+    /// (each sample added to every pixel within the filter's radius, weighted,
+    /// as Mitsuba's film does: the same image, less noise per pixel; filters
+    /// reaching more than 4 pixels, adaptive sampling and `--aov variance`
+    /// sample) [default: splat for Mitsuba scenes, sample otherwise].
+    #[arg(long, value_name = "HOW", value_parser = parse_reconstruction)]
+    pub reconstruction: Option<crate::sampling::filter::Reconstruction>,
     /// Materials of the built-in box's parts for `path`, e.g.
     /// `tall=mirror,short=glass,floor=gold:0.2`. Parts: floor, ceiling, back, left,
     /// right, short, tall. Materials: diffuse, mirror, glass[:IOR], gold, copper,
@@ -387,6 +395,10 @@ impl SceneOptions {
                 if let Some(f) = self.filter {
                     options.filter = f;
                 }
+                options.reconstruction = self.reconstruction.unwrap_or(match kind {
+                    SceneKind::Mitsuba => crate::sampling::filter::Reconstruction::Splat,
+                    _ => crate::sampling::filter::Reconstruction::Sample,
+                });
                 Integrator::Path(options)
             }
             other => other,
@@ -708,6 +720,14 @@ fn parse_light_selection(s: &str) -> Result<crate::scene::LightSelection, String
         "uniform" => Ok(LightSelection::Uniform),
         _ => Err(format!("expected tree, power or uniform, not {s:?}")),
     }
+}
+
+fn parse_reconstruction(s: &str) -> Result<crate::sampling::filter::Reconstruction, String> {
+    use crate::sampling::filter::Reconstruction;
+    [Reconstruction::Sample, Reconstruction::Splat]
+        .into_iter()
+        .find(|r| r.name() == s)
+        .ok_or_else(|| format!("expected sample or splat, not {s:?}"))
 }
 
 fn parse_light_numbers(s: &str) -> Result<crate::scene::LightNumbers, String> {

@@ -47,7 +47,9 @@ impl Accumulator {
 
     /// No samples yet of the rows of `split`, whose samples start at `first`
     /// (a part of a render, to be merged with the others: see
-    /// [`crate::farm`]). The sums of rows outside `split` stay zero.
+    /// [`crate::farm`]). The sums of rows outside `split` stay zero, but
+    /// for those within a splatting filter's reach of its tiles
+    /// ([`crate::sampling::filter::Reconstruction::Splat`]).
     pub fn part(width: u32, height: u32, aovs: AovSet, split: Split, first: u32) -> Self {
         let pixels = width as usize * height as usize;
         let aovs = (!aovs.is_empty()).then(|| (aovs, zeroed(pixels * Self::aov_stride(aovs))));

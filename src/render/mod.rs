@@ -8,6 +8,7 @@
 mod accumulator;
 pub mod adaptive;
 mod output;
+mod sinks;
 mod split;
 mod tile;
 

@@ -9,11 +9,12 @@ use glam::{DVec3, Vec2, Vec3A};
 use rayon::prelude::*;
 
 use super::output::Tally;
+use super::sinks::{ExactSums, FilmSums, Sink, SplatSums};
 use super::split::{Split, TILE_ROWS};
 use crate::aov::{Aov, FirstHit, Layout, in_half};
 use crate::camera::Camera;
 use crate::film::Film;
-use crate::fixed::{self, Fixed3};
+use crate::fixed::Fixed3;
 use crate::geometry::ray::{Hit, Ray};
 use crate::integrators::Integrator;
 #[cfg(target_arch = "x86_64")]
@@ -23,6 +24,7 @@ use crate::materials::Material;
 #[cfg(target_arch = "x86_64")]
 use crate::sampling::sampler::pixel_jitter8;
 use crate::sampling::sampler::{Rng, lens_jitter, pixel_jitter};
+use crate::sampling::splat::SplatWeights;
 use crate::scene::{Scene, SurfaceHit};
 #[cfg(target_arch = "x86_64")]
 use crate::simd::F8;
@@ -63,10 +65,34 @@ pub(super) fn accumulate_into(
 ) -> Tally {
     let width = camera.width as usize;
     let tile_pixels = width * TILE_ROWS;
+    // Splatting, where the render asks for it and keeps exact sums of all
+    // pixels' samples alike (not the viewer's film; not adaptive sampling or
+    // the variance AOV, whose per-pixel statistics are of the pixel's own
+    // samples).
+    let splat = match (&target, integrator) {
+        (
+            Target::Wide {
+                aovs, active: None, ..
+            },
+            Integrator::Path(options),
+        ) if !aovs.as_ref().is_some_and(|(layout, _)| {
+            layout.offset(Aov::Variance).is_some() || layout.offset(Aov::Samples).is_some()
+        }) =>
+        {
+            SplatWeights::new(
+                options.filter,
+                options.reconstruction,
+                camera.width,
+                camera.height,
+            )
+        }
+        _ => None,
+    };
     // Each tile's slice of the sums and of the AOV sums (empty ones without
     // AOVs, so that the tiles still zip with them).
     let mut split = Split::WHOLE;
     let mut active = None;
+    let mut whole: Option<&mut [Fixed3]> = None;
     let (tiles, layout, aov_tiles): (Vec<TileSums>, _, Vec<&mut [i128]>) = match target {
         Target::Narrow(film) => {
             assert_eq!((film.width, film.height), (camera.width, camera.height));
@@ -87,6 +113,7 @@ pub(super) fn accumulate_into(
             split = s;
             active = a;
             assert_eq!(image.len(), width * camera.height as usize);
+            let image = whole.insert(image);
             let tiles: Vec<_> = image.chunks_mut(tile_pixels).map(TileSums::Wide).collect();
             match aovs {
                 Some((layout, sums)) => {
@@ -100,7 +127,7 @@ pub(super) fn accumulate_into(
             }
         }
     };
-    tiles
+    let done: Vec<(Tally, Option<Borders>)> = tiles
         .into_par_iter()
         .zip(aov_tiles)
         .enumerate()
@@ -136,10 +163,48 @@ pub(super) fn accumulate_into(
                 y0,
                 n_rows,
                 active: active.map(|a| &a[y0 * width..(y0 + n_rows) * width]),
+                splat: splat.is_some(),
             };
+            let mut borders = None;
             // Each target with its own copy of the loop (no per-sample test of
             // which target it is).
             let rays = match sums {
+                // Splatted: into sums of the tile's rows and a border around
+                // them; its own rows are added to the accumulator's here, the
+                // borders (other tiles' rows) after all tiles are done.
+                TileSums::Wide(exact) if splat.is_some() => {
+                    let weights = splat.as_ref().expect("splatting");
+                    let b = weights.border();
+                    let mut local = vec![[0i128; 3]; (n_rows + 2 * b) * width];
+                    let mut scratch = vec![Vec3A::ZERO; local.len()];
+                    let mut add = SplatSums {
+                        sums: &mut local,
+                        scratch: &mut scratch,
+                        weights,
+                        width,
+                        y0,
+                        dropped: &mut dropped,
+                    };
+                    let rays = match &layout {
+                        Some(layout) => tile.trace::<true>(Some(layout), &mut add, &mut gather),
+                        None => tile.trace::<false>(None, &mut add, &mut gather),
+                    };
+                    let own = &local[b * width..(b + n_rows) * width];
+                    for (sum, add) in exact.iter_mut().zip(own) {
+                        for c in 0..3 {
+                            sum[c] += add[c];
+                        }
+                    }
+                    let mut edge = local[..b * width].to_vec();
+                    edge.extend_from_slice(&local[(b + n_rows) * width..]);
+                    borders = Some(Borders {
+                        y0,
+                        n_rows,
+                        border: b,
+                        sums: edge,
+                    });
+                    rays
+                }
                 // Into the accumulator's exact sums.
                 TileSums::Wide(exact) => {
                     let mut add = ExactSums {
@@ -175,93 +240,40 @@ pub(super) fn accumulate_into(
                 }
             };
             progress(n_rows as u64);
-            Tally { rays, dropped }
+            (Tally { rays, dropped }, borders)
         })
-        .sum()
-}
-
-/// Where [`Tile::trace`] hands its samples: each with its pixel's index in the
-/// tile, one at a time or the eight of a 4×2 block of the lab's integrators
-/// at once. Non-finite samples are dropped and counted.
-trait Sink {
-    /// Adds sample value `v` to pixel `i`.
-    fn add(&mut self, i: usize, v: Vec3A);
-    /// Adds `v[k]` to pixel `i[k]`, as eight [`Sink::add`] calls would.
-    fn add8(&mut self, i: [usize; 8], v: [Vec3A; 8]) {
-        for (i, v) in i.into_iter().zip(v) {
-            self.add(i, v);
-        }
-    }
-    /// [`Sink::add8`] of values given channel by channel (`v[c][k]` is
-    /// channel `c` of sample `k`).
-    fn add8_channels(&mut self, i: [usize; 8], v: &[[f32; 8]; 3]) {
-        let at = |k: usize| Vec3A::new(v[0][k], v[1][k], v[2][k]);
-        self.add8(i, [at(0), at(1), at(2), at(3), at(4), at(5), at(6), at(7)]);
-    }
-}
-
-/// A tile's exact sums (see [`super::Accumulator`]).
-struct ExactSums<'a> {
-    sums: &'a mut [Fixed3],
-    dropped: &'a mut u64,
-}
-
-impl Sink for ExactSums<'_> {
-    #[inline]
-    fn add(&mut self, i: usize, v: Vec3A) {
-        if v.is_finite() {
-            fixed::add3(&mut self.sums[i], v);
-        } else {
-            *self.dropped += 1;
-        }
-    }
-
-    /// The eight conversions in one call when all are finite (the usual case):
-    /// one at a time they were an eighth of a `direct` frame's instructions.
-    #[inline]
-    fn add8(&mut self, i: [usize; 8], v: [Vec3A; 8]) {
-        if v.iter().all(|v| v.is_finite()) {
-            fixed::add8(self.sums, i, v);
-        } else {
-            for (i, v) in i.into_iter().zip(v) {
-                self.add(i, v);
+        .collect();
+    // The splatted tiles' borders, into the rows of the tiles around them
+    // (exact sums: the order does not matter).
+    if let Some(image) = whole {
+        let height = camera.height as usize;
+        for borders in done.iter().filter_map(|(_, b)| b.as_ref()) {
+            let b = borders.border;
+            let above = (0..b).map(|k| borders.y0 as isize - (b - k) as isize);
+            let below = (0..b).map(|k| (borders.y0 + borders.n_rows + k) as isize);
+            for (row, sums) in above.chain(below).zip(borders.sums.chunks(width)) {
+                if row < 0 || row as usize >= height {
+                    continue;
+                }
+                let at = row as usize * width;
+                for (sum, add) in image[at..at + width].iter_mut().zip(sums) {
+                    for c in 0..3 {
+                        sum[c] += add[c];
+                    }
+                }
             }
         }
     }
-
-    #[inline]
-    fn add8_channels(&mut self, i: [usize; 8], v: &[[f32; 8]; 3]) {
-        // (A fold, not `all`: without the early exit it is compiled to lanes.)
-        let finite = v.iter().flatten().fold(true, |all, x| all & x.is_finite());
-        if finite {
-            fixed::add8_channels(self.sums, i, v);
-        } else {
-            for (k, &i) in i.iter().enumerate() {
-                self.add(i, Vec3A::new(v[0][k], v[1][k], v[2][k]));
-            }
-        }
-    }
+    done.into_iter().map(|(tally, _)| tally).sum()
 }
 
-/// A tile's rows of an f32 film: many samples are summed in f64 in `local`
-/// first (when it is not empty), one goes straight into the film.
-struct FilmSums<'a> {
-    rows: &'a mut [Vec3A],
-    local: &'a mut [DVec3],
-    dropped: &'a mut u64,
-}
-
-impl Sink for FilmSums<'_> {
-    #[inline]
-    fn add(&mut self, i: usize, v: Vec3A) {
-        if !v.is_finite() {
-            *self.dropped += 1;
-        } else if let Some(w) = self.local.get_mut(i) {
-            *w += v.as_dvec3();
-        } else {
-            self.rows[i] += v;
-        }
-    }
+/// A splatted tile's sums of the rows around it: `border` rows above its
+/// first, `y0`, then `border` below its `n_rows`, `width` sums each.
+struct Borders {
+    y0: usize,
+    n_rows: usize,
+    border: usize,
+    sums: Vec<Fixed3>,
 }
 
 /// The one walk over a tile's pixels, for one sample: rows in pairs, each
@@ -313,6 +325,9 @@ struct Tile<'a> {
     n_rows: usize,
     /// The pixels (of the tile) that take samples, if not all.
     active: Option<&'a [bool]>,
+    /// Whether the samples are splatted: `path`'s image points uniform in
+    /// their pixels, handed over with [`Sink::add_at`].
+    splat: bool,
 }
 
 impl Tile<'_> {
@@ -356,6 +371,7 @@ impl Tile<'_> {
         // lab box, less on `cornell-area` (docs/performance.md).
         #[cfg(target_arch = "x86_64")]
         if !AOVS
+            && !self.splat
             && self.active.is_none()
             && options.sampler == SamplerKind::Sobol
             && options.filter == crate::sampling::filter::PixelFilter::Box
@@ -369,6 +385,12 @@ impl Tile<'_> {
         }
         let (scene, camera, seed, samples) = (self.scene, self.camera, self.seed, &self.samples);
         let (width, y0, n_rows) = (self.width, self.y0, self.n_rows);
+        // Splatted samples' image points are uniform in their pixels (the
+        // box's), the filter weighing them where they are added.
+        let mut options = options;
+        if self.splat {
+            options.filter = crate::sampling::filter::PixelFilter::Box;
+        }
         let mut rays = 0u64;
         // One path from its camera ray's hit into pixel `i`, its AOVs
         // gathered from the first hit as the path shades it.
@@ -407,7 +429,7 @@ impl Tile<'_> {
                         let hits = scene.intersect8(&primary, f32::INFINITY);
                         for (((x, y), start), hit) in block.into_iter().zip(&mut starts).zip(hits) {
                             let v = path_sample(y * width + x, start, hit, s, &mut rays);
-                            add.add(y * width + x, v);
+                            add.add_at(y * width + x, start.offset, v);
                         }
                     } else {
                         for &(x, y) in chunk {
@@ -415,10 +437,11 @@ impl Tile<'_> {
                             rays += 1;
                             let hit = scene.intersect(&start.ray, f32::INFINITY);
                             let v = path_sample(y * width + x, &mut start, hit, s, &mut rays);
-                            add.add(y * width + x, v);
+                            add.add_at(y * width + x, start.offset, v);
                         }
                     }
                 }
+                add.end_sample();
             }
             return rays;
         }
@@ -464,7 +487,7 @@ impl Tile<'_> {
                         pixels[k] = y * width + x;
                         values[k] = path_sample(pixels[k], start, hit, s, &mut rays);
                     }
-                    add.add8(pixels, values);
+                    add.add8_at(pixels, starts.each_ref().map(|p| p.offset), values);
                 }
                 quad(quad) {
                     let mut starts = quad
@@ -474,7 +497,7 @@ impl Tile<'_> {
                     let hits = scene.intersect4(&primary, f32::INFINITY);
                     for (((x, y), start), hit) in quad.into_iter().zip(&mut starts).zip(hits) {
                         let v = path_sample(y * width + x, start, hit, s, &mut rays);
-                        add.add(y * width + x, v);
+                        add.add_at(y * width + x, start.offset, v);
                     }
 
                 }
@@ -483,9 +506,10 @@ impl Tile<'_> {
                     rays += 1;
                     let hit = scene.intersect(&start.ray, f32::INFINITY);
                     let v = path_sample(y * width + x, &mut start, hit, s, &mut rays);
-                    add.add(y * width + x, v);
+                    add.add_at(y * width + x, start.offset, v);
                 }
             );
+            add.end_sample();
         }
         rays
     }
@@ -595,6 +619,7 @@ impl Tile<'_> {
             y0,
             n_rows,
             active,
+            splat: _,
         } = self;
         let mut rays = 0u64;
         if let Some(active) = active {
@@ -756,6 +781,8 @@ pub(super) enum AnySampler {
 pub(super) struct PathStart {
     pub(super) sampler: AnySampler,
     pub(super) ray: Ray,
+    /// The image point from the pixel's corner.
+    pub(super) offset: Vec2,
 }
 
 impl PathStart {
@@ -787,7 +814,11 @@ impl PathStart {
         } else {
             Self::lens_ray(camera, &mut sampler, x + d.x, y + d.y)
         };
-        Self { sampler, ray }
+        Self {
+            sampler,
+            ray,
+            offset: d,
+        }
     }
 
     /// The camera ray through image point `(px, py)` and the thin lens's

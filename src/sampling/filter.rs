@@ -9,8 +9,46 @@
 //! `box` (the pixel's own square), `tent` of radius r (`1 − |x|/r`) and
 //! `gaussian` of standard deviation σ, cut off at 4σ and lowered to reach
 //! zero there (`exp(−x²/2σ²) − exp(−8)`).
+//!
+//! A render may instead *splat* ([`Reconstruction::Splat`], Mitsuba's way):
+//! each sample's point is uniform in its pixel and the sample is added to
+//! every pixel within the filter's radius, weighted by the filter normalised
+//! over the image ([`super::splat::SplatWeights`]). Same expected image; each pixel then
+//! averages its neighbours' samples too, which lowers its own noise
+//! (neighbouring pixels' noise correlated).
 
 use glam::Vec2;
+
+/// How a render reconstructs pixels from samples under a filter other than
+/// the box (with the box both are the same).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Reconstruction {
+    /// Each sample's image point is drawn from the filter and counts in its
+    /// own pixel only (filter importance sampling).
+    #[default]
+    Sample,
+    /// Each sample's point is uniform in its pixel and the sample is added,
+    /// weighted, to every pixel within the filter's radius (Mitsuba's
+    /// `hdrfilm`); for filters whose border ([`PixelFilter::splat_border`])
+    /// is at most [`MAX_SPLAT_BORDER`] rows, and renders that do not gather
+    /// per-pixel statistics (adaptive sampling, `--aov variance`), which
+    /// sample instead.
+    Splat,
+}
+
+impl Reconstruction {
+    /// The name on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Reconstruction::Sample => "sample",
+            Reconstruction::Splat => "splat",
+        }
+    }
+}
+
+/// The widest border (in pixels, beyond a sample's own) that a splatting
+/// filter may reach; wider filters are sampled.
+pub const MAX_SPLAT_BORDER: usize = 4;
 
 /// How a pixel weighs the image around it. The widths are stored as `f32`
 /// bits so that options holding a filter stay `Eq` and `Hash`.
@@ -76,7 +114,30 @@ impl PixelFilter {
         }
     }
 
-    /// The filter's 1-D weight at `x` (unnormalised), for tests.
+    /// The filter's radius: its weight is zero from there on.
+    pub fn radius(self) -> f32 {
+        match self {
+            PixelFilter::Box => 0.5,
+            PixelFilter::Tent { radius_bits } => f32::from_bits(radius_bits),
+            PixelFilter::Gaussian { stddev_bits } => 4.0 * f32::from_bits(stddev_bits),
+        }
+    }
+
+    /// How many pixels beyond its own, in each direction, a sample splatted
+    /// with this filter can reach: the largest k with k − ½ below the radius.
+    pub fn splat_border(self) -> usize {
+        ((f64::from(self.radius()) + 0.5).ceil() as usize).saturating_sub(1)
+    }
+
+    /// Whether `reconstruction` splats with this filter (see
+    /// [`Reconstruction::Splat`]; the box never needs to).
+    pub fn splats(self, reconstruction: Reconstruction) -> bool {
+        reconstruction == Reconstruction::Splat
+            && self != PixelFilter::Box
+            && self.splat_border() <= MAX_SPLAT_BORDER
+    }
+
+    /// The filter's 1-D weight at `x` (unnormalised).
     pub fn eval_1d(self, x: f32) -> f32 {
         match self {
             PixelFilter::Box => f32::from(u8::from(x.abs() <= 0.5)),

@@ -5,3 +5,4 @@ pub mod distribution;
 pub mod filter;
 pub mod sampler;
 pub mod sobol;
+pub mod splat;

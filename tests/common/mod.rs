@@ -15,6 +15,27 @@ pub fn asset(rel: &str) -> std::path::PathBuf {
         .join(rel)
 }
 
+/// The pixels of `image`, row by row from the top-left.
+pub fn pixels(image: &Film) -> Vec<[f32; 3]> {
+    let (w, h) = (image.width, image.height);
+    (0..h)
+        .flat_map(|y| (0..w).map(move |x| (x, y)))
+        .map(|(x, y)| image.get(x, y).to_array())
+        .collect()
+}
+
+/// Renders the job `options` (with the library, as `raylab render` does):
+/// its image's pixels.
+pub fn job_pixels(options: raylab::job::JobOptions) -> Vec<[f32; 3]> {
+    let image = raylab::job::Job::new(options)
+        .unwrap()
+        .render_with(&raylab::job::Hooks::default())
+        .unwrap()
+        .finished
+        .image;
+    pixels(&image)
+}
+
 /// A reference image of `assets/refs` (made by programs other than raylab).
 pub fn reference_image(name: &str) -> Film {
     let path = asset("refs").join(name);

@@ -54,6 +54,8 @@ pub struct PathOptions {
     /// How each pixel weighs the image around it (its samples' image points
     /// are drawn from it; the box by default).
     pub filter: crate::sampling::filter::PixelFilter,
+    /// Whether samples are drawn from the filter or splatted through it.
+    pub reconstruction: crate::sampling::filter::Reconstruction,
     /// Whether the camera sees emitters (Mitsuba's `hide_emitters`).
     pub hide_emitters: HideEmitters,
     /// The light and BSDF samples a path of depth 2 takes at its one
@@ -77,6 +79,7 @@ impl Default for PathOptions {
             max_depth: u32::MAX,
             sampler: SamplerKind::DEFAULT,
             filter: crate::sampling::filter::PixelFilter::Box,
+            reconstruction: crate::sampling::filter::Reconstruction::Sample,
             hide_emitters: HideEmitters::No,
             direct: DirectSamples::ONE_EACH,
         }
