@@ -294,6 +294,66 @@ mod tests {
         }
     }
 
+    /// The world normal of a hit is the direction of the world gradient of
+    /// the placed interpolant, by central differences of the function of
+    /// world points (through the placement's inverse), under an uneven,
+    /// sheared placement.
+    #[test]
+    fn the_world_normal_is_the_placed_fields_gradient() {
+        let mut rng = Rng::new(12, 4);
+        let linear = Mat3A::from_cols(
+            Vec3A::new(2.0, 0.3, 0.0),
+            Vec3A::new(0.5, 1.2, -0.4),
+            Vec3A::new(0.1, 0.0, 3.0),
+        );
+        let placement = Placement::new(linear, Vec3A::new(-1.0, 2.0, 0.5)).unwrap();
+        let mut checked = 0;
+        while checked < 300 {
+            let corners: [f32; 8] = std::array::from_fn(|_| rng.next_f32() * 2.0 - 1.0);
+            let v = SdfVoxel {
+                placement,
+                corners,
+                cell: [3, 1, 2],
+                cells: [7, 5, 9],
+                grid: 0,
+                smooth: false,
+            };
+            let mut r = || f64::from(rng.next_f32());
+            let q = DVec3::new(r(), r(), r()) * 0.8 + 0.1;
+            let local = (v.lower() + q) / v.scale();
+            let world = placement.point(local, 0.0).0.as_dvec3();
+            let field = |w: DVec3| {
+                let o = placement.point_to_object(w.as_vec3a());
+                trilinear(&corners, o * v.scale() - v.lower())
+            };
+            let h = 1e-3;
+            let fd = DVec3::new(
+                field(world + DVec3::X * h) - field(world - DVec3::X * h),
+                field(world + DVec3::Y * h) - field(world - DVec3::Y * h),
+                field(world + DVec3::Z * h) - field(world - DVec3::Z * h),
+            ) / (2.0 * h);
+            if fd.length() < 0.05 {
+                continue;
+            }
+            let n = v.point_at(encode(&corners, q)).n.as_dvec3();
+            // (The coordinates name the point on the surface nearest q
+            // along one axis: compare where the gradient is taken.)
+            let at = v.cell_point(encode(&corners, q));
+            let g = trilinear_gradient(&corners, at) * v.scale();
+            let want = placement.normal(g.as_vec3a()).as_dvec3();
+            assert!((n - want).length() < 1e-6, "{n} vs {want}");
+            let at_q = placement
+                .normal((trilinear_gradient(&corners, q) * v.scale()).as_vec3a())
+                .as_dvec3();
+            assert!(
+                (at_q - fd.normalize()).length() < 1e-3,
+                "{at_q} vs {}",
+                fd.normalize()
+            );
+            checked += 1;
+        }
+    }
+
     /// Coordinates name the point they were made from: the rebuilt point is
     /// on the surface and within the coordinates' rounding of the original.
     #[test]
