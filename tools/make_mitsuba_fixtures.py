@@ -3,8 +3,10 @@
 (tests/data/mitsuba/suite/textures/): a colour test pattern, a grey
 leaf-like mask, and a field of round bumps as a height map and as the
 normal map of the same heights, as 8-bit PNGs made here (no third-party data), with the
-standard library only. Run again to recreate them; the output is
-deterministic."""
+standard library only; and the signed distance grid of `sdfgrid_path.xml`
+(tests/data/mitsuba/suite/grids/torus.vol: a torus's distances on 14³
+samples over the unit cube, Mitsuba's `.vol` format). Run again to recreate
+them; the output is deterministic."""
 
 import math
 import os
@@ -74,7 +76,30 @@ def normals(x, y):
     return tuple(int(round(255 * (0.5 + 0.5 * c / length))) for c in n)
 
 
+def vol(path, n, distance):
+    """Writes a Mitsuba `.vol` grid (version 3, float32, one channel) of
+    n^3 samples of distance(x, y, z) at (i, j, k) / (n - 1), x fastest."""
+    data = b"VOL" + bytes([3]) + struct.pack("<iiiii", 1, n, n, n, 1)
+    data += struct.pack("<6f", 0.0, 0.0, 0.0, 1.0, 1.0, 1.0)
+    h = 1.0 / (n - 1)
+    values = [distance(i * h, j * h, k * h) for k in range(n) for j in range(n) for i in range(n)]
+    data += struct.pack("<%df" % len(values), *values)
+    with open(path, "wb") as f:
+        f.write(data)
+
+
+def torus(x, y, z):
+    """Signed distance to a torus about the z axis through (0.5, 0.5, 0.5):
+    major radius 0.3, minor 0.13."""
+    x, y, z = x - 0.5, y - 0.5, z - 0.5
+    ring = math.sqrt(x * x + y * y) - 0.3
+    return math.sqrt(ring * ring + z * z) - 0.13
+
+
 def main():
+    grids = os.path.join(OUT, "..", "grids")
+    os.makedirs(grids, exist_ok=True)
+    vol(os.path.join(grids, "torus.vol"), 14, torus)
     os.makedirs(OUT, exist_ok=True)
     png(os.path.join(OUT, "pattern.png"), 64, 64, 3, pattern)
     png(os.path.join(OUT, "mask.png"), 64, 64, 1, mask)

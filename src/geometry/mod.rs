@@ -1,6 +1,7 @@
 //! Geometry: rays, the watertight ray–triangle test and the eight-wide BVH that
 //! answers the scene's ray queries, and the analytic shapes (spheres, disks
-//! and cylinders, the last two placed by an affine map).
+//! and cylinders, the last two placed by an affine map, and the cells of
+//! signed distance grids).
 
 pub mod bvh;
 pub mod cylinder;
@@ -8,6 +9,8 @@ pub mod disk;
 pub(crate) mod packet;
 pub mod placement;
 pub mod ray;
+pub mod sdf_voxel;
+pub mod sdfgrid;
 #[cfg(test)]
 mod shape_checks;
 pub mod sphere;

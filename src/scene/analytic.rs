@@ -1,17 +1,25 @@
 //! The scene's analytic shapes: Mitsuba's spheres, disks and cylinders as
-//! exact surfaces ([`AnalyticShape`], a closed set), each with its material
+//! exact surfaces, and the cells of its signed distance grids (`sdfgrid`:
+//! one primitive per cell the surface may cross, each an exact ray test of
+//! its trilinear interpolant) ([`AnalyticShape`], a closed set), each with its material
 //! and side ([`SceneShape`]), held as [`AnalyticShapes`]: a small binary
 //! hierarchy of their bounds beside the triangles' eight-wide one, queried
 //! after it with the distance it found (so a scene of triangles alone does
 //! no extra work). Shape `k` is primitive `triangles + k` of the scene (so
 //! hits, materials and light tables name it as they name triangles); its
-//! hit's two barycentric slots hold its Mitsuba texture coordinates `(u, v)`.
+//! hit's two barycentric slots hold its Mitsuba texture coordinates `(u, v)`
+//! (a grid cell's: the hit point's coordinates in the cell, see
+//! [`SdfVoxel`]; its texture coordinates are `(0, 0)`, as Mitsuba's). The
+//! grids' samples are held once, beside the shapes, for the cells' smooth
+//! normals ([`AnalyticShapes::grid`]).
 
 use glam::{Vec2, Vec3A};
 
 use crate::geometry::cylinder::{self, Cylinder};
 use crate::geometry::disk::{self, Disk};
 use crate::geometry::ray::{Ray, SurfacePoint};
+use crate::geometry::sdf_voxel::SdfVoxel;
+use crate::geometry::sdfgrid::SdfGrid;
 use crate::geometry::sphere::Sphere;
 
 /// An analytic surface.
@@ -23,6 +31,8 @@ pub enum AnalyticShape {
     Disk(Disk),
     /// The open unit cylinder under an affine map.
     Cylinder(Cylinder),
+    /// A cell of a signed distance grid (Mitsuba's `sdfgrid`).
+    SdfVoxel(SdfVoxel),
 }
 
 impl AnalyticShape {
@@ -33,47 +43,56 @@ impl AnalyticShape {
             Self::Sphere(s) => s.intersect(ray, t_max),
             Self::Disk(d) => d.intersect(ray, t_max),
             Self::Cylinder(c) => c.intersect(ray, t_max),
+            Self::SdfVoxel(v) => v.intersect(ray, t_max),
         }
     }
 
-    /// Texture coordinates `(u, v)` of the point at `t` along `ray`.
+    /// Texture coordinates `(u, v)` of the point at `t` along `ray` (a
+    /// grid cell's: the point's coordinates in the cell).
     #[inline]
     pub fn uv_at(&self, ray: &Ray, t: f32) -> Vec2 {
         match self {
             Self::Sphere(s) => s.uv_of(ray.at(t)),
             Self::Disk(d) => disk::uv_of_local(d.placement.local_at(ray, t)),
             Self::Cylinder(c) => cylinder::uv_of_local(c.placement.local_at(ray, t)),
+            Self::SdfVoxel(v) => v.hit_code(ray, t),
         }
     }
 
     /// The point at `uv` with its error bound and its unit normal (outwards
-    /// for a sphere or cylinder, the placed `+z` for a disk).
+    /// for a sphere or cylinder, the placed `+z` for a disk, the gradient
+    /// of a grid cell's interpolant).
     #[inline]
     pub fn point_at(&self, uv: Vec2) -> SurfacePoint {
         match self {
             Self::Sphere(s) => s.point_at(uv),
             Self::Disk(d) => d.point_at(uv),
             Self::Cylinder(c) => c.point_at(uv),
+            Self::SdfVoxel(v) => v.point_at(uv),
         }
     }
 
-    /// `∂p/∂u` and `∂p/∂v` at `uv` (Mitsuba's parameterisations).
+    /// `∂p/∂u` and `∂p/∂v` at `uv` (Mitsuba's parameterisations; zero on a
+    /// grid cell, which has none).
     #[inline]
     pub fn derivatives(&self, uv: Vec2) -> (Vec3A, Vec3A) {
         match self {
             Self::Sphere(s) => s.derivatives(uv),
             Self::Disk(d) => d.derivatives(uv),
             Self::Cylinder(c) => c.derivatives(uv),
+            Self::SdfVoxel(_) => (Vec3A::ZERO, Vec3A::ZERO),
         }
     }
 
-    /// Surface area.
+    /// Surface area (zero for a grid cell, as Mitsuba's `sdfgrid` says:
+    /// it cannot emit).
     #[inline]
     pub fn area(&self) -> f32 {
         match self {
             Self::Sphere(s) => s.area(),
             Self::Disk(d) => d.area(),
             Self::Cylinder(c) => c.area(),
+            Self::SdfVoxel(_) => 0.0,
         }
     }
 
@@ -83,6 +102,7 @@ impl AnalyticShape {
             Self::Sphere(s) => s.bounds(),
             Self::Disk(d) => d.bounds(),
             Self::Cylinder(c) => c.bounds(),
+            Self::SdfVoxel(v) => v.bounds(),
         }
     }
 
@@ -94,12 +114,14 @@ impl AnalyticShape {
     }
 
     /// Whether every number that places the shape is finite (and a sphere's
-    /// radius positive).
+    /// radius positive, and a grid cell's values finite and its cell in its
+    /// grid).
     pub fn is_finite(&self) -> bool {
         match self {
             Self::Sphere(s) => s.center.is_finite() && s.radius.is_finite() && s.radius > 0.0,
             Self::Disk(d) => d.area().is_finite() && d.area() > 0.0,
             Self::Cylinder(c) => c.area().is_finite() && c.area() > 0.0,
+            Self::SdfVoxel(v) => v.is_finite(),
         }
     }
 }
@@ -153,12 +175,15 @@ pub struct AnalyticShapes {
     /// Where each input shape sits in `items`.
     position: Vec<u32>,
     nodes: Vec<Node>,
+    /// The signed distance grids the cells ([`AnalyticShape::SdfVoxel`])
+    /// belong to.
+    grids: Vec<SdfGrid>,
 }
 
 impl AnalyticShapes {
     /// The hierarchy over `shapes` (split at the median of the longest axis
-    /// of their bounds' centres' box).
-    pub fn build(shapes: &[SceneShape]) -> Self {
+    /// of their bounds' centres' box), with the grids their cells name.
+    pub fn build(shapes: &[SceneShape], grids: Vec<SdfGrid>) -> Self {
         let mut items: Vec<(SceneShape, u32)> = shapes
             .iter()
             .enumerate()
@@ -183,7 +208,19 @@ impl AnalyticShapes {
             items,
             position,
             nodes,
+            grids,
         }
+    }
+
+    /// Signed distance grid `k` (the grid of cells whose `grid` is `k`).
+    #[inline]
+    pub fn grid(&self, k: u32) -> Option<&SdfGrid> {
+        self.grids.get(k as usize)
+    }
+
+    /// The signed distance grids.
+    pub fn grids(&self) -> &[SdfGrid] {
+        &self.grids
     }
 
     /// Whether the scene has no analytic shape.
@@ -389,7 +426,7 @@ mod tests {
                 }
             })
             .collect();
-        let set = AnalyticShapes::build(&shapes);
+        let set = AnalyticShapes::build(&shapes, Vec::new());
         assert_eq!(set.in_order(), shapes);
         let mut hits = [0; 3];
         for _ in 0..5000 {

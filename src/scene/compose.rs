@@ -3,11 +3,13 @@
 
 use glam::{Affine3A, Mat3A, Vec3A};
 
-use super::analytic::AnalyticShape;
+use super::analytic::{AnalyticShape, SceneShape};
 use super::mesh::Instance;
 use super::parts::{NO_INSTANCE, SceneParts};
 use crate::geometry::cylinder::Cylinder;
 use crate::geometry::disk::Disk;
+use crate::geometry::placement::Placement;
+use crate::geometry::sdf_voxel::SdfVoxel;
 use crate::lights::Light;
 use crate::materials::surface::{pattern_images_mut, texture_refs_mut};
 
@@ -84,6 +86,7 @@ impl SceneParts {
         let material_offset = self.materials.len() as u32;
         let mesh_offset = self.meshes.len() as u32;
         let instance_offset = self.instances.len() as u32;
+        let grid_offset = self.sdf_grids.len() as u32;
         let image_offset = self.textures.append(other.textures);
         // An empty list means "all bare"; it must grow once either side has
         // instances.
@@ -134,8 +137,55 @@ impl SceneParts {
         self.two_sided |= other.two_sided;
         self.shapes.extend(other.shapes.into_iter().map(|mut s| {
             s.material += material_offset;
+            if let AnalyticShape::SdfVoxel(v) = &mut s.shape {
+                v.grid += grid_offset;
+            }
             s
         }));
+        self.sdf_grids.extend(other.sdf_grids);
+    }
+
+    /// Places signed distance grid `grid` (an index into `sdf_grids`) by
+    /// `to_world` (any affine map: the unit cube the grid spans to the
+    /// world) with material `material`: one analytic shape per cell the
+    /// surface may cross. `smooth` selects Mitsuba's `smooth` shading
+    /// normals (else `analytic`). Returns how many cells were placed; an
+    /// error line when the grid does not exist, the map is singular, or no
+    /// cell holds surface (Mitsuba's "SDFGrid should at least have one
+    /// non-empty voxel").
+    pub fn place_sdf_grid(
+        &mut self,
+        grid: u32,
+        to_world: Affine3A,
+        material: u32,
+        smooth: bool,
+    ) -> Result<usize, String> {
+        let g = self
+            .sdf_grids
+            .get(grid as usize)
+            .ok_or_else(|| format!("no signed distance grid {grid}"))?;
+        let placement = Placement::from_affine(to_world)
+            .ok_or("its to_world is singular or not finite (it squashes the grid flat)")?;
+        let cells = g.resolution().map(|n| n - 1);
+        let before = self.shapes.len();
+        for cell in g.surface_cells() {
+            self.shapes.push(SceneShape {
+                shape: AnalyticShape::SdfVoxel(SdfVoxel {
+                    placement,
+                    corners: g.corners(cell),
+                    cell,
+                    cells,
+                    grid,
+                    smooth,
+                }),
+                flip: false,
+                material,
+            });
+        }
+        match self.shapes.len() - before {
+            0 => Err("the grid has no cell the surface crosses (no sign change)".into()),
+            n => Ok(n),
+        }
     }
 
     /// Replaces the analytic spheres by meshes (Mitsuba's parametrisation,
@@ -223,6 +273,10 @@ fn transform_shape(shape: &mut AnalyticShape, to_world: Affine3A) -> bool {
         },
         AnalyticShape::Cylinder(c) => match c.placement.then(to_world) {
             Some(p) => *c = Cylinder::new(p),
+            None => return false,
+        },
+        AnalyticShape::SdfVoxel(v) => match v.placement.then(to_world) {
+            Some(p) => v.placement = p,
             None => return false,
         },
     }

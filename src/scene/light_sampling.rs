@@ -447,6 +447,8 @@ impl Scene {
             }
             AnalyticShape::Disk(d) => (d.sample_uv(u), None),
             AnalyticShape::Cylinder(c) => (c.sample_uv(u), None),
+            // (Never a light: `Scene::from_parts` refuses emitting cells.)
+            AnalyticShape::SdfVoxel(_) => return None,
         };
         let point = s.front_point(uv);
         let normal = point.n;
@@ -764,6 +766,8 @@ fn analytic_bounds(s: &SceneShape, power: f32, two_sided: bool) -> LightBounds {
             LightBounds::flat(lo, hi, n, phi, two_sided)
         }
         AnalyticShape::Cylinder(_) => LightBounds::sphere(lo, hi, power / (PI * PI)),
+        // (Never a light: `Scene::from_parts` refuses emitting cells.)
+        AnalyticShape::SdfVoxel(_) => LightBounds::sphere(lo, hi, 0.0),
     }
 }
 

@@ -7,7 +7,7 @@
 use glam::Vec3A;
 use rayon::prelude::*;
 
-use super::analytic::{AnalyticShapes, SceneShape};
+use super::analytic::{AnalyticShape, AnalyticShapes, SceneShape};
 use super::light_table::{AreaLights, LightNumbers, LightSelection, LightTable};
 use super::mesh::{Instance, MeshData, Tangents};
 use super::parts::{PointLight, SceneError, SceneParts};
@@ -127,6 +127,9 @@ impl Scene {
         if !self.shapes.is_empty() {
             let _ = write!(f, "|analytic shapes {:?}", self.shapes.in_order());
         }
+        if !self.shapes.grids().is_empty() {
+            let _ = write!(f, "|sdf grids {:?}", self.shapes.grids());
+        }
         f.value()
     }
 
@@ -237,6 +240,29 @@ impl Scene {
                     ),
                 });
             }
+            if let AnalyticShape::SdfVoxel(_) = &s.shape
+                && parts.materials[s.material as usize].emission != Vec3A::ZERO
+            {
+                return Err(SceneError::BadReference {
+                    what: format!(
+                        "analytic shape {k} is a cell of a signed distance grid with an emitting material (an sdfgrid cannot be an area emitter, as in Mitsuba)"
+                    ),
+                });
+            }
+            if let AnalyticShape::SdfVoxel(v) = &s.shape
+                && parts
+                    .sdf_grids
+                    .get(v.grid as usize)
+                    .is_none_or(|g| g.resolution().map(|n| n - 1) != v.cells)
+            {
+                return Err(SceneError::BadReference {
+                    what: format!(
+                        "analytic shape {k} is a cell of signed distance grid {} of {} (or of another size)",
+                        v.grid,
+                        parts.sdf_grids.len()
+                    ),
+                });
+            }
         }
         let has_alpha = parts.materials.iter().any(|m| m.alpha != AlphaMode::Opaque);
         let has_unlit = parts.materials.iter().any(SurfaceMaterial::is_unlit);
@@ -260,7 +286,7 @@ impl Scene {
             })
             .unwrap_or((Vec3A::ZERO, Vec3A::ZERO));
         let bvh = Bvh::build(&parts.triangles);
-        let shapes = AnalyticShapes::build(&parts.shapes);
+        let shapes = AnalyticShapes::build(&parts.shapes, parts.sdf_grids);
         let mut material_of = parts.material_of;
         material_of.extend(parts.shapes.iter().map(|s| s.material));
         let mut scene = Self {
@@ -348,7 +374,8 @@ impl Scene {
         !self.shapes.is_empty()
     }
 
-    /// How many analytic shapes (spheres, disks, cylinders) the scene has.
+    /// How many analytic shapes (spheres, disks, cylinders, and the cells of
+    /// signed distance grids) the scene has.
     pub fn analytic_shape_count(&self) -> usize {
         self.shapes.len()
     }
@@ -683,6 +710,12 @@ impl Scene {
                 .sum::<usize>()
             + self.bvh.memory_bytes()
             + self.shapes.len() * std::mem::size_of::<SceneShape>()
+            + self
+                .shapes
+                .grids()
+                .iter()
+                .map(|g| g.memory_bytes())
+                .sum::<usize>()
     }
 }
 

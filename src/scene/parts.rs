@@ -10,6 +10,7 @@ use thiserror::Error;
 use super::analytic::SceneShape;
 use super::mesh::{Instance, MeshData};
 use crate::camera::SceneCamera;
+use crate::geometry::sdfgrid::SdfGrid;
 use crate::geometry::triangle::Triangle;
 use crate::lights::Light;
 use crate::materials::surface::SurfaceMaterial;
@@ -98,9 +99,12 @@ pub struct SceneParts {
     pub two_sided: bool,
     /// Cameras from the file.
     pub cameras: Vec<SceneCamera>,
-    /// Analytic spheres, disks and cylinders (primitives `triangles.len() +
-    /// k` of the scene).
+    /// Analytic spheres, disks and cylinders, and the cells of signed
+    /// distance grids (primitives `triangles.len() + k` of the scene).
     pub shapes: Vec<SceneShape>,
+    /// The signed distance grids whose cells are among `shapes` (a cell's
+    /// `grid` indexes this).
+    pub sdf_grids: Vec<SdfGrid>,
 }
 
 impl SceneParts {

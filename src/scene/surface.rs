@@ -5,9 +5,11 @@
 
 use glam::{Vec2, Vec3A, Vec4, Vec4Swizzles};
 
+use super::analytic::AnalyticShape;
 use super::mesh::{Instance, MeshData, Tangents};
 use super::model::Scene;
 use crate::geometry::ray::{Hit, SurfacePoint};
+use crate::geometry::sdf_voxel::SdfVoxel;
 use crate::materials::Frame;
 use crate::materials::surface::{HitAttributes, MaterialKind, PerturbMap, TexturedBsdf};
 use crate::textures::{TextureStore, mitsuba_luminance};
@@ -194,7 +196,12 @@ impl Scene {
     pub fn attributes(&self, hit: &Hit) -> HitAttributes {
         match self.mesh_of(hit.prim) {
             Some((_, mesh, idx)) => attributes_of(mesh, idx, barycentrics(hit)),
-            None if hit.prim as usize >= self.triangles.len() => analytic_attributes(hit),
+            None if hit.prim as usize >= self.triangles.len() => match self.shape_of(hit.prim) {
+                Some(s) if matches!(s.shape, AnalyticShape::SdfVoxel(_)) => {
+                    HitAttributes::default()
+                }
+                _ => analytic_attributes(hit),
+            },
             None => HitAttributes::default(),
         }
     }
@@ -335,26 +342,52 @@ impl Scene {
         };
         let point = shape.front_point(uv);
         let ng = point.n;
-        let attrs = analytic_attributes(hit);
-        let (mut ns, mut tangent, mut bitangent) = (ng, Vec3A::ZERO, Vec3A::ZERO);
+        let (attrs, ni) = match &shape.shape {
+            // A grid cell: no texture coordinates (Mitsuba's are (0, 0)), and
+            // Mitsuba's smooth normal where asked for.
+            AnalyticShape::SdfVoxel(v) => (HitAttributes::default(), self.sdf_normal(v, uv, ng)),
+            _ => (analytic_attributes(hit), ng),
+        };
+        let (mut ns, mut tangent, mut bitangent) = (ni, Vec3A::ZERO, Vec3A::ZERO);
         if let Some(m) = self.materials.get(material as usize)
             && let MaterialKind::Textured(t) = &m.kind
             && t.needs_frame()
         {
             let (dp_du, dp_dv) = shape.shape.derivatives(uv);
             (ns, tangent, bitangent) =
-                mitsuba_frame(t, dp_du, dp_dv, ng, ng, &attrs, &self.textures);
+                mitsuba_frame(t, dp_du, dp_dv, ng, ni, &attrs, &self.textures);
         }
         SurfaceHit {
             point,
             ng,
             ns,
-            ni: ng,
+            ni,
             nc: ns,
             tangent,
             bitangent,
             attrs,
             material,
+        }
+    }
+}
+
+impl Scene {
+    /// The interpolated normal of a grid cell's hit with coordinates `code`
+    /// and geometric normal `ng`: Mitsuba's `smooth` normal (see
+    /// [`SdfGrid::smooth_normal`](crate::geometry::sdfgrid::SdfGrid::smooth_normal))
+    /// where the cell asks for it, else `ng` (`analytic`).
+    fn sdf_normal(&self, v: &SdfVoxel, code: Vec2, ng: Vec3A) -> Vec3A {
+        if !v.smooth {
+            return ng;
+        }
+        let Some(grid) = self.shapes.grid(v.grid) else {
+            return ng;
+        };
+        let n = v.normal(grid.smooth_normal(v.object_point(code)));
+        if n.is_finite() && n != Vec3A::ZERO {
+            n
+        } else {
+            ng
         }
     }
 }

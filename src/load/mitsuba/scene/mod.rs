@@ -41,6 +41,7 @@ use crate::textures::{ColorSpace, Pattern, TextureRef};
 use bsdfs::Materials;
 use color::Role;
 use props::{ColorProp, Props};
+use shapes::Member;
 
 /// A Mitsuba scene as raylab's parts.
 #[derive(Debug)]
@@ -90,8 +91,8 @@ struct Builder<'t, 'l> {
     parts: SceneParts,
     /// Material table index by (BSDF object, emitter object) pointers.
     material_of: HashMap<(usize, usize), u32>,
-    /// Meshes of shape groups, by the group object's pointer.
-    groups: HashMap<usize, Vec<(u32, Mat4, u32, bool)>>,
+    /// Members of shape groups, by the group object's pointer.
+    groups: HashMap<usize, Vec<Member>>,
     /// The mesh attribute each material reads (its shapes' colours).
     attribute_of: HashMap<u32, Option<String>>,
     approximated: Vec<String>,
@@ -293,7 +294,7 @@ impl Builder<'_, '_> {
     fn shape(
         &mut self,
         shape: &Arc<Object>,
-        within: Option<&mut Vec<(u32, Mat4, u32, bool)>>,
+        within: Option<&mut Vec<Member>>,
     ) -> Result<(), MitsubaError> {
         let p = Props::new(shape);
         match shape.plugin.as_str() {
@@ -324,13 +325,20 @@ impl Builder<'_, '_> {
                 }
                 p.finish()?;
                 let members = self.groups[&(Arc::as_ptr(group) as usize)].clone();
-                for (mesh, m, material, own_normals) in members {
-                    self.place(Placed {
-                        mesh,
-                        to_world: to_world * m,
-                        material,
-                        own_normals,
-                    });
+                for member in members {
+                    match member {
+                        Member::Mesh(mesh, m, material, own_normals) => self.place(Placed {
+                            mesh,
+                            to_world: to_world * m,
+                            material,
+                            own_normals,
+                        }),
+                        Member::Sdf(grid, m, material, smooth) => self
+                            .parts
+                            .place_sdf_grid(grid, affine(to_world * m), material, smooth)
+                            .map(|_| ())
+                            .map_err(|e| p.error(format!("its sdfgrid: {e}")))?,
+                    }
                 }
                 return Ok(());
             }
@@ -341,7 +349,15 @@ impl Builder<'_, '_> {
         if bsdfs.len() > 1 || emitters.len() > 1 {
             return Err(p.error("a shape holds at most one BSDF and one emitter"));
         }
+        if shape.plugin == "sdfgrid" && !emitters.is_empty() {
+            return Err(p.error(
+                "an sdfgrid cannot be an area emitter (as in Mitsuba, which has no way to sample its surface)",
+            ));
+        }
         let material = self.material(bsdfs.first(), emitters.first())?;
+        if shape.plugin == "sdfgrid" {
+            return self.sdfgrid(&p, material, within);
+        }
         let attribute = self.attribute_of.get(&material).cloned().flatten();
         let (mut mesh, to_world, mut own_normals) = self.mesh(shape, &p, attribute.as_deref())?;
         for tag in [Tag::Medium, Tag::Sensor] {
@@ -379,13 +395,40 @@ impl Builder<'_, '_> {
         let mesh_index = self.parts.meshes.len() as u32;
         self.parts.meshes.push(mesh);
         match within {
-            Some(members) => members.push((mesh_index, to_world, material, own_normals)),
+            Some(members) => {
+                members.push(Member::Mesh(mesh_index, to_world, material, own_normals))
+            }
             None => self.place(Placed {
                 mesh: mesh_index,
                 to_world,
                 material,
                 own_normals,
             }),
+        }
+        Ok(())
+    }
+
+    /// An `sdfgrid` (Mitsuba's signed distance grid: the zero set of the
+    /// trilinear interpolation of a `.vol` file's samples over the unit
+    /// cube) with material `material`: exact cells among the analytic
+    /// shapes, placed now or, in a shape group, by each instance.
+    fn sdfgrid(
+        &mut self,
+        p: &Props,
+        material: u32,
+        within: Option<&mut Vec<Member>>,
+    ) -> Result<(), MitsubaError> {
+        let (path, smooth, to_world) = shapes::sdfgrid_props(p, self.tree)?;
+        let grid = super::vol::read_sdf_vol(&path, self.materials.ledger())?;
+        let index = self.parts.sdf_grids.len() as u32;
+        self.parts.sdf_grids.push(grid);
+        match within {
+            Some(members) => members.push(Member::Sdf(index, to_world, material, smooth)),
+            None => {
+                self.parts
+                    .place_sdf_grid(index, affine(to_world), material, smooth)
+                    .map_err(|e| p.error(e))?;
+            }
         }
         Ok(())
     }

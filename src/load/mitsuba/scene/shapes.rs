@@ -5,22 +5,66 @@
 //! raylab's analytic shapes, or, where they cannot be (in shape groups, a
 //! sphere under an uneven scale), tessellated finely with their exact
 //! normals and Mitsuba's parametrisation (an approximation: their
-//! silhouettes are polygons; the load says so).
+//! silhouettes are polygons; the load says so). `sdfgrid`'s properties
+//! (its grid is read by `vol.rs` and placed as exact cells).
 
 use std::collections::HashMap;
 use std::f32::consts::PI;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
-use glam::{Affine3A, Vec2, Vec3, Vec4};
+use glam::{Affine3A, Mat4, Vec2, Vec3, Vec4};
 
 use super::super::error::MitsubaError;
 use super::super::mesh::MitsubaMesh;
+use super::super::tree::{SceneTree, Tag};
+use super::props::Props;
 use crate::geometry::cylinder::Cylinder;
 use crate::geometry::disk::Disk;
 use crate::geometry::placement::Placement;
 use crate::geometry::sphere::Sphere;
 use crate::load::obj::parse_obj_file;
 use crate::scene::{AnalyticShape, MeshData, SceneShape};
+
+/// A member of a shape group, placed by each instance of the group.
+#[derive(Clone, Copy)]
+pub(super) enum Member {
+    /// A mesh: its index, its own `to_world`, its material and whether its
+    /// normals are its own (see `Builder::place`).
+    Mesh(u32, Mat4, u32, bool),
+    /// A signed distance grid (`sdfgrid`): its index in the parts' grids,
+    /// its own `to_world`, its material and whether its normals are
+    /// `smooth`.
+    Sdf(u32, Mat4, u32, bool),
+}
+
+/// An `sdfgrid`'s properties, all of them read (the shape's BSDF and
+/// emitter aside): its `.vol` file, whether its `normals` are `smooth` (the
+/// default; else `analytic`) and its `to_world`. A medium or sensor inside
+/// it is refused, as for every shape.
+pub(super) fn sdfgrid_props(
+    p: &Props,
+    tree: &SceneTree,
+) -> Result<(PathBuf, bool, Mat4), MitsubaError> {
+    let file = p.string_opt("filename")?.ok_or_else(|| {
+        p.error("needs a 'filename' (its 'grid' tensor can only be given from Python or C++)")
+    })?;
+    let path = tree
+        .resolve(file)
+        .ok_or_else(|| p.error(format!("cannot find '{}'", crate::guard::quote(file))))?;
+    let smooth = p.choice("normals", "smooth", &["analytic", "smooth"])? == "smooth";
+    let to_world = p.transform("to_world")?;
+    for tag in [Tag::Medium, Tag::Sensor] {
+        if let Some(o) = p.children_of(tag).first() {
+            return Err(p.error(format!(
+                "{} inside a shape is not supported yet",
+                o.describe()
+            )));
+        }
+    }
+    p.ignore(&["id"]);
+    p.finish()?;
+    Ok((path, smooth, to_world))
+}
 
 /// Segments around a tessellated sphere, disk or cylinder (rings: half).
 pub(super) const SEGMENTS: u32 = crate::scene::compose::SPHERE_SEGMENTS;
