@@ -17,6 +17,8 @@
 //! normalisation is exact for the function the weights use (it differs from
 //! the analytic filter by below 1e-6 of its peak).
 
+use std::ops::Range;
+
 use super::filter::{MAX_SPLAT_BORDER, PixelFilter, Reconstruction};
 
 /// Linear segments of the tabulated filter over its radius.
@@ -38,6 +40,9 @@ pub struct SplatWeights {
     columns: Vec<f32>,
     /// `1/G` of each row.
     rows: Vec<f32>,
+    /// The columns and the rows whose `1/G` is the whole filter's
+    /// (`inner.0` for columns, `inner.1` for rows).
+    inner: (Range<usize>, Range<usize>),
 }
 
 impl SplatWeights {
@@ -82,11 +87,21 @@ impl SplatWeights {
                 .collect()
         };
         let (columns, rows) = (normalisers(width), normalisers(height));
+        // The whole filter's 1/G, as an inner pixel's is computed (both ends
+        // clamped to the radius).
+        let whole = (1.0 / (from_zero(f64::INFINITY) - from_zero(f64::NEG_INFINITY))) as f32;
+        let inner = |g: &[f32]| -> Range<usize> {
+            match g.iter().position(|&v| v == whole) {
+                Some(lo) => lo..g.len() - g.iter().rev().position(|&v| v == whole).unwrap_or(0),
+                None => 0..0,
+            }
+        };
         Some(Self {
             radius,
             border: filter.splat_border(),
             table,
             scale: (SEGMENTS as f64 / f64::from(radius)) as f32,
+            inner: (inner(&columns), inner(&rows)),
             columns,
             rows,
         })
@@ -97,48 +112,45 @@ impl SplatWeights {
         self.border
     }
 
-    /// The tabulated `f(|x|)` (0 from the radius on).
-    #[inline]
-    fn f(&self, x: f32) -> f32 {
-        let t = x.abs() * self.scale;
-        // (NaN too.)
-        if t.is_nan() || t >= SEGMENTS as f32 {
-            return 0.0;
-        }
-        let i = t as usize;
-        let frac = t - i as f32;
-        let (a, b) = (self.table[i], self.table[i + 1]);
-        a + (b - a) * frac
-    }
-
     /// The weights in x of a sample in column `q` at `u` across the pixel
     /// (entry `k` for column `q + k − border`; zero outside the image).
     #[inline]
     pub fn columns(&self, q: usize, u: f32) -> AxisWeights {
-        self.axis(&self.columns, q, u)
+        self.axis(&self.columns, &self.inner.0, q, u)
     }
 
     /// The weights in y of a sample in row `q` at `u` down the pixel.
     #[inline]
     pub fn rows(&self, q: usize, u: f32) -> AxisWeights {
-        self.axis(&self.rows, q, u)
+        self.axis(&self.rows, &self.inner.1, q, u)
     }
 
-    #[inline]
-    fn axis(&self, normalisers: &[f32], q: usize, u: f32) -> AxisWeights {
+    #[inline(always)]
+    fn axis(&self, normalisers: &[f32], inner: &Range<usize>, q: usize, u: f32) -> AxisWeights {
         let mut w = [0.0; 2 * MAX_SPLAT_BORDER + 1];
         let b = self.border;
+        // Away from the edges every pixel's normaliser is the whole
+        // filter's (the same number).
+        let inside = q >= inner.start + b && q + b < inner.end;
+        let table = &self.table[..SEGMENTS + 1];
         for (k, w) in w.iter_mut().enumerate().take(2 * b + 1) {
             // Pixel q + k − b, whose centre is k − b + ½ from the pixel's corner.
-            let Some(p) = (q + k).checked_sub(b) else {
-                continue;
-            };
-            let Some(&g) = normalisers.get(p) else {
-                continue;
-            };
             let d = u - 0.5 - (k as f32 - b as f32);
-            if d.abs() < self.radius {
-                *w = self.f(d) * g;
+            let t = d.abs() * self.scale;
+            if d.abs() < self.radius && t < SEGMENTS as f32 {
+                let g = if inside {
+                    normalisers[q]
+                } else {
+                    match (q + k).checked_sub(b).and_then(|p| normalisers.get(p)) {
+                        Some(&g) => g,
+                        None => continue,
+                    }
+                };
+                // The tabulated f(|d|), 0 from the radius on.
+                let i = t as usize;
+                let frac = t - i as f32;
+                let (a, c) = (table[i], table[i + 1]);
+                *w = (a + (c - a) * frac) * g;
             }
         }
         w
