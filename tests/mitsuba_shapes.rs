@@ -1,8 +1,9 @@
 //! Mitsuba 3's `disk` and `cylinder` as raylab reads them: analytic
 //! primitives (exact silhouettes: a ray just inside a scaled disk's rim or
 //! a cylinder's outline hits, one just outside misses; Mitsuba's texture
-//! coordinates at known points), tessellated only inside a shape group (the
-//! load says so). Mitsuba's own statistical test against its images is
+//! coordinates at known points), in shape groups too (placed by each
+//! instance; tessellated only where an instance scales a sphere unevenly,
+//! and the load says so). Mitsuba's own statistical test against its images is
 //! `tools/mitsuba_suite.py` (`tests/data/mitsuba/suite/disk_cylinder_path.xml`).
 
 use glam::{Vec2, Vec3A};
@@ -83,22 +84,45 @@ fn disks_and_cylinders_are_analytic_with_exact_outlines() {
     assert!(hit(Ray::new(inside, Vec3A::X)).is_none());
 }
 
+/// In a shape group each instance places its disks, cylinders and spheres
+/// as analytic shapes under the composed placement (exact outlines); only
+/// where that placement does not suit (a sphere scaled unevenly) is the
+/// shape tessellated, and the load says so.
 #[test]
-fn in_a_shape_group_they_are_tessellated_and_the_load_says_so() {
+fn in_a_shape_group_each_instance_places_them_exactly() {
     let loaded = load(
         r#"
     <shape type="shapegroup" id="group">
-        <shape type="disk"/>
-        <shape type="cylinder"/>
+        <shape type="disk"><transform name="to_world"><scale x="2" y="0.5"/></transform></shape>
+        <shape type="sphere">
+            <point name="center" x="0" y="3" z="0"/><float name="radius" value="0.5"/>
+        </shape>
     </shape>
-    <shape type="instance"><ref id="group"/></shape>"#,
+    <shape type="instance"><ref id="group"/>
+        <transform name="to_world"><translate z="1"/></transform>
+    </shape>
+    <shape type="instance"><ref id="group"/>
+        <transform name="to_world"><scale y="2"/><translate x="6"/></transform>
+    </shape>"#,
     );
-    assert!(!loaded.scene.has_analytic_shapes());
-    assert!(!loaded.scene.triangles().is_empty());
+    let scene = &loaded.scene;
+    let down = |x: f32, y: f32| Ray::new(Vec3A::new(x, y, 5.0), -Vec3A::Z);
+    let hit = |x: f32, y: f32| scene.intersect(&down(x, y), f32::INFINITY);
+    // The first instance: the ellipse at z = 1 and the sphere at (0, 3, 1).
+    assert!((hit(1.9995, 0.0).unwrap().t - 4.0).abs() < 1e-6);
+    assert!(hit(2.0005, 0.0).is_none());
+    assert!((hit(0.0, 3.0).unwrap().t - 3.5).abs() < 1e-6);
+    assert!(hit(0.0, 3.4999).is_some() && hit(0.0, 3.5001).is_none());
+    // The second: the ellipse of half axes 2 and 1 at z = 0, x = 6.
+    assert!((hit(7.9995, 0.0).unwrap().t - 5.0).abs() < 1e-6);
+    assert!(hit(6.0, 0.9995).is_some() && hit(6.0, 1.0005).is_none());
+    // Its sphere, stretched in y, is the one shape tessellated.
+    assert!(!scene.triangles().is_empty());
+    assert!(hit(6.0, 6.0).is_some());
     assert!(
         loaded.warnings.iter().any(|w| w.contains("approximated")
-            && w.contains("disk ×1")
-            && w.contains("cylinder ×1")),
+            && w.contains("sphere ×1")
+            && !w.contains("disk ×")),
         "{:?}",
         loaded.warnings
     );

@@ -338,6 +338,9 @@ impl Builder<'_, '_> {
                             .place_sdf_grid(grid, affine(to_world * m), material, smooth)
                             .map(|_| ())
                             .map_err(|e| p.error(format!("its sdfgrid: {e}")))?,
+                        Member::Analytic(plugin, m, material, flip) => {
+                            self.analytic(plugin, to_world * m, material, flip)
+                        }
                     }
                 }
                 return Ok(());
@@ -359,7 +362,7 @@ impl Builder<'_, '_> {
             return self.sdfgrid(&p, material, within);
         }
         let attribute = self.attribute_of.get(&material).cloned().flatten();
-        let (mut mesh, to_world, mut own_normals) = self.mesh(shape, &p, attribute.as_deref())?;
+        let (mut mesh, to_world, own_normals) = self.mesh(shape, &p, attribute.as_deref())?;
         for tag in [Tag::Medium, Tag::Sensor] {
             if let Some(o) = p.children_of(tag).first() {
                 return Err(p.error(format!(
@@ -371,26 +374,22 @@ impl Builder<'_, '_> {
         p.ignore(&["id"]);
         p.finish()?;
         mesh.material = material;
-        if matches!(shape.plugin.as_str(), "sphere" | "disk" | "cylinder") {
-            // An analytic shape where it is not in a shape group (whose
-            // instances may scale unevenly) and its placement suits it (a
-            // sphere's a similarity); else the triangles.
+        let analytic = match shape.plugin.as_str() {
+            "sphere" => Some("sphere"),
+            "disk" => Some("disk"),
+            "cylinder" => Some("cylinder"),
+            _ => None,
+        };
+        if let Some(plugin) = analytic {
+            // An analytic shape, placed now or by each instance of its
+            // shape group (whose placements may not suit it: see
+            // `Builder::analytic`).
             let flip = p.boolean("flip_normals", false)?;
-            if within.is_none()
-                && let Some(s) = shapes::analytic(&shape.plugin, affine(to_world), flip)
-            {
-                self.parts
-                    .shapes
-                    .push(crate::scene::SceneShape { material, ..s });
-                return Ok(());
+            match within {
+                Some(members) => members.push(Member::Analytic(plugin, to_world, material, flip)),
+                None => self.analytic(plugin, to_world, material, flip),
             }
-            self.approximated.push(shape.plugin.clone());
-            mesh = shapes::tessellated(&shape.plugin);
-            own_normals = true;
-            mesh.material = material;
-            if flip {
-                shapes::flip(&mut mesh);
-            }
+            return Ok(());
         }
         let mesh_index = self.parts.meshes.len() as u32;
         self.parts.meshes.push(mesh);
@@ -406,6 +405,33 @@ impl Builder<'_, '_> {
             }),
         }
         Ok(())
+    }
+
+    /// A `sphere`, `disk` or `cylinder` placed by `to_world`, with
+    /// `material` and `flip_normals` `flip`: analytic where the placement
+    /// suits it (a sphere's a similarity), else Mitsuba's unit shape
+    /// tessellated (the load says so).
+    fn analytic(&mut self, plugin: &'static str, to_world: Mat4, material: u32, flip: bool) {
+        if let Some(s) = shapes::analytic(plugin, affine(to_world), flip) {
+            self.parts
+                .shapes
+                .push(crate::scene::SceneShape { material, ..s });
+            return;
+        }
+        self.approximated.push(plugin.to_string());
+        let mut mesh = shapes::tessellated(plugin);
+        mesh.material = material;
+        if flip {
+            shapes::flip(&mut mesh);
+        }
+        let mesh_index = self.parts.meshes.len() as u32;
+        self.parts.meshes.push(mesh);
+        self.place(Placed {
+            mesh: mesh_index,
+            to_world,
+            material,
+            own_normals: true,
+        });
     }
 
     /// An `sdfgrid` (Mitsuba's signed distance grid: the zero set of the
@@ -1024,7 +1050,7 @@ fn build(tree: &SceneTree, ledger: &Ledger) -> Result<MitsubaScene, MitsubaError
         }
         let list: Vec<String> = counts.iter().map(|(p, n)| format!("{p} ×{n}")).collect();
         warnings.push(format!(
-            "shapes approximated by triangles ({} segments around; spheres, disks and cylinders in shape groups, spheres under uneven scales): {}",
+            "shapes approximated by triangles ({} segments around; spheres under uneven scales): {}",
             shapes::SEGMENTS,
             list.join(", ")
         ));

@@ -35,6 +35,10 @@ pub(super) enum Member {
     /// its own `to_world`, its material and whether its normals are
     /// `smooth`.
     Sdf(u32, Mat4, u32, bool),
+    /// A `sphere`, `disk` or `cylinder`: its plugin, its own `to_world`, its
+    /// material and `flip_normals`; each instance places it analytic where
+    /// its placement suits (a sphere's a similarity), else tessellated.
+    Analytic(&'static str, Mat4, u32, bool),
 }
 
 /// An `sdfgrid`'s properties, all of them read (the shape's BSDF and
