@@ -7,6 +7,8 @@
 //! inputs are one-line errors. Mitsuba's own statistical test against its
 //! image is `tools/mitsuba_suite.py --only various_shapes`.
 
+mod common;
+
 use std::path::Path;
 
 use glam::{Vec2, Vec3A};
@@ -45,16 +47,7 @@ fn sphere_vol(n: i32) -> Vec<u8> {
 fn load(dir: &Path, body: &str) -> Result<raylab::load::Loaded, String> {
     std::fs::write(dir.join("sphere.vol"), sphere_vol(N)).unwrap();
     let path = dir.join("sdf.xml");
-    let xml = format!(
-        r#"<scene version="3.0.0">
-    <sensor type="perspective">
-        <transform name="to_world"><lookat origin="0, 0, 10" target="0, 0, 0" up="0, 1, 0"/></transform>
-        <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film>
-    </sensor>
-    <emitter type="constant"/>
-    {body}
-</scene>"#
-    );
+    let xml = common::mitsuba_scene(body);
     std::fs::write(&path, xml).unwrap();
     raylab::load::load(path.to_str().unwrap(), &Default::default()).map_err(|e| e.to_string())
 }

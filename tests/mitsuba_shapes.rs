@@ -6,6 +6,8 @@
 //! and the load says so). Mitsuba's own statistical test against its images is
 //! `tools/mitsuba_suite.py` (`tests/data/mitsuba/suite/disk_cylinder_path.xml`).
 
+mod common;
+
 use glam::{Vec2, Vec3A};
 use raylab::geometry::ray::Ray;
 
@@ -13,16 +15,7 @@ use raylab::geometry::ray::Ray;
 fn load(body: &str) -> raylab::load::Loaded {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("shapes.xml");
-    let xml = format!(
-        r#"<scene version="3.0.0">
-    <sensor type="perspective">
-        <transform name="to_world"><lookat origin="0, 0, 10" target="0, 0, 0" up="0, 1, 0"/></transform>
-        <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film>
-    </sensor>
-    <emitter type="constant"/>
-    {body}
-</scene>"#
-    );
+    let xml = common::mitsuba_scene(body);
     std::fs::write(&path, xml).unwrap();
     raylab::load::load(path.to_str().unwrap(), &Default::default()).unwrap()
 }

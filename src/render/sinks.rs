@@ -144,13 +144,6 @@ impl Sink for SplatSums<'_> {
     }
 
     #[inline]
-    fn add8(&mut self, i: [usize; 8], v: [Vec3A; 8]) {
-        for (i, v) in i.into_iter().zip(v) {
-            self.add(i, v);
-        }
-    }
-
-    #[inline]
     fn add_at(&mut self, i: usize, d: Vec2, v: Vec3A) {
         if !v.is_finite() {
             *self.dropped += 1;

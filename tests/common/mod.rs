@@ -24,6 +24,21 @@ pub fn pixels(image: &Film) -> Vec<[f32; 3]> {
         .collect()
 }
 
+/// A Mitsuba 3 scene of `body` under a constant sky, seen by an 8 × 8
+/// camera at (0, 0, 10) looking at the origin with +y up.
+pub fn mitsuba_scene(body: &str) -> String {
+    format!(
+        r#"<scene version="3.0.0">
+    <sensor type="perspective">
+        <transform name="to_world"><lookat origin="0, 0, 10" target="0, 0, 0" up="0, 1, 0"/></transform>
+        <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film>
+    </sensor>
+    <emitter type="constant"/>
+    {body}
+</scene>"#
+    )
+}
+
 /// Renders the job `options` (with the library, as `raylab render` does):
 /// its image's pixels.
 pub fn job_pixels(options: raylab::job::JobOptions) -> Vec<[f32; 3]> {

@@ -363,16 +363,7 @@ impl Builder<'_, '_> {
         }
         let attribute = self.attribute_of.get(&material).cloned().flatten();
         let (mut mesh, to_world, own_normals) = self.mesh(shape, &p, attribute.as_deref())?;
-        for tag in [Tag::Medium, Tag::Sensor] {
-            if let Some(o) = p.children_of(tag).first() {
-                return Err(p.error(format!(
-                    "{} inside a shape is not supported yet",
-                    o.describe()
-                )));
-            }
-        }
-        p.ignore(&["id"]);
-        p.finish()?;
+        shapes::finish(&p)?;
         mesh.material = material;
         let analytic = match shape.plugin.as_str() {
             "sphere" => Some("sphere"),

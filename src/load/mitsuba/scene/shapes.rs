@@ -57,6 +57,13 @@ pub(super) fn sdfgrid_props(
         .ok_or_else(|| p.error(format!("cannot find '{}'", crate::guard::quote(file))))?;
     let smooth = p.choice("normals", "smooth", &["analytic", "smooth"])? == "smooth";
     let to_world = p.transform("to_world")?;
+    finish(p)?;
+    Ok((path, smooth, to_world))
+}
+
+/// Ends a shape's properties: a medium or sensor inside it is refused, its
+/// `id` needs no reader, and any property left unread is an error.
+pub(super) fn finish(p: &Props) -> Result<(), MitsubaError> {
     for tag in [Tag::Medium, Tag::Sensor] {
         if let Some(o) = p.children_of(tag).first() {
             return Err(p.error(format!(
@@ -66,8 +73,7 @@ pub(super) fn sdfgrid_props(
         }
     }
     p.ignore(&["id"]);
-    p.finish()?;
-    Ok((path, smooth, to_world))
+    p.finish()
 }
 
 /// Segments around a tessellated sphere, disk or cylinder (rings: half).
