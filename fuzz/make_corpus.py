@@ -939,6 +939,18 @@ def mitsuba_mesh_seeds():
         serialized_shape(4, 6, True, False, True, False, b"second")]))
 
 
+def vol_file(n, channels, values):
+    data = b"VOL" + bytes([3]) + struct.pack("<iiiii", 1, n, n, n, channels)
+    data += struct.pack("<6f", 0.0, 0.0, 0.0, 1.0, 1.0, 1.0)
+    return data + struct.pack("<%df" % len(values), *values)
+
+
+def vol_seeds():
+    put("mitsuba_vol", "density.vol", vol_file(3, 1, [float(i % 5) for i in range(27)]))
+    put("mitsuba_vol", "rgb.vol", vol_file(2, 3, [0.1 * i for i in range(24)]))
+    put("mitsuba_vol", "sdf.vol", vol_file(2, 1, [-0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5]))
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--shared", default=os.path.join(HERE, "..", "..", "shared"))
@@ -957,6 +969,7 @@ def main():
     draco_seeds()
     mitsuba_seeds()
     mitsuba_mesh_seeds()
+    vol_seeds()
     for t in sorted(os.listdir(os.path.join(HERE, "corpus"))):
         files = os.listdir(os.path.join(HERE, "corpus", t))
         size = sum(os.path.getsize(os.path.join(HERE, "corpus", t, f)) for f in files)

@@ -78,6 +78,7 @@ pub mod lights;
 pub mod limits;
 pub mod load;
 pub mod materials;
+pub mod media;
 pub mod memory;
 pub mod nan_check;
 pub mod render;

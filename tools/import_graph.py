@@ -59,7 +59,7 @@ LAYERS = [
     # numbers, rays and the acceleration structure
     ["sampling", "geometry"],
     # what a scene is made of
-    ["textures", "materials", "lights", "camera"],
+    ["textures", "materials", "media", "lights", "camera"],
     # the scene model
     ["scene"],
     # what is computed per pixel

@@ -5,7 +5,9 @@ leaf-like mask, and a field of round bumps as a height map and as the
 normal map of the same heights, as 8-bit PNGs made here (no third-party data), with the
 standard library only; and the signed distance grid of `sdfgrid_path.xml`
 (tests/data/mitsuba/suite/grids/torus.vol: a torus's distances on 14³
-samples over the unit cube, Mitsuba's `.vol` format). Run again to recreate
+samples over the unit cube, Mitsuba's `.vol` format), and the grids of
+`media_grid_volpath.xml` (grids/puff.vol: a lumpy cloud's density on 12³
+samples; grids/tint.vol: an RGB albedo on 6³). Run again to recreate
 them; the output is deterministic."""
 
 import math
@@ -76,13 +78,19 @@ def normals(x, y):
     return tuple(int(round(255 * (0.5 + 0.5 * c / length))) for c in n)
 
 
-def vol(path, n, distance):
-    """Writes a Mitsuba `.vol` grid (version 3, float32, one channel) of
-    n^3 samples of distance(x, y, z) at (i, j, k) / (n - 1), x fastest."""
-    data = b"VOL" + bytes([3]) + struct.pack("<iiiii", 1, n, n, n, 1)
+def vol(path, n, distance, channels=1):
+    """Writes a Mitsuba `.vol` grid (version 3, float32) of n^3 samples of
+    distance(x, y, z) at (i, j, k) / (n - 1), x fastest; with 3 channels,
+    distance returns three values."""
+    data = b"VOL" + bytes([3]) + struct.pack("<iiiii", 1, n, n, n, channels)
     data += struct.pack("<6f", 0.0, 0.0, 0.0, 1.0, 1.0, 1.0)
     h = 1.0 / (n - 1)
-    values = [distance(i * h, j * h, k * h) for k in range(n) for j in range(n) for i in range(n)]
+    values = []
+    for k in range(n):
+        for j in range(n):
+            for i in range(n):
+                v = distance(i * h, j * h, k * h)
+                values.extend(v if channels > 1 else [v])
     data += struct.pack("<%df" % len(values), *values)
     with open(path, "wb") as f:
         f.write(data)
@@ -96,10 +104,27 @@ def torus(x, y, z):
     return math.sqrt(ring * ring + z * z) - 0.13
 
 
+def puff(x, y, z):
+    """A lumpy cloud's density: two overlapping balls with a ripple, 0 at
+    the cube's faces."""
+    def ball(cx, cy, cz, r):
+        d = math.sqrt((x - cx) ** 2 + (y - cy) ** 2 + (z - cz) ** 2) / r
+        return max(0.0, 1.0 - d) ** 1.5
+    ripple = 0.75 + 0.25 * math.sin(17.0 * x) * math.sin(13.0 * y + 1.0) * math.sin(11.0 * z + 2.0)
+    return (ball(0.42, 0.45, 0.4, 0.38) + 0.8 * ball(0.62, 0.55, 0.6, 0.3)) * ripple
+
+
+def tint(x, y, z):
+    """An albedo that turns from warm at the bottom to cool at the top."""
+    return [0.95 - 0.5 * z, 0.7 + 0.2 * x, 0.45 + 0.5 * z]
+
+
 def main():
     grids = os.path.join(OUT, "..", "grids")
     os.makedirs(grids, exist_ok=True)
     vol(os.path.join(grids, "torus.vol"), 14, torus)
+    vol(os.path.join(grids, "puff.vol"), 12, puff)
+    vol(os.path.join(grids, "tint.vol"), 6, tint, channels=3)
     os.makedirs(OUT, exist_ok=True)
     png(os.path.join(OUT, "pattern.png"), 64, 64, 3, pattern)
     png(os.path.join(OUT, "mask.png"), 64, 64, 1, mask)

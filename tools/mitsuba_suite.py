@@ -3,7 +3,8 @@
 
 Runs every scene of a mitsuba-data checkout's `tests/scenes/<group>/*.xml`
 that has an RGB reference (`refs/<name>_ref_rgb.exr` and its per-sample
-variance `_ref_rgb_var.exr`), outside `participating_media`, through
+variance `_ref_rgb_var.exr`), outside `participating_media` (with
+`--media`: that group alone, issue 44), through
 `raylab render` at Mitsuba's sample budget (spp = 2e6 // pixels, seed 0),
 and applies Mitsuba's own test (`src/render/tests/test_renders.py` of
 mitsuba-renderer/mitsuba3), written here from its definition:
@@ -141,10 +142,10 @@ def mitsuba_reference(python, scene, integrator, spp, cache):
     return data["mean"], data["var"]
 
 
-def scenes(data, only):
+def scenes(data, only, media):
     root = os.path.join(data, "tests", "scenes")
     for group in sorted(os.listdir(root)):
-        if group == "participating_media":
+        if (group == "participating_media") != media:
             continue
         folder = os.path.join(root, group)
         if not os.path.isdir(folder):
@@ -171,6 +172,8 @@ def main():
     ap.add_argument("--only", help="only scenes whose group/file name contains this")
     ap.add_argument("--out", default="mitsuba-suite-out", help="where renders go")
     ap.add_argument("--budget", type=int, default=2_000_000, help="samples per image")
+    ap.add_argument("--media", action="store_true",
+                    help="run the participating_media group (only it) instead of the others")
     args = ap.parse_args()
     if bool(args.data) == bool(args.scenes):
         ap.error("give either --data (Mitsuba's suite) or --scenes (with --mitsuba)")
@@ -181,7 +184,7 @@ def main():
     if args.data:
         jobs = [
             (f"{group}/{os.path.basename(scene)}", scene, integrator, (ref, var), 0)
-            for group, scene, integrator, ref, var in scenes(args.data, args.only)
+            for group, scene, integrator, ref, var in scenes(args.data, args.only, args.media)
         ]
     else:
         jobs = [

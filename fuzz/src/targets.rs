@@ -363,6 +363,28 @@ pub fn mitsuba_serialized(data: &[u8]) {
     }
 }
 
+/// A `.vol` file `in.vol` read as Mitsuba's `VolumeGrid` reads it, then as
+/// a medium's grid (looked up at a few points) and as an `sdfgrid`'s.
+pub fn mitsuba_vol(data: &[u8]) {
+    let path = put("in.vol", data);
+    match raylab::load::mitsuba::read_vol(&path, &mesh_ledger()) {
+        Err(e) => super::check_message(&e.to_string()),
+        Ok(vol) => match raylab::media::Grid::new(vol.res, vol.channels, vol.values) {
+            Err(e) => super::check_message(&e),
+            Ok(grid) => {
+                for p in [[0.5f32; 3], [-1.0, 0.3, 2.0], [0.999, 0.0, 0.51]] {
+                    let v = grid.eval(glam::Vec3A::from(p), false);
+                    assert!(v.is_finite() && v.max_element() <= grid.max(), "{v}");
+                    let _ = grid.eval(glam::Vec3A::from(p), true);
+                }
+            }
+        },
+    }
+    if let Err(e) = raylab::load::mitsuba::parse_sdf_vol(data, &path) {
+        super::check_message(&e.to_string());
+    }
+}
+
 /// The target of this name (all but `cli`, which needs the binary's argument
 /// parser), for replaying inputs.
 pub fn by_name(name: &str) -> Option<fn(&[u8])> {
@@ -385,6 +407,7 @@ pub fn by_name(name: &str) -> Option<fn(&[u8])> {
         "mitsuba_xml" => mitsuba_xml,
         "mitsuba_ply" => mitsuba_ply,
         "mitsuba_serialized" => mitsuba_serialized,
+        "mitsuba_vol" => mitsuba_vol,
         _ => return None,
     })
 }

@@ -357,6 +357,15 @@ impl Material {
         matches!(*self, Material::Dielectric { ior } if ior == 1.0)
     }
 
+    /// Whether one of its lobes lets light through undeviated, which
+    /// Mitsuba flags `Null` (its `thindielectric`): its `volpath` crosses
+    /// such a lobe without counting a bounce, and shadow rays pass it
+    /// ([`crate::materials::surface::SurfaceMaterial::null_transmission`]).
+    #[inline]
+    pub fn passes_straight(&self) -> bool {
+        matches!(self, Material::MiThinDielectric(_))
+    }
+
     /// Whether the material has only delta lobes (mirror, glass, smooth
     /// conductors, a smooth [`Material::Pbr`] without a diffuse part):
     /// next-event estimation cannot hit them, so an integrator should only follow

@@ -799,6 +799,45 @@ impl SurfaceMaterial {
         Some(tangent_normal(t, scale, attrs, textures))
     }
 
+    /// Whether light passes the surface unchanged everywhere (Mitsuba's
+    /// `null` BSDF, [`Material::is_null`], without a mask): an
+    /// index-matched boundary of a medium, which shadow rays cross.
+    #[inline]
+    pub fn is_null(&self) -> bool {
+        self.fixed_bsdf().is_some_and(Material::is_null)
+    }
+
+    /// What of a shadow ray passes the surface straight on at `|cos θ| =
+    /// cos` to its shading normal (Mitsuba's `eval_null_transmission`): all
+    /// of it for a `null` BSDF, the sheet's transmission for a
+    /// `thindielectric`; `None` for surfaces that block it.
+    #[inline]
+    pub fn null_transmission(&self, cos: f32) -> Option<Vec3A> {
+        match self.fixed_bsdf()? {
+            m if m.is_null() => Some(Vec3A::ONE),
+            Material::MiThinDielectric(t) => Some(t.null_transmission(cos)),
+            _ => None,
+        }
+    }
+
+    /// The BSDF of a material that is the same everywhere and opaque (no
+    /// texture varies it, no mask makes holes in it).
+    #[inline]
+    fn fixed_bsdf(&self) -> Option<&Material> {
+        if self.alpha != AlphaMode::Opaque {
+            return None;
+        }
+        match &self.kind {
+            MaterialKind::Fixed(m) => Some(m),
+            MaterialKind::Textured(t)
+                if t.opacity.is_none() && t.reflectance.is_none() && t.params.is_empty() =>
+            {
+                Some(&t.bsdf)
+            }
+            _ => None,
+        }
+    }
+
     /// Beer–Lambert attenuation inside the material's volume (zero if none).
     pub fn attenuation(&self) -> Vec3A {
         match &self.kind {

@@ -20,9 +20,15 @@ impl SceneParts {
     /// do).
     pub fn transform(&mut self, to_world: Affine3A) {
         let linear = to_world.matrix3;
-        if similarity(linear).is_none() {
+        let scale = similarity(linear);
+        if scale.is_none() {
             // An ellipsoid is not a sphere: as triangles.
             self.spheres_to_meshes();
+        }
+        // A medium's coefficients are per unit length; a placement that
+        // is not a similarity leaves them as they are (documented).
+        if let Some(s) = scale {
+            self.media.transform(to_world, s);
         }
         self.shapes
             .retain_mut(|s| transform_shape(&mut s.shape, to_world));
@@ -122,6 +128,8 @@ impl SceneParts {
                 first_triangle: inst.first_triangle + triangle_offset,
                 ..inst
             }));
+        self.media
+            .append(other.media, self.materials.len(), other.materials.len());
         self.materials
             .extend(other.materials.into_iter().map(|mut m| {
                 for t in texture_refs_mut(&mut m) {

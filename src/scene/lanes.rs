@@ -53,8 +53,9 @@ impl Scene {
     /// [`Scene::lab_lanes_apply`]; every material a fixed Lambertian reflector
     /// (whose BSDF reflectance is its base colour), mirror or glass, without an
     /// emission texture; flat shading (no mesh has vertex normals); a black
-    /// environment; and no punctual light but the key light (the others are
-    /// chosen by where they shine, which the lanes do not weigh).
+    /// environment; no punctual light but the key light (the others are
+    /// chosen by where they shine, which the lanes do not weigh); and no
+    /// participating medium.
     pub(crate) fn path_lanes_apply(&self) -> bool {
         use crate::materials::Material;
         let bits = |v: glam::Vec3A| v.to_array().map(f32::to_bits);
@@ -74,12 +75,7 @@ impl Scene {
             && self.meshes.iter().all(|m| m.normals.is_empty())
             && self.environment.is_black()
             && self.lights.is_empty()
-    }
-
-    /// The index of triangle `prim`'s material (in [`Scene::materials`]).
-    #[inline(always)]
-    pub(crate) fn material_index(&self, prim: u32) -> usize {
-        self.material_of[prim as usize] as usize
+            && self.media.is_empty()
     }
 
     /// [`Scene::intersect8`] of rays in lanes, answered in lanes; `None` when

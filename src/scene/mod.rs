@@ -12,7 +12,8 @@
 //! `analytic.rs` (the analytic shapes and their hierarchy),
 //! `parts.rs` (what a scene is made of, [`SceneParts`]) with `compose.rs`
 //! (placing and appending parts), `light_tree.rs` (the light tree, and
-//! [`Facing`]), `light_table.rs` (the light tables a scene keeps), `model.rs`
+//! [`Facing`]), `light_table.rs` (the light tables a scene keeps), `media.rs` (where
+//! participating media are), `model.rs`
 //! ([`Scene`]: building it, the query seam, what it holds), and the rest of
 //! its methods: `surface.rs` (what a hit looks like), `light_sampling.rs`
 //! (choosing lights, their densities) and `lanes.rs` (eight rays in AVX2
@@ -24,6 +25,7 @@ mod lanes;
 mod light_sampling;
 mod light_table;
 mod light_tree;
+mod media;
 pub mod mesh;
 mod model;
 mod parts;
@@ -33,6 +35,7 @@ pub use analytic::{AnalyticShape, SceneShape};
 pub use light_sampling::{LightSample, MAX_IMPORTANCE_LIGHTS};
 pub use light_table::{LightNumbers, LightSelection};
 pub use light_tree::Facing;
+pub use media::{MediumInterface, SceneMedia};
 pub use mesh::{Instance, MeshData, Tangents};
 pub use model::{MAX_ALPHA_LAYERS, Scene};
 pub use parts::{NO_INSTANCE, PointLight, SceneError, SceneParts};

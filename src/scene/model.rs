@@ -9,6 +9,7 @@ use rayon::prelude::*;
 
 use super::analytic::{AnalyticShape, AnalyticShapes, SceneShape};
 use super::light_table::{AreaLights, LightNumbers, LightSelection, LightTable};
+use super::media::SceneMedia;
 use super::mesh::{Instance, MeshData, Tangents};
 use super::parts::{PointLight, SceneError, SceneParts};
 use crate::camera::SceneCamera;
@@ -66,6 +67,8 @@ pub struct Scene {
     pub two_sided: bool,
     /// Cameras from the file, in depth-first node order.
     pub cameras: Vec<SceneCamera>,
+    /// Participating media and the surfaces that bound them.
+    pub(super) media: SceneMedia,
 }
 
 impl Scene {
@@ -129,6 +132,9 @@ impl Scene {
         }
         if !self.shapes.grids().is_empty() {
             let _ = write!(f, "|sdf grids {:?}", self.shapes.grids());
+        }
+        if self.media != SceneMedia::default() {
+            let _ = write!(f, "|media {:?}", self.media);
         }
         f.value()
     }
@@ -264,6 +270,10 @@ impl Scene {
                 });
             }
         }
+        parts
+            .media
+            .check(parts.materials.len())
+            .map_err(|what| SceneError::BadReference { what })?;
         let has_alpha = parts.materials.iter().any(|m| m.alpha != AlphaMode::Opaque);
         let has_unlit = parts.materials.iter().any(SurfaceMaterial::is_unlit);
         let bounds = parts
@@ -313,6 +323,7 @@ impl Scene {
             ambient: parts.ambient,
             two_sided: parts.two_sided,
             cameras: parts.cameras,
+            media: parts.media,
         };
         scene.area_lights = AreaLights::build(&scene);
         scene.set_lights(parts.lights);
@@ -601,6 +612,25 @@ impl Scene {
     pub fn set_lights(&mut self, lights: Vec<Light>) {
         self.lights = lights;
         self.rebuild_light_table();
+    }
+
+    /// The index of primitive `prim`'s material (in [`Scene::materials`]).
+    #[inline(always)]
+    pub(crate) fn material_index(&self, prim: u32) -> usize {
+        self.material_of[prim as usize] as usize
+    }
+
+    /// The scene's participating media and the surfaces that bound them.
+    #[inline]
+    pub fn media(&self) -> &SceneMedia {
+        &self.media
+    }
+
+    /// Whether the scene holds participating media (then `path` is
+    /// volumetric: `crate::integrators::path::volume`).
+    #[inline]
+    pub fn has_media(&self) -> bool {
+        !self.media.is_empty()
     }
 
     /// The environment that surrounds the scene (rays that escape see it;

@@ -8,6 +8,7 @@ use glam::Vec3A;
 use thiserror::Error;
 
 use super::analytic::SceneShape;
+use super::media::SceneMedia;
 use super::mesh::{Instance, MeshData};
 use crate::camera::SceneCamera;
 use crate::geometry::sdfgrid::SdfGrid;
@@ -105,6 +106,8 @@ pub struct SceneParts {
     /// The signed distance grids whose cells are among `shapes` (a cell's
     /// `grid` indexes this).
     pub sdf_grids: Vec<SdfGrid>,
+    /// Participating media and the surfaces that bound them.
+    pub media: SceneMedia,
 }
 
 impl SceneParts {

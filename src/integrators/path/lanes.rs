@@ -27,8 +27,8 @@ use std::f32::consts::{FRAC_1_PI, FRAC_PI_4};
 
 use glam::{Vec2, Vec3A};
 
+use super::options::{RR_DEPTH, RR_SCALE};
 use super::samples::{PathSampler, SobolSampler};
-use super::scalar::{RR_DEPTH, RR_SCALE};
 use super::vertex::{light_terms, power_heuristic};
 use crate::geometry::bvh::Singles8;
 use crate::geometry::packet::Closest8;

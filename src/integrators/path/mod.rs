@@ -24,15 +24,15 @@
 
 mod direct;
 pub(crate) mod lanes;
+mod options;
 mod samples;
 mod scalar;
 mod vertex;
+mod volume;
 
 pub use direct::DirectSamples;
+pub use options::{HideEmitters, PathOptions, RR_DEPTH, RR_SCALE};
 pub use samples::{PathSampler, SOBOL_BOUNCES, SOBOL_PAIRS, SamplerKind, SobolSampler};
-pub use scalar::{
-    HideEmitters, PathOptions, RR_DEPTH, RR_SCALE, radiance, radiance_from, radiance_observed,
-    radiance_traced,
-};
+pub use scalar::{radiance, radiance_from, radiance_observed, radiance_traced};
 pub use vertex::{PathEvent, PathTracer, consistent_normal, power_heuristic};
 pub(crate) use vertex::{coat_normal, shading};

@@ -1,90 +1,18 @@
 //! The scalar path tracer, one path at a time: the reference that
 //! [`super::lanes`] equals bit for bit.
 
-use glam::{Vec2, Vec3A};
+use glam::Vec3A;
 
-use super::direct::{DirectSamples, direct_counted};
-use super::samples::{PathSampler, SamplerKind};
+use super::direct::direct_counted;
+use super::options::{HideEmitters, PathOptions, RR_DEPTH, RR_SCALE};
+use super::samples::PathSampler;
 use super::vertex::{
-    NeeWeights, PathEvent, PathTracer, emission, next_event, power_heuristic, vertex_frame,
+    NeeWeights, PathEvent, PathTracer, emission, next_event, power_heuristic, take_wavelength,
+    vertex_frame, vertex_numbers,
 };
 use crate::geometry::ray::{Hit, Ray};
-use crate::materials::{Material, spectrum};
+use crate::materials::Material;
 use crate::scene::{Facing, Scene, SurfaceHit};
-
-/// Bounces after which Russian roulette may end a path.
-pub const RR_DEPTH: u32 = 3;
-/// Russian roulette keeps a path with probability `min(RR_SCALE · max(β), 0.95)`
-/// (β the path throughput): only paths whose throughput has fallen below
-/// `1/RR_SCALE` face it at all. Mitsuba's rule is `RR_SCALE = 1`; on the lab box 5
-/// reaches a given relMSE in about a third less time (docs/path-tracing.md), and
-/// the 0.95 cap still ends paths between perfect mirrors.
-pub const RR_SCALE: f32 = 5.0;
-
-/// Whether the camera sees emitters: Mitsuba's `hide_emitters`, as its
-/// `path` and `direct` integrators (3.7.1) define it. Hidden, the camera
-/// ray passes through every emitting surface it meets first (as through
-/// glass without refraction) and an environment it escapes to is black; a
-/// path's value then counts only once the path has met a surface that
-/// Mitsuba counts as the path's own.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
-pub enum HideEmitters {
-    /// Emitters are seen (raylab's own integrators, Mitsuba's default).
-    #[default]
-    No,
-    /// Mitsuba's `path`: a path counts once it scatters off a surface other
-    /// than a `null` one (raylab's dielectric of index 1,
-    /// [`crate::materials::Material::is_null`]); seen only through `null`
-    /// surfaces, light and sky are black.
-    Path,
-    /// Mitsuba's `direct`: a path counts once the camera ray (past the
-    /// emitters) hits any surface; what a `null` surface lets through
-    /// stays seen.
-    Direct,
-}
-
-/// Options of the `path` integrator.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub struct PathOptions {
-    /// Longest path in segments, as in Mitsuba: 1 sees only emitters, 2 adds
-    /// direct light, ...; `u32::MAX` leaves it to Russian roulette.
-    pub max_depth: u32,
-    /// Sample points.
-    pub sampler: SamplerKind,
-    /// How each pixel weighs the image around it (its samples' image points
-    /// are drawn from it; the box by default).
-    pub filter: crate::sampling::filter::PixelFilter,
-    /// Whether samples are drawn from the filter or splatted through it.
-    pub reconstruction: crate::sampling::filter::Reconstruction,
-    /// Whether the camera sees emitters (Mitsuba's `hide_emitters`).
-    pub hide_emitters: HideEmitters,
-    /// The light and BSDF samples a path of depth 2 takes at its one
-    /// vertex (Mitsuba's `direct`); other depths take one of each.
-    pub direct: DirectSamples,
-}
-
-impl PathOptions {
-    /// Whether paths are Mitsuba's `direct` with other counts than one light
-    /// and one BSDF sample ([`PathOptions::direct`] at depth 2), which the
-    /// eight-lane path tracer does not render.
-    #[inline]
-    pub fn counts_direct(&self) -> bool {
-        self.max_depth == 2 && self.direct != DirectSamples::ONE_EACH
-    }
-}
-
-impl Default for PathOptions {
-    fn default() -> Self {
-        Self {
-            max_depth: u32::MAX,
-            sampler: SamplerKind::DEFAULT,
-            filter: crate::sampling::filter::PixelFilter::Box,
-            reconstruction: crate::sampling::filter::Reconstruction::Sample,
-            hide_emitters: HideEmitters::No,
-            direct: DirectSamples::ONE_EACH,
-        }
-    }
-}
 
 /// Radiance arriving along `ray` (a unit direction), estimated by one path.
 /// Adds the rays cast (closest-hit and shadow) to `rays`. May return a
@@ -146,6 +74,11 @@ pub fn radiance_traced(
     observe: &mut impl FnMut(&SurfaceHit, &Material),
     tracer: &mut impl PathTracer,
 ) -> Vec3A {
+    if scene.has_media() {
+        // Participating media: the volumetric path tracer (its vertices are
+        // not shown to `tracer`).
+        return super::volume::radiance(scene, ray, first, options, sampler, rays, observe);
+    }
     if options.counts_direct() {
         let hide = options.hide_emitters != HideEmitters::No;
         return direct_counted(
@@ -269,44 +202,15 @@ pub fn radiance_traced(
         }
         // Mitsuba's `path` counts a path that scatters here, but off `null`.
         counts |= !bsdf.is_null();
-        // `KHR_materials_dispersion`: the first dispersive surface a path
-        // meets draws the path's wavelength (from the path's own stream, so
-        // that images stay the same on any number of threads) and weighs the
-        // throughput by that wavelength's RGB response, white in expectation;
-        // from there on every dispersive surface takes its index at that
-        // wavelength, for its light sample and its BSDF sample alike. A path
-        // that meets none draws nothing and stays RGB.
-        if bsdf.dispersive() {
-            let lambda = *wavelength.get_or_insert_with(|| {
-                let (lambda, w) = spectrum::sample_weighted(sampler.next_1d());
-                beta *= w;
-                lambda
-            });
-            bsdf.set_wavelength(lambda);
-        }
+        // `KHR_materials_dispersion`: the path's wavelength, drawn at its
+        // first dispersive surface ([`take_wavelength`]).
+        take_wavelength(&mut bsdf, &mut wavelength, &mut beta, sampler);
         let wo_world = -ray.dir;
         let (shading, frame, wo, facing) = vertex_frame(scene, &surface, &mut bsdf, wo_world);
         let sp = surface.point;
         let bsdf_at = bsdf.at(wo);
-
-        // Choices and the roulette's number are drawn only where they are
-        // used: each independent number costs about a dozen instructions, and
-        // a vertex of the lab box (one point light, diffuse walls) has no
-        // choice to make. (Skipping the point on the light too, which the key
-        // light does not need, saved 1 % on the box but cost 0.5 % a ray on
-        // `cornell-area`.)
-        // Next-event estimation only off non-delta lobes (a delta lobe has
-        // nothing to gain from it).
-        let light_sampled = !bsdf.is_specular();
-        let u_light_pos = sampler.next_2d();
-        let u_bsdf = sampler.next_2d();
-        // One pair for both choices: `x` picks the light, `y` settles the
-        // light table's coin and picks the lobe.
-        let u_choice = if (light_sampled && lights_need_samples) || bsdf.chooses_lobe() {
-            sampler.next_2d_minor()
-        } else {
-            Vec2::ZERO
-        };
+        let (light_sampled, u_light_pos, u_bsdf, u_choice) =
+            vertex_numbers(&bsdf, lights_need_samples, sampler);
         let u_lobe = u_choice.y;
 
         (from, from_facing) = (sp.p, facing);

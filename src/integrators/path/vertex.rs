@@ -6,6 +6,7 @@
 
 use glam::{Vec2, Vec3A};
 
+use super::samples::PathSampler;
 use crate::geometry::ray::SurfacePoint;
 use crate::lights::environment::SkyRadiance;
 use crate::materials::surface::{MaterialKind, SurfaceMaterial};
@@ -97,6 +98,57 @@ pub(crate) fn vertex_frame(
         Facing::Side(n)
     };
     (shading, frame, frame.to_local(wo_world), facing)
+}
+
+/// `KHR_materials_dispersion`: the first dispersive surface a path meets
+/// draws the path's wavelength (from the path's own stream, so that images
+/// stay the same on any number of threads) and weighs the throughput `beta`
+/// by that wavelength's RGB response, white in expectation; from there on
+/// every dispersive surface takes its index at that wavelength, for its
+/// light sample and its BSDF sample alike. A path that meets none draws
+/// nothing and stays RGB.
+#[inline(always)]
+pub(crate) fn take_wavelength(
+    bsdf: &mut Material,
+    wavelength: &mut Option<f32>,
+    beta: &mut Vec3A,
+    sampler: &mut impl PathSampler,
+) {
+    if bsdf.dispersive() {
+        let lambda = *wavelength.get_or_insert_with(|| {
+            let (lambda, w) = crate::materials::spectrum::sample_weighted(sampler.next_1d());
+            *beta *= w;
+            lambda
+        });
+        bsdf.set_wavelength(lambda);
+    }
+}
+
+/// The numbers a surface vertex draws, in the order every path tracer
+/// draws them: whether it samples a light (only off non-delta lobes: a
+/// delta lobe has nothing to gain from it), the light's point, the BSDF's
+/// pair, and one minor pair for both choices (`x` picks the light, `y`
+/// settles the light table's coin and picks the lobe), drawn only where
+/// used. (Choices and the roulette's number are drawn only where they are
+/// used: each independent number costs about a dozen instructions, and a
+/// vertex of the lab box, one point light and diffuse walls, has no choice
+/// to make. Skipping the point on the light too, which the key light does
+/// not need, saved 1 % on the box but cost 0.5 % a ray on `cornell-area`.)
+#[inline(always)]
+pub(crate) fn vertex_numbers(
+    bsdf: &Material,
+    lights_need_samples: bool,
+    sampler: &mut impl PathSampler,
+) -> (bool, Vec2, Vec2, Vec2) {
+    let light_sampled = !bsdf.is_specular();
+    let u_light_pos = sampler.next_2d();
+    let u_bsdf = sampler.next_2d();
+    let u_choice = if (light_sampled && lights_need_samples) || bsdf.chooses_lobe() {
+        sampler.next_2d_minor()
+    } else {
+        Vec2::ZERO
+    };
+    (light_sampled, u_light_pos, u_bsdf, u_choice)
 }
 
 /// What the surface `surface` (of `material`, met by a ray along `dir`

@@ -80,7 +80,7 @@ mod transform;
 mod tree;
 mod upgrade;
 mod values;
-mod vol;
+pub(crate) mod vol;
 mod xml;
 
 #[cfg(test)]
@@ -97,7 +97,7 @@ pub use tree::{
     Child, Location, MAX_ATTRIBUTE_BYTES, MAX_INCLUDE_DEPTH, MAX_NESTING, MAX_SUBSTITUTION_BYTES,
     Object, Property, SceneTree, Spectrum, Tag, Value, Version,
 };
-pub use vol::{parse_sdf_vol, read_sdf_vol};
+pub use vol::{VolFile, parse_sdf_vol, parse_vol, read_sdf_vol, read_vol};
 
 /// Reads the Mitsuba XML scene at `path`, with `defines` as `mitsuba -D
 /// NAME=VALUE` gives them (a later definition of a name replaces an

@@ -1,5 +1,6 @@
 //! Mitsuba's grid volume files (`.vol`, read by its `VolumeGrid`, for
-//! `gridvolume` and `sdfgrid`) as the samples of a signed distance grid
+//! `gridvolume` and `sdfgrid`): [`read_vol`] reads one as it is; an
+//! `sdfgrid` takes its samples as a signed distance grid
 //! ([`read_sdf_vol`]).
 //!
 //! The format (little-endian, `src/render/volumegrid.cpp` of Mitsuba
@@ -29,6 +30,19 @@ use super::mesh::read_file;
 /// count, bounding box.
 const HEADER_BYTES: usize = 3 + 1 + 4 + 12 + 4 + 24;
 
+/// A `.vol` file's contents.
+#[derive(Clone, Debug, PartialEq)]
+pub struct VolFile {
+    /// Samples along x, y and z (each ≥ 1).
+    pub res: [u32; 3],
+    /// Channels a sample (≥ 1).
+    pub channels: u32,
+    /// The bounding box the header gives (min, max).
+    pub bounds: ([f32; 3], [f32; 3]),
+    /// The values, channels fastest, then x, y, z.
+    pub values: Vec<f32>,
+}
+
 /// Reads the `.vol` file `path` as an `sdfgrid`'s samples, checking its size
 /// against `ledger` first (nothing is charged).
 pub fn read_sdf_vol(path: &Path, ledger: &Ledger) -> Result<SdfGrid, MitsubaError> {
@@ -36,9 +50,31 @@ pub fn read_sdf_vol(path: &Path, ledger: &Ledger) -> Result<SdfGrid, MitsubaErro
     parse_sdf_vol(&bytes, path)
 }
 
+/// Reads the `.vol` file `path`, checking its size against `ledger` first
+/// (nothing is charged).
+pub fn read_vol(path: &Path, ledger: &Ledger) -> Result<VolFile, MitsubaError> {
+    let bytes = read_file(path, ledger)?;
+    parse_vol(&bytes, path)
+}
+
 /// Reads `bytes` as the `.vol` file `path` (which errors name) holding an
 /// `sdfgrid`'s samples: one channel of `float32`.
 pub fn parse_sdf_vol(bytes: &[u8], path: &Path) -> Result<SdfGrid, MitsubaError> {
+    let vol = parse_vol(bytes, path)?;
+    if vol.channels != 1 {
+        return Err(MitsubaError::mesh(
+            path,
+            format!(
+                "an SDF grid has 1 channel, this volume grid has {}",
+                vol.channels
+            ),
+        ));
+    }
+    SdfGrid::new(vol.res, vol.values).map_err(|m| MitsubaError::mesh(path, m))
+}
+
+/// Reads `bytes` as the `.vol` file `path` (which errors name).
+pub fn parse_vol(bytes: &[u8], path: &Path) -> Result<VolFile, MitsubaError> {
     let err = |m: String| MitsubaError::mesh(path, m);
     if bytes.len() < HEADER_BYTES {
         return Err(err(format!(
@@ -71,12 +107,7 @@ pub fn parse_sdf_vol(bytes: &[u8], path: &Path) -> Result<SdfGrid, MitsubaError>
             "volume grid of {nx}x{ny}x{nz} samples and {channels} channels (each must be positive)"
         )));
     }
-    if channels != 1 {
-        return Err(err(format!(
-            "an SDF grid has 1 channel, this volume grid has {channels}"
-        )));
-    }
-    let values = [nx, ny, nz]
+    let values = [nx, ny, nz, channels]
         .iter()
         .try_fold(1u64, |acc, &n| acc.checked_mul(n as u64));
     let need = values
@@ -86,7 +117,7 @@ pub fn parse_sdf_vol(bytes: &[u8], path: &Path) -> Result<SdfGrid, MitsubaError>
         Some(need) if need == bytes.len() as u64 => {}
         Some(need) => {
             return Err(err(format!(
-                "volume grid of {nx}x{ny}x{nz} float32 samples needs {need} bytes, the file has {}{}",
+                "volume grid of {nx}x{ny}x{nz} float32 samples of {channels} channels needs {need} bytes, the file has {}{}",
                 bytes.len(),
                 if (bytes.len() as u64) < need {
                     " (truncated)"
@@ -101,11 +132,22 @@ pub fn parse_sdf_vol(bytes: &[u8], path: &Path) -> Result<SdfGrid, MitsubaError>
             )));
         }
     }
+    let float =
+        |at: usize| f32::from_le_bytes([bytes[at], bytes[at + 1], bytes[at + 2], bytes[at + 3]]);
+    let bounds = (
+        [float(24), float(28), float(32)],
+        [float(36), float(40), float(44)],
+    );
     let values: Vec<f32> = bytes[HEADER_BYTES..]
         .chunks_exact(4)
         .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
         .collect();
-    SdfGrid::new([nx as u32, ny as u32, nz as u32], values).map_err(err)
+    Ok(VolFile {
+        res: [nx as u32, ny as u32, nz as u32],
+        channels: channels as u32,
+        bounds,
+        values,
+    })
 }
 
 #[cfg(test)]
@@ -168,7 +210,10 @@ mod tests {
                 vol_bytes(b"VOL", 3, 1, [2, -2, 2], 1, &v8),
                 "must be positive",
             ),
-            (vol_bytes(b"VOL", 3, 1, [2, 2, 2], 3, &v8), "has 3"),
+            (
+                vol_bytes(b"VOL", 3, 1, [2, 2, 2], 3, &v8),
+                "of 3 channels needs",
+            ),
             (
                 vol_bytes(b"VOL", 3, 1, [i32::MAX, i32::MAX, i32::MAX], 1, &v8),
                 "overflows",

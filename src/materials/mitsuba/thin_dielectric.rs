@@ -39,6 +39,17 @@ impl ThinDielectric {
         f * (2.0 / (1.0 + f))
     }
 
+    /// What passes straight through at `|cos θ| = cos` (Mitsuba's
+    /// `eval_null_transmission`, which its `volpath` weighs shadow rays by):
+    /// `(1 − R) · specular_transmittance`.
+    #[inline]
+    pub fn null_transmission(&self, cos: f32) -> Vec3A {
+        if !positive(self.eta) {
+            return Vec3A::ZERO;
+        }
+        (1.0 - self.reflectance(Vec3A::new(0.0, 0.0, cos))) * self.specular_transmittance
+    }
+
     /// Reflects (`u_lobe ≤ R`) or passes straight through.
     #[inline]
     pub fn sample(&self, wo: Vec3A, u_lobe: f32) -> Option<BsdfSample> {

@@ -15,6 +15,7 @@ mod bsdfs;
 mod cie;
 mod color;
 mod conductors;
+mod media;
 mod props;
 mod shapes;
 
@@ -35,8 +36,8 @@ use crate::load::shot::settings::ShotSettings;
 use crate::materials::surface::SurfaceMaterial;
 use crate::memory::Ledger;
 use crate::sampling::filter::PixelFilter;
-use crate::scene::SceneParts;
 use crate::scene::mesh::MeshData;
+use crate::scene::{MediumInterface, SceneParts};
 use crate::textures::{ColorSpace, Pattern, TextureRef};
 use bsdfs::Materials;
 use color::Role;
@@ -89,8 +90,11 @@ struct Builder<'t, 'l> {
     tree: &'t SceneTree,
     materials: Materials<'l>,
     parts: SceneParts,
-    /// Material table index by (BSDF object, emitter object) pointers.
-    material_of: HashMap<(usize, usize), u32>,
+    /// Material table index by (BSDF object, emitter object) pointers and
+    /// the media on the shape's two sides.
+    material_of: HashMap<(usize, usize, MediumInterface), u32>,
+    /// Medium index by the medium object's pointer.
+    media_of: HashMap<usize, u32>,
     /// Members of shape groups, by the group object's pointer.
     groups: HashMap<usize, Vec<Member>>,
     /// The mesh attribute each material reads (its shapes' colours).
@@ -99,16 +103,48 @@ struct Builder<'t, 'l> {
 }
 
 impl Builder<'_, '_> {
-    /// The material of a shape's BSDF (default: Mitsuba's diffuse 0.5) and
-    /// area emitter.
+    /// The index of a `<medium>` (read once, however often referenced).
+    fn medium(&mut self, o: &Arc<Object>) -> Result<u32, MitsubaError> {
+        let key = Arc::as_ptr(o) as usize;
+        if let Some(&m) = self.media_of.get(&key) {
+            return Ok(m);
+        }
+        let medium = media::medium(o, self.tree, self.materials.ledger())?;
+        let index = self.parts.media.media.len() as u32;
+        self.parts.media.media.push(medium);
+        self.media_of.insert(key, index);
+        Ok(index)
+    }
+
+    /// The media a shape bounds: its `interior` and `exterior`.
+    fn interface(&mut self, p: &Props) -> Result<MediumInterface, MitsubaError> {
+        let mut side = |name: &str| -> Result<Option<u32>, MitsubaError> {
+            match p.child_opt(name) {
+                None => Ok(None),
+                Some(o) if o.tag == Tag::Medium => self.medium(&o).map(Some),
+                Some(o) => {
+                    Err(p.error(format!("its {name} must be a medium, not {}", o.describe())))
+                }
+            }
+        };
+        Ok(MediumInterface {
+            interior: side("interior")?,
+            exterior: side("exterior")?,
+        })
+    }
+
+    /// The material of a shape's BSDF (default: Mitsuba's diffuse 0.5),
+    /// area emitter and the media it bounds.
     fn material(
         &mut self,
         bsdf: Option<&Arc<Object>>,
         emitter: Option<&Arc<Object>>,
+        interface: MediumInterface,
     ) -> Result<u32, MitsubaError> {
         let key = (
             bsdf.map_or(0, |b| Arc::as_ptr(b) as usize),
             emitter.map_or(0, |e| Arc::as_ptr(e) as usize),
+            interface,
         );
         if let Some(&m) = self.material_of.get(&key) {
             return Ok(m);
@@ -169,6 +205,11 @@ impl Builder<'_, '_> {
         }
         let index = self.parts.materials.len() as u32;
         self.parts.materials.push(m);
+        if interface.is_transition() {
+            let interfaces = &mut self.parts.media.interfaces;
+            interfaces.resize(index as usize + 1, MediumInterface::default());
+            interfaces[index as usize] = interface;
+        }
         self.material_of.insert(key, index);
         self.attribute_of
             .insert(index, self.materials.attribute.take());
@@ -357,7 +398,8 @@ impl Builder<'_, '_> {
                 "an sdfgrid cannot be an area emitter (as in Mitsuba, which has no way to sample its surface)",
             ));
         }
-        let material = self.material(bsdfs.first(), emitters.first())?;
+        let interface = self.interface(&p)?;
+        let material = self.material(bsdfs.first(), emitters.first(), interface)?;
         if shape.plugin == "sdfgrid" {
             return self.sdfgrid(&p, material, within);
         }
@@ -846,7 +888,26 @@ fn integrator(obj: &Object, settings: &mut ShotSettings) -> Result<(), MitsubaEr
             }));
         }
         "volpath" | "volpathmis" => {
-            return Err(p.error("participating media are not supported yet (volpath)"));
+            // `path` made volumetric where the scene has media (`volpathmis`
+            // samples chromatic media with spectral MIS, as raylab always
+            // does; both converge to the same image).
+            p.ignore(&["rr_depth"]);
+            let max_depth = match p.integer("max_depth", -1)? {
+                -1 => u32::MAX,
+                d if d >= 0 => u32::try_from(d).unwrap_or(u32::MAX),
+                _ => return Err(p.error("max_depth must be -1 (unlimited) or at least 0")),
+            };
+            let hide_emitters = if p.boolean("hide_emitters", false)? {
+                HideEmitters::Path
+            } else {
+                HideEmitters::No
+            };
+            settings.max_depth = Some(max_depth);
+            settings.integrator = Some(Integrator::Path(PathOptions {
+                max_depth,
+                hide_emitters,
+                ..PathOptions::default()
+            }));
         }
         other => {
             return Err(p.error(format!(
@@ -871,6 +932,7 @@ fn build(tree: &SceneTree, ledger: &Ledger) -> Result<MitsubaScene, MitsubaError
         materials: Materials::new(ledger, scene_name),
         parts: SceneParts::default(),
         material_of: HashMap::new(),
+        media_of: HashMap::new(),
         groups: HashMap::new(),
         attribute_of: HashMap::new(),
         approximated: Vec::new(),
@@ -1024,11 +1086,10 @@ fn build(tree: &SceneTree, ledger: &Ledger) -> Result<MitsubaScene, MitsubaError
                 }
                 p.finish()?;
             }
-            Tag::Medium | Tag::Phase | Tag::Volume => {
-                return Err(rp.error(format!(
-                    "{} is not supported yet (participating media)",
-                    o.describe()
-                )));
+            // Media are read where shapes refer to them.
+            Tag::Medium => {}
+            Tag::Phase | Tag::Volume => {
+                return Err(rp.error(format!("{} belongs inside a medium", o.describe())));
             }
             _ => {}
         }
@@ -1047,6 +1108,24 @@ fn build(tree: &SceneTree, ledger: &Ledger) -> Result<MitsubaScene, MitsubaError
         ));
     }
     let mut parts = b.parts;
+    if !parts.media.interfaces.is_empty() {
+        parts
+            .media
+            .interfaces
+            .resize(parts.materials.len(), MediumInterface::default());
+    }
+    // Mitsuba's integrators other than `volpath` and `volpathmis` ignore
+    // media: surfaces that bound them are plain surfaces.
+    let volumetric = root
+        .children
+        .iter()
+        .any(|c| c.object.tag == Tag::Integrator && media::volumetric(&c.object));
+    if !volumetric && !parts.media.is_empty() {
+        warnings.push(
+            "the scene's media are ignored: its integrator is not volpath or volpathmis (as in Mitsuba)".into(),
+        );
+        parts.media = Default::default();
+    }
     parts.textures = b.materials.textures;
     parts.two_sided = false;
     Ok(MitsubaScene {

@@ -43,8 +43,9 @@ pub(super) enum Member {
 
 /// An `sdfgrid`'s properties, all of them read (the shape's BSDF and
 /// emitter aside): its `.vol` file, whether its `normals` are `smooth` (the
-/// default; else `analytic`) and its `to_world`. A medium or sensor inside
-/// it is refused, as for every shape.
+/// default; else `analytic`) and its `to_world`. A sensor inside
+/// it is refused, as for every shape; its interior and exterior media are
+/// read with its material.
 pub(super) fn sdfgrid_props(
     p: &Props,
     tree: &SceneTree,
@@ -61,16 +62,15 @@ pub(super) fn sdfgrid_props(
     Ok((path, smooth, to_world))
 }
 
-/// Ends a shape's properties: a medium or sensor inside it is refused, its
-/// `id` needs no reader, and any property left unread is an error.
+/// Ends a shape's properties: a sensor inside it is refused (a medium
+/// other than its `interior` and `exterior` is unread), its `id` needs no
+/// reader, and any property left unread is an error.
 pub(super) fn finish(p: &Props) -> Result<(), MitsubaError> {
-    for tag in [Tag::Medium, Tag::Sensor] {
-        if let Some(o) = p.children_of(tag).first() {
-            return Err(p.error(format!(
-                "{} inside a shape is not supported yet",
-                o.describe()
-            )));
-        }
+    if let Some(o) = p.children_of(Tag::Sensor).first() {
+        return Err(p.error(format!(
+            "{} inside a shape is not supported yet",
+            o.describe()
+        )));
     }
     p.ignore(&["id"]);
     p.finish()
