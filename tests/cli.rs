@@ -699,7 +699,7 @@ fn direct_without_a_point_light_warns() {
         dir.path(),
     );
     assert!(out.status.success(), "{}", stderr(&out));
-    assert!(stderr(&out).contains("--max-depth and --material only change `path`"));
+    assert!(stderr(&out).contains("--max-depth, --material and --fog only change `path`"));
 }
 
 /// The showcase glTF scene committed with the project.

@@ -357,3 +357,62 @@ fn bad_media_are_refused_with_one_line() {
         );
     }
 }
+
+/// `--fog`: fog filling the scene's bounding box (here the unit sphere's,
+/// [−1, 1]³, the sphere itself an empty `null` surface) with the camera
+/// outside it. Albedo 0: every ray through the box's face crosses 2 units
+/// of it, so those pixels are `exp(−2σ)` exactly in expectation (within
+/// 0.03, four standard errors of 4096 samples of a path that passes or
+/// not) and the others the sky. Albedo 1: a white furnace,
+/// every pixel the sky's 0.7 (the image's mean within 0.5 %).
+#[test]
+fn fog_fills_the_scene_bounds() {
+    let dir = tempfile::tempdir().unwrap();
+    let xml = sphere_of("", 1.0, "path").replace("<ref name=\"interior\" id=\"m\"/>", "");
+    let path = dir.path().join("fog.xml");
+    std::fs::write(&path, &xml).unwrap();
+    let sigma = 0.6f32;
+    let mut options = JobOptions::new(path.to_str().unwrap());
+    options.spp = Some(4096);
+    options.scene.fog = Some((sigma, glam::Vec3A::ZERO));
+    let pixels = common::job_pixels(options);
+    for y in 0..16 {
+        for x in 0..16 {
+            // Pixel (x, y) spans [−1.25 + 0.15625 x, …] in x and y: inside
+            // the box's face when it spans [−1, 1] wholly.
+            let inside = (2..14).contains(&x) && (2..14).contains(&y);
+            let outside = x == 0 || x == 15 || y == 0 || y == 15;
+            let p = pixels[y * 16 + x];
+            if inside {
+                let want = (-2.0 * sigma).exp();
+                assert!((p[0] - want).abs() < 0.03, "({x}, {y}): {p:?} vs {want}");
+            } else if outside {
+                assert_eq!(p, [1.0; 3], "({x}, {y})");
+            }
+        }
+    }
+    std::fs::write(
+        &path,
+        xml.replace("value=\"1\"/></emitter>", "value=\"0.7\"/></emitter>"),
+    )
+    .unwrap();
+    let mut options = JobOptions::new(path.to_str().unwrap());
+    options.spp = Some(1024);
+    options.scene.fog = Some((1.5, glam::Vec3A::ONE));
+    let pixels = common::job_pixels(options);
+    let mean: f32 = pixels.iter().map(|p| p[0]).sum::<f32>() / 256.0;
+    assert!((mean - 0.7).abs() < 0.005 * 0.7, "furnace mean {mean}");
+    // Bad values are one line.
+    let options = raylab::load::LoadOptions {
+        fog: Some((-1.0, glam::Vec3A::ONE)),
+        ..Default::default()
+    };
+    let e = raylab::load::load(path.to_str().unwrap(), &options)
+        .err()
+        .map(|e| e.to_string());
+    assert!(
+        e.as_deref()
+            .is_some_and(|e| e.contains("--fog") && !e.contains('\n')),
+        "{e:?}"
+    );
+}

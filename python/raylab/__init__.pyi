@@ -105,6 +105,7 @@ def render(
     env_color: Optional[_Vec3] = None,
     env_strength: Optional[float] = None,
     env_rotate: Optional[float] = None,
+    fog: Union[None, float, str, Sequence[float]] = None,
     add: Union[None, _Path, Sequence[_Path]] = None,
     transform: Union[None, str, Sequence[str]] = None,
     ambient: Optional[float] = None,

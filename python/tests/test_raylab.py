@@ -172,6 +172,7 @@ def valid_values(tmp_path):
         "env_color": ("0.2,0.3,0.4", {}),
         "env_strength": (0.5, {"env_color": (1, 1, 1)}),
         "env_rotate": (90, {"env": VENICE}),
+        "fog": ((0.5, 0.9, 0.9, 0.9), {"integrator": "path"}),
         "add": ([ASSETS / "models/teapot.obj"], {}),
         "transform": ("fit 0.5; translate 0 1 0", {"add": ASSETS / "models/teapot.obj"}),
         "ambient": (0.2, {}),

@@ -315,10 +315,12 @@ fn settings_warnings(args: &JobOptions, session: &Session) -> Vec<String> {
             "warning: the scene has no light (point light power 0, nothing emits): the path-traced image is black".to_string(),
         );
     }
-    let path_only = args.scene.max_depth.is_some() || !args.scene.material.is_empty();
+    let path_only = args.scene.max_depth.is_some()
+        || !args.scene.material.is_empty()
+        || args.scene.fog.is_some();
     if !integrator.is_physical() && path_only {
         said.push(format!(
-            "warning: --max-depth and --material only change `path` images; {integrator} ignores them"
+            "warning: --max-depth, --material and --fog only change `path` images; {integrator} ignores them"
         ));
     }
     if integrator == crate::integrators::Integrator::Direct && scene.point_power() == 0.0 {

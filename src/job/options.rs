@@ -149,6 +149,12 @@ pub struct SceneOptions {
     /// OpenEXR .exr, +y up), also seen as the background.
     #[arg(long, value_name = "FILE.hdr|FILE.exr", conflicts_with = "env_color")]
     pub env: Option<PathBuf>,
+    /// Fill the scene's bounding box with fog for `path`: extinction DENSITY
+    /// per scene unit (a mean free path of 1/DENSITY), scattering
+    /// isotropically with albedo R,G,B [default: 1,1,1]. The sky and the
+    /// sun light it from outside. See docs/media.md.
+    #[arg(long, value_name = "DENSITY[,R,G,B]", value_parser = parse_fog)]
+    pub fog: Option<(f32, Vec3A)>,
     /// A constant sky of radiance R,G,B (W/sr/m²) instead of a map.
     #[arg(long, value_name = "R,G,B", allow_hyphen_values = true, value_parser = parse_color)]
     pub env_color: Option<Vec3A>,
@@ -487,6 +493,7 @@ impl SceneOptions {
             light_numbers: self.light_numbers,
             variant: self.variant.clone(),
             defines: self.define.clone(),
+            fog: self.fog,
             environment: crate::load::EnvironmentOptions {
                 source: match (&self.env, self.env_color) {
                     (Some(path), _) => Some(crate::load::EnvSource::File(path.clone())),
@@ -956,6 +963,26 @@ fn parse_vec3(s: &str) -> Result<Vec3A, String> {
         .collect::<Result<_, _>>()
         .map_err(|_| err())?;
     Ok(Vec3A::new(v[0], v[1], v[2]))
+}
+
+/// `DENSITY` or `DENSITY,R,G,B` (`--fog`).
+fn parse_fog(s: &str) -> Result<(f32, Vec3A), String> {
+    let parts: Vec<&str> = s.split(',').collect();
+    let density: f32 = parts[0]
+        .trim()
+        .parse()
+        .ok()
+        .filter(|d: &f32| d.is_finite() && *d >= 0.0)
+        .ok_or("expected a density >= 0, then optionally ,R,G,B (an albedo in [0, 1])")?;
+    let albedo = match parts.len() {
+        1 => Vec3A::ONE,
+        4 => parse_vec3(&parts[1..].join(","))
+            .ok()
+            .filter(|c| c.min_element() >= 0.0 && c.max_element() <= 1.0)
+            .ok_or("the fog's colour is an albedo: three numbers in [0, 1]")?,
+        _ => return Err("expected DENSITY or DENSITY,R,G,B".into()),
+    };
+    Ok((density, albedo))
 }
 
 fn parse_color(s: &str) -> Result<Vec3A, String> {

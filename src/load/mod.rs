@@ -103,6 +103,9 @@ pub struct LoadOptions {
     pub animation: AnimationOptions,
     /// A Mitsuba scene's `$NAME` values (`-D NAME=VALUE`).
     pub defines: Vec<(String, String)>,
+    /// Fog filling the scene's bounding box (`--fog`): its density (per
+    /// scene unit) and albedo ([`Scene::add_fog`]).
+    pub fog: Option<(f32, Vec3A)>,
 }
 
 /// Where an environment's radiance comes from.
@@ -620,6 +623,11 @@ pub fn load(name: &str, options: &LoadOptions) -> Result<Loaded, LoadError> {
         variant,
         plugins,
     };
+    if let Some((density, albedo)) = options.fog {
+        scene
+            .add_fog(density, albedo)
+            .map_err(|e| LoadError::Usage(format!("--fog: {e}")))?;
+    }
     if options.light_selection != scene.light_selection() {
         scene.set_light_selection(options.light_selection);
     }

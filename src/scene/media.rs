@@ -123,6 +123,18 @@ impl SceneMedia {
         self.media.extend(other.media);
     }
 
+    /// Adds `fog` as the medium everywhere no other is: the camera's (unless
+    /// it is in one) and each side of a boundary that names none.
+    pub fn add_fog(&mut self, fog: Medium) {
+        let index = self.media.len() as u32;
+        self.media.push(fog);
+        self.camera = self.camera.or(Some(index));
+        for f in &mut self.interfaces {
+            f.interior = f.interior.or(Some(index));
+            f.exterior = f.exterior.or(Some(index));
+        }
+    }
+
     /// Moves the media with the scene they are in, placed by `to_world`
     /// whose scale is `s` (a similarity's).
     pub fn transform(&mut self, to_world: glam::Affine3A, s: f32) {

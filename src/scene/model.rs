@@ -620,6 +620,42 @@ impl Scene {
         self.material_of[prim as usize] as usize
     }
 
+    /// Fills the scene's bounding box with fog (`--fog`): a medium of
+    /// extinction `density` per scene unit and single-scattering albedo
+    /// `albedo`, scattering isotropically, that ends at the box, so that
+    /// the sky and the sun still light it from outside. Where a boundary
+    /// names no medium the fog is, and the camera starts in it. Fails on a
+    /// density or albedo out of range.
+    pub fn add_fog(&mut self, density: f32, albedo: Vec3A) -> Result<(), String> {
+        use crate::media::{Field, FieldValues, Heterogeneous, Medium, Phase};
+        if !(density.is_finite() && density >= 0.0) {
+            return Err(format!("fog density {density} (must be finite and >= 0)"));
+        }
+        if !(albedo.is_finite() && albedo.min_element() >= 0.0 && albedo.max_element() <= 1.0) {
+            return Err(format!(
+                "fog colour {albedo} (each channel is an albedo in [0, 1])"
+            ));
+        }
+        let (lo, hi) = self.bounds;
+        // A flat scene's box gets a little depth (a thousandth of its size).
+        let size = (hi - lo).max(Vec3A::splat(1e-3 * (hi - lo).length().max(1e-3)));
+        let to_world = glam::Affine3A::from_scale_rotation_translation(
+            size.into(),
+            glam::Quat::IDENTITY,
+            lo.into(),
+        );
+        let everywhere = |v: Vec3A| Field::new(FieldValues::Constant(v), to_world);
+        self.media
+            .add_fog(Medium::Heterogeneous(Box::new(Heterogeneous {
+                sigma_t: everywhere(Vec3A::ONE),
+                albedo: everywhere(albedo),
+                scale: density,
+                phase: Phase::Isotropic,
+                sample_emitters: true,
+            })));
+        Ok(())
+    }
+
     /// The scene's participating media and the surfaces that bound them.
     #[inline]
     pub fn media(&self) -> &SceneMedia {

@@ -117,7 +117,12 @@ pub fn parse_vol(bytes: &[u8], path: &Path) -> Result<VolFile, MitsubaError> {
         Some(need) if need == bytes.len() as u64 => {}
         Some(need) => {
             return Err(err(format!(
-                "volume grid of {nx}x{ny}x{nz} float32 samples of {channels} channels needs {need} bytes, the file has {}{}",
+                "volume grid of {nx}x{ny}x{nz} float32 samples{} needs {need} bytes, the file has {}{}",
+                if channels == 1 {
+                    String::new()
+                } else {
+                    format!(" of {channels} channels")
+                },
                 bytes.len(),
                 if (bytes.len() as u64) < need {
                     " (truncated)"
