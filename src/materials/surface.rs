@@ -820,6 +820,14 @@ impl SurfaceMaterial {
         }
     }
 
+    /// Whether shadow rays may pass the surface at all
+    /// ([`SurfaceMaterial::null_transmission`] is `Some`).
+    #[inline]
+    pub fn passes_shadow_rays(&self) -> bool {
+        self.fixed_bsdf()
+            .is_some_and(|m| m.is_null() || m.passes_straight())
+    }
+
     /// The BSDF of a material that is the same everywhere and opaque (no
     /// texture varies it, no mask makes holes in it).
     #[inline]

@@ -324,14 +324,19 @@ pub(super) fn transmittance(
     for _ in 0..=MAX_CROSSINGS {
         *rays += 1;
         let hit = scene.intersect(&ray, t_max);
+        // A surface that blocks shadow rays ends the walk before the
+        // medium's transmittance is estimated or the hit is shaded.
+        let material = hit.map(|h| &scene.materials()[scene.material_index(h.prim)]);
+        if material.is_some_and(|m| !m.passes_shadow_rays()) {
+            return Vec3A::ZERO;
+        }
         if let Some(m) = medium {
             let t = hit.map_or(t_max, |h| h.t);
             tr *= media.media[m as usize].transmittance(&ray, t, &mut || sampler.next_1d());
         }
-        let Some(hit) = hit else {
+        let (Some(hit), Some(material)) = (hit, material) else {
             return tr;
         };
-        let material = &scene.materials()[scene.material_index(hit.prim)];
         if tr == Vec3A::ZERO {
             return tr;
         }

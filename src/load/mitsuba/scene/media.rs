@@ -180,7 +180,7 @@ fn field(
 
 /// `m` as an affine map, if it is one and invertible.
 fn affine(m: Mat4) -> Option<Affine3A> {
-    let a = Affine3A::from_mat4(m);
+    let a = super::affine(m);
     (m.row(3) == glam::Vec4::W && a.matrix3.determinant().abs() > 0.0 && a.is_finite()).then_some(a)
 }
 
