@@ -245,6 +245,20 @@ pub fn load_and_render(path: &Path, options: &LoadOptions) {
     }
 }
 
+/// The memory the targets' loads may use: 64 MiB, e.g. 16 M texels of RGBA
+/// texture. The instrumented build runs texel loops some 50 times slower than
+/// a release build, so a few bytes of a losslessly compressed image that
+/// declares 180 M texels (a size within raylab's limits, which a release build
+/// decodes and uses in 2 s) would run past libFuzzer's 10 s: a timeout
+/// that is no hang. Above this budget the load stops from the image's header,
+/// as it does for a user's `--max-memory`.
+pub fn fuzz_options() -> LoadOptions {
+    LoadOptions {
+        max_memory: raylab::memory::MemoryBudget::bytes(64 << 20),
+        ..LoadOptions::default()
+    }
+}
+
 /// Loads the fixture OBJ lit by the environment map `env`.
 pub fn load_with_env(env: &Path) {
     let options = LoadOptions {
@@ -253,7 +267,7 @@ pub fn load_with_env(env: &Path) {
             strength: None,
             rotation: None,
         },
-        ..LoadOptions::default()
+        ..fuzz_options()
     };
     load_and_render(&scratch().join("fixture.obj"), &options);
 }

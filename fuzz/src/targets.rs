@@ -3,7 +3,7 @@
 
 use raylab::load::LoadOptions;
 
-use super::{load_and_render, load_with_env, put, scratch, split_nul};
+use super::{fuzz_options, load_and_render, load_with_env, put, scratch, split_nul};
 
 /// A Wavefront OBJ (before the first NUL byte) and its material library
 /// `in.mtl` (after it), loaded and rendered as `raylab render in.obj` would.
@@ -11,7 +11,7 @@ pub fn obj(data: &[u8]) {
     let (obj, mtl) = split_nul(data);
     put("in.mtl", mtl);
     let path = put("in.obj", obj);
-    load_and_render(&path, &LoadOptions::default());
+    load_and_render(&path, &fuzz_options());
 }
 
 const MTL_USER: &str = "mtllib in.mtl\nv -1 -1 0\nv 1 -1 0\nv 0 1 0\nv 1 1 0\nvt 0 0\nvt 1 0\nvt 0.5 1\n\
@@ -22,7 +22,7 @@ vn 0 0 1\nusemtl a\nf 1/1/1 2/2/1 3/3/1\nusemtl b\nf 2/2/1 4/1/1 3/3/1\nusemtl m
 pub fn mtl(data: &[u8]) {
     put("in.mtl", data);
     let path = put("mtl-user.obj", MTL_USER.as_bytes());
-    load_and_render(&path, &LoadOptions::default());
+    load_and_render(&path, &fuzz_options());
 }
 
 /// A glTF 2.0 JSON file `in.gltf` (it may refer to the fixtures `fixture.bin`
@@ -30,7 +30,7 @@ pub fn mtl(data: &[u8]) {
 /// and posed by its first animation.
 pub fn gltf_json(data: &[u8]) {
     let path = put("in.gltf", data);
-    load_and_render(&path, &LoadOptions::default());
+    load_and_render(&path, &fuzz_options());
     load_and_render(&path, &posed());
 }
 
@@ -38,7 +38,7 @@ pub fn gltf_json(data: &[u8]) {
 /// posed by its first animation.
 pub fn glb(data: &[u8]) {
     let path = put("in.glb", data);
-    load_and_render(&path, &LoadOptions::default());
+    load_and_render(&path, &fuzz_options());
     load_and_render(&path, &posed());
 }
 
@@ -51,7 +51,7 @@ fn posed() -> LoadOptions {
             time: Some(0.7),
             if_animated: false,
         },
-        ..LoadOptions::default()
+        ..fuzz_options()
     }
 }
 
@@ -62,7 +62,7 @@ pub fn scene_toml(data: &[u8]) {
     if let Err(e) = raylab::load::shot::read_settings(&path) {
         super::check_message(&e.to_string());
     }
-    load_and_render(&path, &LoadOptions::default());
+    load_and_render(&path, &fuzz_options());
 }
 
 /// A Radiance RGBE map `in.hdr` lighting the fixture OBJ.
@@ -89,7 +89,7 @@ fn texture(data: &[u8], ext: &str) {
          vn 0 0 1\nusemtl a\nf 1/1/1 2/2/1 3/3/1\nusemtl b\nf 2/2/1 4/1/1 3/3/1\n"
     );
     let path = put(&format!("tex-{ext}.obj"), obj.as_bytes());
-    load_and_render(&path, &LoadOptions::default());
+    load_and_render(&path, &fuzz_options());
 }
 
 /// A PNG texture.
@@ -171,7 +171,7 @@ pub fn meshopt(data: &[u8]) {
         decoded = count * stride,
     );
     let path = put("meshopt.gltf", json.as_bytes());
-    load_and_render(&path, &LoadOptions::default());
+    load_and_render(&path, &fuzz_options());
 }
 
 /// The Draco attribute ids of POSITION, NORMAL and TEXCOORD_0 (or none) and
@@ -249,7 +249,7 @@ pub fn draco(data: &[u8]) {
         len = stream.len(),
     );
     let path = put("draco.gltf", json.as_bytes());
-    load_and_render(&path, &LoadOptions::default());
+    load_and_render(&path, &fuzz_options());
 }
 
 /// A `raylab bench --rays` file, read as the bench reads it and cast at a
@@ -399,8 +399,10 @@ pub fn by_name(name: &str) -> Option<fn(&[u8])> {
         "exr" => exr,
         "png" => png,
         "jpeg" => jpeg,
+        "webp" => webp,
         "meshopt" => meshopt,
         "draco" => draco,
+        "ktx2" => ktx2,
         "rays" => rays,
         "bvh" => bvh,
         "checkpoint" => checkpoint,

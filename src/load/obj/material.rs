@@ -61,28 +61,49 @@ pub(super) fn looks_like_normal_map(image: &Image) -> bool {
 /// [`BUMP_SLOPE_SCALE`]; +x along increasing u, +y towards the image's top
 /// (decreasing v), as the normal maps raylab reads.
 pub(super) fn height_to_normal_map(image: &Image, multiplier: f32) -> Image {
-    let (w, h) = (image.width(), image.height());
-    let height = |x: i64, y: i64| {
-        let x = x.rem_euclid(w as i64) as u32;
-        let y = y.rem_euclid(h as i64) as u32;
-        let t: Vec4 = image.texel(x, y, ColorSpace::Linear);
-        (t.x + t.y + t.z) / 3.0
-    };
+    use rayon::prelude::*;
+    let (w, h) = (image.width() as usize, image.height() as usize);
     let k = 0.5 * multiplier * BUMP_SLOPE_SCALE;
-    let mut texels = Vec::with_capacity(w as usize * h as usize * 3);
-    for y in 0..h as i64 {
-        for x in 0..w as i64 {
-            let du = (height(x + 1, y) - height(x - 1, y)) * k;
-            // Up in the image is y − 1.
-            let dv = (height(x, y - 1) - height(x, y + 1)) * k;
-            let n = Vec3::new(-du, -dv, 1.0).normalize();
-            texels.extend(
-                n.to_array()
-                    .map(|c| ((c * 0.5 + 0.5) * 255.0).round() as u8),
-            );
+    // Bands of rows in parallel; each reads its rows' heights once (and one
+    // row either side), so a texel is fetched about once, not five times.
+    const BAND: usize = 32;
+    let height_row = |y: usize, row: &mut [f32]| {
+        for (x, out) in row.iter_mut().enumerate() {
+            let t: Vec4 = image.texel(x as u32, y as u32, ColorSpace::Linear);
+            *out = (t.x + t.y + t.z) / 3.0;
         }
-    }
-    Image::from_u8(w, h, 3, texels)
+    };
+    let mut texels = vec![0u8; w * h * 3];
+    texels
+        .par_chunks_mut(BAND * w * 3)
+        .enumerate()
+        .for_each(|(band, out)| {
+            let y0 = band * BAND;
+            let rows = out.len() / (w * 3);
+            // Heights of rows y0 − 1 ..= y0 + rows, wrapping around.
+            let mut heights = vec![0.0f32; (rows + 2) * w];
+            for (i, row) in heights.chunks_mut(w).enumerate() {
+                height_row((y0 + i + h - 1) % h, row);
+            }
+            for r in 0..rows {
+                let (up, mid, down) = (
+                    &heights[r * w..][..w],
+                    &heights[(r + 1) * w..][..w],
+                    &heights[(r + 2) * w..][..w],
+                );
+                for x in 0..w {
+                    let du = (mid[(x + 1) % w] - mid[(x + w - 1) % w]) * k;
+                    // Up in the image is y − 1.
+                    let dv = (up[x] - down[x]) * k;
+                    let n = Vec3::new(-du, -dv, 1.0).normalize();
+                    let texel = &mut out[(r * w + x) * 3..][..3];
+                    for (o, c) in texel.iter_mut().zip(n.to_array()) {
+                        *o = ((c * 0.5 + 0.5) * 255.0).round() as u8;
+                    }
+                }
+            }
+        });
+    Image::from_u8(w as u32, h as u32, 3, texels)
 }
 
 /// The textures a material uses, as references into the scene's store.
@@ -280,5 +301,41 @@ mod tests {
             "{t} vs {want}"
         );
         assert!(looks_like_normal_map(&n));
+    }
+
+    #[test]
+    fn bands_of_a_normal_map_join_without_seams() {
+        // Every texel against the central differences taken texel by texel,
+        // wrapping at the edges, on an image several bands tall whose height
+        // is not a multiple of a band.
+        let (w, h) = (23u32, 101u32);
+        let mut state = 12345u32;
+        let texels: Vec<u8> = (0..w * h * 3)
+            .map(|_| {
+                state = state.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+                (state >> 24) as u8
+            })
+            .collect();
+        let image = Image::from_u8(w, h, 3, texels);
+        let n = height_to_normal_map(&image, 0.7);
+        let height = |x: i64, y: i64| {
+            let t = image.texel(
+                x.rem_euclid(i64::from(w)) as u32,
+                y.rem_euclid(i64::from(h)) as u32,
+                ColorSpace::Linear,
+            );
+            (t.x + t.y + t.z) / 3.0
+        };
+        let k = 0.5 * 0.7 * BUMP_SLOPE_SCALE;
+        for y in 0..i64::from(h) {
+            for x in 0..i64::from(w) {
+                let du = (height(x + 1, y) - height(x - 1, y)) * k;
+                let dv = (height(x, y - 1) - height(x, y + 1)) * k;
+                let want = Vec3::new(-du, -dv, 1.0).normalize();
+                let got = n.texel(x as u32, y as u32, ColorSpace::Linear).truncate();
+                let want = (want * 0.5 + Vec3::splat(0.5)) * 255.0;
+                assert_eq!(got * 255.0, want.round(), "texel ({x}, {y})");
+            }
+        }
     }
 }

@@ -180,7 +180,8 @@ fn field(
 
 /// `m` as an affine map, if it is one and invertible.
 fn affine(m: Mat4) -> Option<Affine3A> {
-    let a = super::affine(m);
+    // The same map the shapes get (`Affine3A::from_mat4`): its 3 × 3 part and translation.
+    let a = Affine3A::from_mat4(m);
     (m.row(3) == glam::Vec4::W && a.matrix3.determinant().abs() > 0.0 && a.is_finite()).then_some(a)
 }
 
