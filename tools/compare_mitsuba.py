@@ -219,6 +219,8 @@ XML = {}
 
 def parse_xml_arg(arg):
     """`PATH[::NAME=VALUE,...]` (defines for both renderers, as `-D`) -> name, path, defines.
+    A define written `raylab:NAME=VALUE` is raylab's only (e.g. a `.vdb` file where
+    Mitsuba reads the same grid converted to `.vol`: tools/vdb_to_vol.py).
     The name is the file's stem, or, for `scene*.xml`, its folder's name (the folder
     above a `mitsuba` folder: `cornell-box/mitsuba/scene_v3.xml` is `cornell-box`)."""
     path, _, rest = arg.partition("::")
@@ -366,7 +368,8 @@ class Raylab:
         out = os.path.join(self.tmp, "raylab.exr")
         if scene in XML:
             path, defines = XML[scene]
-            d = dict(defines)
+            d = {k: v for k, v in defines.items() if not k.startswith("raylab:")}
+            d.update({k[7:]: v for k, v in defines.items() if k.startswith("raylab:")})
             if "$spp" in xml_text(path):
                 d["spp"] = spp
             cmd = [self.binary, "render", path, *[f"-D{k}={v}" for k, v in d.items()],
@@ -400,7 +403,8 @@ class Mitsuba:
         if name not in self.scenes:
             if name in XML:
                 path, defines = XML[name]
-                self.scenes[name] = self.mi.load_file(path, **defines)
+                mine = {k: v for k, v in defines.items() if not k.startswith("raylab:")}
+                self.scenes[name] = self.mi.load_file(path, **mine)
             else:
                 self.scenes[name] = self.mi.load_dict(mitsuba_scene_dict(name, self.tmp))
         return self.scenes[name]
@@ -534,7 +538,8 @@ def main():
                     help="built-in scenes (default cornell,cornell-area; none when --xml is given)")
     ap.add_argument("--xml", action="append", default=[], metavar="PATH[::NAME=VALUE,...]",
                     help="a Mitsuba 3 XML scene, read by both renderers at its own resolution "
-                    "(repeatable); NAME=VALUE are defines for both (`-D`)")
+                    "(repeatable); NAME=VALUE are defines for both (`-D`), "
+                    "raylab:NAME=VALUE raylab's only")
     ap.add_argument("--targets", default="1e-2,1e-3")
     ap.add_argument("--mitsuba-spp", default=None, metavar="N,...",
                     help="targets per scene instead of --targets: the relMSE Mitsuba's pilot "

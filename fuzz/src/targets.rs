@@ -385,6 +385,25 @@ pub fn mitsuba_vol(data: &[u8]) {
     }
 }
 
+/// An OpenVDB file: read as `raylab::load::vdb` reads a density grid (every
+/// node, mask and compressed buffer checked), then looked up around its
+/// voxels: every value finite, within [0, max].
+pub fn vdb(data: &[u8]) {
+    match raylab::load::vdb::parse_vdb(data, None) {
+        Err(e) => super::check_message(&e),
+        Ok(read) => {
+            let g = &read.grid;
+            let (lo, hi) = g.voxels();
+            let lo = glam::Vec3A::new(lo[0] as f32, lo[1] as f32, lo[2] as f32);
+            let hi = glam::Vec3A::new(hi[0] as f32, hi[1] as f32, hi[2] as f32);
+            for t in [-0.1f32, 0.0, 0.3, 0.5, 0.77, 1.0, 1.2] {
+                let v = g.eval(lo + (hi - lo) * t + 0.25);
+                assert!(v.is_finite() && v >= 0.0 && v <= g.max(), "{v}");
+            }
+        }
+    }
+}
+
 /// The target of this name (all but `cli`, which needs the binary's argument
 /// parser), for replaying inputs.
 pub fn by_name(name: &str) -> Option<fn(&[u8])> {
@@ -410,6 +429,7 @@ pub fn by_name(name: &str) -> Option<fn(&[u8])> {
         "mitsuba_ply" => mitsuba_ply,
         "mitsuba_serialized" => mitsuba_serialized,
         "mitsuba_vol" => mitsuba_vol,
+        "vdb" => vdb,
         _ => return None,
     })
 }

@@ -18,6 +18,7 @@ pub mod mitsuba;
 pub mod obj;
 pub mod shot;
 pub mod transform;
+pub mod vdb;
 
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};

@@ -14,6 +14,9 @@ use std::sync::Arc;
 
 use glam::{Affine3A, Vec3A};
 
+use super::majorant::{Majorants, Segments};
+use super::sparse::SparseGrid;
+
 /// A grid of samples with one or three channels (RGB).
 #[derive(Clone, PartialEq)]
 pub struct Grid {
@@ -88,6 +91,13 @@ impl Grid {
         self.res
     }
 
+    /// Sample `(x, y, z)` (each below the resolution), RGB (a grey grid's
+    /// value thrice).
+    #[inline]
+    pub fn sample(&self, x: u32, y: u32, z: u32) -> Vec3A {
+        self.at(x, y, z)
+    }
+
     #[inline(always)]
     fn at(&self, x: u32, y: u32, z: u32) -> Vec3A {
         let i = (((z * self.res[1] + y) * self.res[0] + x) * self.channels) as usize;
@@ -142,6 +152,32 @@ pub enum FieldValues {
         /// Nearest-sample lookups instead of trilinear ones.
         nearest: bool,
     },
+    /// A sparse grid (an OpenVDB file's), one channel, whose unit cube is its
+    /// voxels' box grown by one voxel each way (where its trilinear values
+    /// reach 0).
+    Sparse(Arc<SparseGrid>),
+}
+
+impl FieldValues {
+    /// The box of index space (min, max) that the unit cube stands for:
+    /// the unit cube itself, but a sparse grid's voxels.
+    fn index_box(&self) -> (Vec3A, Vec3A) {
+        match self {
+            FieldValues::Sparse(g) => {
+                let (lo, hi) = g.voxels();
+                let f = |v: [i32; 3]| Vec3A::new(v[0] as f32, v[1] as f32, v[2] as f32);
+                (f(lo) - 1.0, f(hi) + 1.0)
+            }
+            _ => (Vec3A::ZERO, Vec3A::ONE),
+        }
+    }
+
+    /// The map from index space to the unit cube.
+    fn unit_from_index(&self) -> Affine3A {
+        let (lo, hi) = self.index_box();
+        Affine3A::from_scale(glam::Vec3::from(1.0 / (hi - lo)))
+            * Affine3A::from_translation(glam::Vec3::from(-lo))
+    }
 }
 
 /// A field placed in the scene: its values over the unit cube that
@@ -155,9 +191,20 @@ pub struct Field {
     pub to_local: Affine3A,
     /// The world bounds of the cube (min, max).
     pub bounds: (Vec3A, Vec3A),
+    /// Bounds of its values over cells of the cube, for grids placed
+    /// without rotation (whose cube then fills `bounds`).
+    pub majorants: Option<Arc<Majorants>>,
 }
 
 impl Field {
+    /// A sparse grid placed by `index_to_world` (invertible), the map from
+    /// its index space to the world.
+    pub fn sparse(grid: Arc<SparseGrid>, index_to_world: Affine3A) -> Field {
+        let values = FieldValues::Sparse(grid);
+        let to_world = index_to_world * values.unit_from_index().inverse();
+        Field::new(values, to_world)
+    }
+
     /// `values` over the unit cube placed by `to_world` (invertible).
     pub fn new(values: FieldValues, to_world: Affine3A) -> Field {
         let mut lo = Vec3A::splat(f32::INFINITY);
@@ -168,11 +215,44 @@ impl Field {
             lo = lo.min(w);
             hi = hi.max(w);
         }
+        let m = to_world.matrix3;
+        let axis_aligned = m.x_axis.y == 0.0
+            && m.x_axis.z == 0.0
+            && m.y_axis.x == 0.0
+            && m.y_axis.z == 0.0
+            && m.z_axis.x == 0.0
+            && m.z_axis.y == 0.0;
+        let majorants = match &values {
+            FieldValues::Grid { grid, .. } if axis_aligned => {
+                Some(Arc::new(Majorants::of_grid(grid)))
+            }
+            FieldValues::Sparse(grid) if axis_aligned => {
+                let (lo, hi) = values.index_box();
+                Some(Arc::new(Majorants::of_sparse(grid, lo, hi)))
+            }
+            _ => None,
+        };
         Field {
             values,
             to_local: to_world.inverse(),
             bounds: (lo, hi),
+            majorants,
         }
+    }
+
+    /// The cells of its majorant grid along `ray` from `t0` to `t1` (a span
+    /// within `bounds`), if it has one.
+    #[inline]
+    pub fn segments(
+        &self,
+        ray: &crate::geometry::ray::Ray,
+        t0: f32,
+        t1: f32,
+    ) -> Option<Segments<'_>> {
+        let m = self.majorants.as_deref()?;
+        let o = self.to_local.transform_point3a(ray.origin);
+        let d = self.to_local.transform_vector3a(ray.dir);
+        Some(m.segments(o, d, t0, t1))
     }
 
     /// The value at world point `p`.
@@ -183,6 +263,11 @@ impl Field {
             FieldValues::Grid { grid, nearest } => {
                 grid.eval(self.to_local.transform_point3a(p), *nearest)
             }
+            FieldValues::Sparse(grid) => {
+                let unit = self.to_local.transform_point3a(p);
+                let (lo, hi) = self.values.index_box();
+                Vec3A::splat(grid.eval(lo + unit * (hi - lo)))
+            }
         }
     }
 
@@ -191,6 +276,7 @@ impl Field {
         match &self.values {
             FieldValues::Constant(v) => v.max_element(),
             FieldValues::Grid { grid, .. } => grid.max(),
+            FieldValues::Sparse(grid) => grid.max(),
         }
     }
 
@@ -199,6 +285,21 @@ impl Field {
         let inv = self.to_local.inverse();
         *self = Field::new(self.values.clone(), to_world * inv);
     }
+}
+
+/// A grid of `n` samples for tests: a share `empty` of them 0, the rest
+/// uniform in `[empty, 1) · scale`, from a fixed sequence seeded by `seed`.
+#[cfg(test)]
+pub(crate) fn random_grid(n: [u32; 3], seed: u32, empty: f32, scale: f32) -> Grid {
+    let mut state = seed;
+    let values = (0..n.iter().product::<u32>())
+        .map(|_| {
+            state = state.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            let v = (state >> 8) as f32 / (1u32 << 24) as f32;
+            if v < empty { 0.0 } else { v * scale }
+        })
+        .collect();
+    Grid::new(n, 1, values).unwrap()
 }
 
 #[cfg(test)]

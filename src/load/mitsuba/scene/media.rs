@@ -129,6 +129,21 @@ fn field(
             let path = tree
                 .resolve(file)
                 .ok_or_else(|| q.error(format!("cannot find '{}'", crate::guard::quote(file))))?;
+            if path
+                .extension()
+                .is_some_and(|e| e.eq_ignore_ascii_case("vdb"))
+            {
+                // raylab's extension: an OpenVDB file's float grid, placed by
+                // its own transform and then `to_world`.
+                let grid = q.string_opt("grid")?.map(str::to_owned);
+                q.choice("filter_type", "trilinear", &["trilinear"])?;
+                q.ignore(&["raw", "accel", "wrap_mode", "use_grid_bbox"]);
+                let vdb = crate::load::vdb::read_vdb(&path, grid.as_deref(), ledger)
+                    .map_err(|e| MitsubaError::mesh(&e.path, e.message))?;
+                let field = Field::sparse(vdb.grid, to_world * vdb.index_to_world);
+                q.finish()?;
+                return Ok(field);
+            }
             let vol = super::super::vol::read_vol(&path, ledger)?;
             let nearest =
                 q.choice("filter_type", "trilinear", &["trilinear", "nearest"])? == "nearest";
