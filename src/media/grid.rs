@@ -223,9 +223,10 @@ impl Field {
             && m.z_axis.x == 0.0
             && m.z_axis.y == 0.0;
         let majorants = match &values {
-            FieldValues::Grid { grid, .. } if axis_aligned => {
-                Some(Arc::new(Majorants::of_grid(grid)))
-            }
+            FieldValues::Grid { grid, .. } if axis_aligned => Some(Arc::new(Majorants::of_grid(
+                grid.resolution(),
+                |x, y, z| grid.sample(x, y, z).max_element(),
+            ))),
             FieldValues::Sparse(grid) if axis_aligned => {
                 let (lo, hi) = values.index_box();
                 Some(Arc::new(Majorants::of_sparse(grid, lo, hi)))

@@ -8,7 +8,6 @@
 
 use glam::Vec3A;
 
-use super::grid::Grid;
 use super::sparse::SparseGrid;
 
 /// Most cells along an axis.
@@ -50,17 +49,17 @@ impl Majorants {
         }
     }
 
-    /// Bounds of a dense grid (cell-centred samples: sample `i` of `n`
-    /// reaches from `(i − ½)/n` to `(i + 1½)/n`).
-    pub fn of_grid(grid: &Grid) -> Majorants {
-        let n = grid.resolution();
+    /// Bounds of a dense grid of `n` samples, `sample(x, y, z)` the largest
+    /// channel of each (cell-centred samples: sample `i` of `n` reaches from
+    /// `(i − ½)/n` to `(i + 1½)/n`).
+    pub fn of_grid(n: [u32; 3], sample: impl Fn(u32, u32, u32) -> f32) -> Majorants {
         let res = n.map(|k| k.div_ceil(4).clamp(1, MAX_CELLS));
         let mut m = Majorants::empty(res);
         let nf = Vec3A::new(n[0] as f32, n[1] as f32, n[2] as f32);
         for z in 0..n[2] {
             for y in 0..n[1] {
                 for x in 0..n[0] {
-                    let v = grid.sample(x, y, z).max_element();
+                    let v = sample(x, y, z);
                     if v > 0.0 {
                         let i = Vec3A::new(x as f32, y as f32, z as f32);
                         m.raise((i - 0.5) / nf, (i + 1.5) / nf, v);
@@ -183,7 +182,7 @@ mod tests {
             state = state.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
             (state >> 8) as f32 / (1u32 << 24) as f32
         };
-        let m = Majorants::of_grid(&grid);
+        let m = Majorants::of_grid(grid.resolution(), |x, y, z| grid.sample(x, y, z).x);
         assert!((m.max() - grid.max()).abs() < 1e-6);
         for _ in 0..300 {
             let o = Vec3A::new(next(), next(), next());
