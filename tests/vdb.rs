@@ -144,3 +144,108 @@ fn files_raylab_cannot_use_are_refused_in_one_line() {
     assert!(e.contains("puff.vdb"), "{e}");
     one_line(&e);
 }
+
+/// A one-leaf file as OpenVDB lays it out, uncompressed or zipped, with or
+/// without mask compression: the paths OpenVDB's Python writer (always
+/// Blosc) does not produce.
+fn one_leaf_file(compression: u32, values: &[f32; 512]) -> Vec<u8> {
+    use std::io::Write;
+    let mut f = Vec::new();
+    let string = |f: &mut Vec<u8>, s: &str| {
+        f.extend((s.len() as u32).to_le_bytes());
+        f.extend(s.as_bytes());
+    };
+    f.extend([0x20, 0x42, 0x44, 0x56, 0, 0, 0, 0]);
+    f.extend(224u32.to_le_bytes());
+    f.extend(10u32.to_le_bytes());
+    f.extend(0u32.to_le_bytes());
+    f.push(0); // no grid offsets
+    f.extend(b"01234567-89AB-CDEF-0123-456789ABCDEF");
+    f.extend(0u32.to_le_bytes()); // file metadata
+    f.extend(1u32.to_le_bytes()); // one grid
+    string(&mut f, "density");
+    string(&mut f, "Tree_float_5_4_3");
+    string(&mut f, ""); // no instance parent
+    f.extend(compression.to_le_bytes());
+    f.extend(1u32.to_le_bytes());
+    string(&mut f, "class");
+    string(&mut f, "string");
+    string(&mut f, "fog volume");
+    string(&mut f, "UniformScaleMap");
+    for v in [
+        0.5f64, 0.5, 0.5, 0.5, 0.5, 0.5, 2.0, 2.0, 2.0, 4.0, 4.0, 4.0, 1.0, 1.0, 1.0,
+    ] {
+        f.extend(v.to_le_bytes());
+    }
+    f.extend(1u32.to_le_bytes()); // buffers
+    f.extend(0f32.to_le_bytes()); // background
+    f.extend(0u32.to_le_bytes()); // tiles
+    f.extend(1u32.to_le_bytes()); // children
+    f.extend([0u8; 12]); // origin (0, 0, 0)
+    let data = |f: &mut Vec<u8>, bytes: &[u8]| {
+        if compression & 1 != 0 {
+            let mut z = flate2::write::ZlibEncoder::new(Vec::new(), flate2::Compression::default());
+            z.write_all(bytes).unwrap();
+            let z = z.finish().unwrap();
+            f.extend((z.len() as i64).to_le_bytes());
+            f.extend(z);
+        } else {
+            f.extend(bytes);
+        }
+    };
+    let masked = compression & 2 != 0;
+    for side in [32usize, 16] {
+        let n = side * side * side;
+        let mut child = vec![0u8; n / 8];
+        child[0] = 1;
+        f.extend(&child);
+        f.extend(vec![0u8; n / 8]); // no active tiles
+        f.push(0); // inactive values: the background
+        let count = if masked { 0 } else { n };
+        if compression & 1 != 0 && count == 0 {
+            f.extend(0i64.to_le_bytes());
+        } else {
+            data(&mut f, &vec![0u8; count * 4]);
+        }
+    }
+    f.extend([0xffu8; 64]); // the leaf's topology: every voxel active
+    f.extend([0xffu8; 64]); // its buffer: the mask again, then the values
+    f.push(6);
+    let bytes: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
+    data(&mut f, &bytes);
+    f
+}
+
+#[test]
+fn uncompressed_and_zipped_files_read_alike() {
+    let mut values = [0.0f32; 512];
+    for (i, v) in values.iter_mut().enumerate() {
+        *v = (i % 97) as f32 * 0.25;
+    }
+    for compression in [0u32, 1, 2, 3] {
+        let file = one_leaf_file(compression, &values);
+        let read =
+            parse_vdb(&file, None).unwrap_or_else(|e| panic!("compression {compression}: {e}"));
+        for x in 0..8 {
+            for y in 0..8 {
+                for z in 0..8 {
+                    let i = (x << 6 | y << 3 | z) as usize;
+                    assert_eq!(
+                        read.grid.voxel([x, y, z]),
+                        values[i],
+                        "compression {compression}"
+                    );
+                }
+            }
+        }
+        assert_eq!(read.grid.voxel([8, 0, 0]), 0.0);
+        let to_world = read
+            .index_to_world
+            .transform_point3(glam::Vec3::new(1.0, 2.0, 3.0));
+        assert_eq!(to_world, glam::Vec3::new(0.5, 1.0, 1.5));
+        // Cut anywhere: an error, never a panic.
+        for n in (0..file.len()).step_by(37) {
+            assert!(parse_vdb(&file[..n], None).is_err());
+        }
+    }
+}

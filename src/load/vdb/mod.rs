@@ -59,7 +59,10 @@ pub struct VdbError {
 
 impl std::fmt::Display for VdbError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let path = crate::guard::quote(&self.path.display().to_string());
+        // The whole path (a quoted word would be cut to 40 characters and
+        // lose the file's name), control characters escaped.
+        let path = self.path.display().to_string();
+        let path = crate::guard::one_line(&path);
         write!(f, "{path}: {}", crate::guard::one_line(&self.message))
     }
 }
