@@ -136,7 +136,9 @@ impl Grid {
         let c10 = lerp(self.at(x0, y1, z0), self.at(x1, y1, z0), w.x);
         let c01 = lerp(self.at(x0, y0, z1), self.at(x1, y0, z1), w.x);
         let c11 = lerp(self.at(x0, y1, z1), self.at(x1, y1, z1), w.x);
-        lerp(lerp(c00, c10, w.y), lerp(c01, c11, w.y), w.z)
+        // (Rounding may carry `a(1 − t) + b t` an ulp past both ends; the
+        // largest value stays a bound, as majorants need.)
+        lerp(lerp(c00, c10, w.y), lerp(c01, c11, w.y), w.z).min(Vec3A::splat(self.max))
     }
 }
 

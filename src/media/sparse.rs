@@ -294,7 +294,9 @@ impl SparseGrid {
         let c10 = lerp(v(0, 1, 0), v(1, 1, 0), w.x);
         let c01 = lerp(v(0, 0, 1), v(1, 0, 1), w.x);
         let c11 = lerp(v(0, 1, 1), v(1, 1, 1), w.x);
-        lerp(lerp(c00, c10, w.y), lerp(c01, c11, w.y), w.z)
+        // (Rounding may carry `a(1 − t) + b t` an ulp past both ends; the
+        // largest value stays a bound, as majorants need.)
+        lerp(lerp(c00, c10, w.y), lerp(c01, c11, w.y), w.z).min(self.max)
     }
 }
 
