@@ -165,11 +165,7 @@ impl FieldValues {
     /// the unit cube itself, but a sparse grid's voxels.
     fn index_box(&self) -> (Vec3A, Vec3A) {
         match self {
-            FieldValues::Sparse(g) => {
-                let (lo, hi) = g.voxels();
-                let f = |v: [i32; 3]| Vec3A::new(v[0] as f32, v[1] as f32, v[2] as f32);
-                (f(lo) - 1.0, f(hi) + 1.0)
-            }
+            FieldValues::Sparse(g) => g.index_box(),
             _ => (Vec3A::ZERO, Vec3A::ONE),
         }
     }
@@ -268,7 +264,7 @@ impl Field {
             }
             FieldValues::Sparse(grid) => {
                 let unit = self.to_local.transform_point3a(p);
-                let (lo, hi) = self.values.index_box();
+                let (lo, hi) = grid.index_box();
                 Vec3A::splat(grid.eval(lo + unit * (hi - lo)))
             }
         }

@@ -248,6 +248,14 @@ impl SparseGrid {
         self.voxels
     }
 
+    /// [`SparseGrid::voxels`] grown by one voxel each way, as points of
+    /// index space: the box beyond which lookups are 0.
+    #[inline]
+    pub fn index_box(&self) -> (glam::Vec3A, glam::Vec3A) {
+        let f = |v: [i32; 3]| glam::Vec3A::new(v[0] as f32, v[1] as f32, v[2] as f32);
+        (f(self.voxels.0) - 1.0, f(self.voxels.1) + 1.0)
+    }
+
     /// The bytes it takes.
     pub fn bytes(&self) -> u64 {
         ((self.table.len() + self.leaves.len() + self.tiles.len()) * 4) as u64

@@ -336,7 +336,8 @@ struct GridReader {
     background: f32,
 }
 
-/// A node's children: (origin, LOG2 of its child's side in voxels).
+/// Children along a side of the upper internal node (2⁵) and of the lower
+/// one (2⁴), as log2: the `5_4` of `Tree_float_5_4_3`.
 const LOG2_5: u32 = 5;
 const LOG2_4: u32 = 4;
 
