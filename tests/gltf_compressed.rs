@@ -431,6 +431,18 @@ fn a_corrupt_ktx2_image_is_refused_in_one_line() {
             "not a Zstandard frame",
         ),
         (
+            // The last entry's padding one byte past kvdByteLength: the
+            // transcoder's own scan (basisu 0.1.0) would panic on it.
+            "key/value padding past its length",
+            patch(&good, 60, &35u32.to_le_bytes()),
+            "runs past the key/value data's 35 bytes",
+        ),
+        (
+            "a key/value entry longer than the data",
+            patch(&good, 148, &33u32.to_le_bytes()),
+            "runs past the key/value data's 36 bytes",
+        ),
+        (
             "zstd data damaged",
             patch(&good, level_offset + 40, &[0xff; 16]),
             "does not transcode",

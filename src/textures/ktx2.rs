@@ -219,10 +219,12 @@ fn check(bytes: &[u8], name: &str) -> Result<Header, TextureError> {
     }
 
     let (kvd_offset, kvd_length) = (field(56), field(60));
-    let kvd = range(bytes, kvd_offset.into(), kvd_length.into())
+    range(bytes, kvd_offset.into(), kvd_length.into())
         .ok_or_else(|| refuse("its key/value data lies outside the file".into()))?;
     let (mut flip_x, mut flip_y) = (false, false);
-    for (key, value) in key_values(kvd) {
+    for (key, value) in
+        key_values(bytes, kvd_offset as usize, kvd_length as usize).map_err(refuse)?
+    {
         // Values are NUL-terminated strings (KTX 2.0 §5.3, §5.4).
         let value = value.split(|&b| b == 0).next().unwrap_or_default();
         match key {
@@ -259,18 +261,46 @@ fn check(bytes: &[u8], name: &str) -> Result<Header, TextureError> {
     })
 }
 
-/// The key/value pairs of KTX2 key/value data (§3.11): each a `u32` length,
-/// then the key (NUL-terminated) and value, padded to 4 bytes. Ends at the
-/// first malformed entry.
-fn key_values(kvd: &[u8]) -> impl Iterator<Item = (&[u8], &[u8])> {
-    let mut at = 0usize;
-    std::iter::from_fn(move || {
-        let len = u32_at(kvd, at)? as usize;
-        let entry = kvd.get(at + 4..(at + 4).checked_add(len)?)?;
-        at = (at + 4 + len).next_multiple_of(4);
-        let nul = entry.iter().position(|&b| b == 0)?;
-        Some((&entry[..nul], &entry[nul + 1..]))
-    })
+/// A key and its value, as bytes.
+type KeyValue<'a> = (&'a [u8], &'a [u8]);
+
+/// The key/value pairs of the KTX2 key/value data at `offset..offset + length`
+/// of `bytes` (§3.11): each a `u32` length, then the key (NUL-terminated) and
+/// value, padded to 4 bytes of the file. Reading ends, as the transcoder's
+/// does, at an entry too short to hold a key or with 4 bytes or fewer left;
+/// an entry, or its padding, running past the data's end is refused (the
+/// transcoder's own scan would step past the end: basisu 0.1.0 panics).
+fn key_values(bytes: &[u8], offset: usize, length: usize) -> Result<Vec<KeyValue<'_>>, String> {
+    let end = offset + length;
+    let mut at = offset;
+    let mut pairs = Vec::new();
+    while end - at > 4 {
+        let len = u32_at(bytes, at).unwrap_or(0) as usize;
+        at += 4;
+        if len < 2 {
+            break;
+        }
+        let past = |at: usize| {
+            format!(
+                "its key/value entry at byte {} runs past the key/value data's {length} bytes",
+                at - 4
+            )
+        };
+        if end - at < len {
+            return Err(past(at));
+        }
+        let entry = &bytes[at..at + len];
+        let start = at;
+        at = (at + len).next_multiple_of(4);
+        if at > end {
+            return Err(past(start));
+        }
+        let Some(nul) = entry.iter().position(|&b| b == 0) else {
+            continue;
+        };
+        pairs.push((&entry[..nul], &entry[nul + 1..]));
+    }
+    Ok(pairs)
 }
 
 /// The window size a Zstandard frame header asks for (RFC 8878 §3.1.1.1),
