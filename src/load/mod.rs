@@ -19,6 +19,7 @@ pub mod obj;
 pub mod shot;
 pub mod transform;
 pub mod vdb;
+mod volumes;
 
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};

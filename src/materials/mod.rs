@@ -121,5 +121,6 @@ pub use fresnel::{
     fresnel_conductor, fresnel_dielectric, fresnel_diffuse_reflectance, fresnel_mitsuba,
 };
 pub use material::{BsdfAt, Material};
+pub(crate) use microfacet::gauss_legendre;
 pub use microfacet::{ALPHA_SMOOTH, MicrofacetDistribution, MicrofacetKind};
 pub use pbr::PbrBsdf;

@@ -148,6 +148,12 @@ pub struct GltfMaterial {
     pub diffuse_transmission_color: Vec3A,
     /// Its `diffuseTransmissionColorTexture` (sRGB).
     pub diffuse_transmission_color_texture: Option<TextureRef>,
+    /// `KHR_materials_volume_scatter` `multiscatterColor`: the colour (the
+    /// multiple-scattering albedo) of a scattering volume (`None`: the
+    /// volume only absorbs).
+    pub multiscatter_color: Option<Vec3A>,
+    /// Its `scatterAnisotropy`: the phase function's mean cosine.
+    pub scatter_anisotropy: f32,
     /// `KHR_materials_pbrSpecularGlossiness`: when present, it replaces the
     /// metallic–roughness parameters (the diffuse colour is `base_color` and
     /// `base_color_texture`), converted per hit by
@@ -413,6 +419,8 @@ impl Default for GltfMaterial {
             diffuse_transmission_texture: None,
             diffuse_transmission_color: Vec3A::ONE,
             diffuse_transmission_color_texture: None,
+            multiscatter_color: None,
+            scatter_anisotropy: 0.0,
             specular_glossiness: None,
         }
     }

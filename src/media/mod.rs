@@ -13,6 +13,7 @@
 //! weighed by the mean of the three channels' pdfs, so no channel's weight
 //! grows without bound.
 
+pub mod albedo;
 pub mod grid;
 pub mod majorant;
 pub mod phase;
@@ -40,6 +41,10 @@ pub struct Homogeneous {
     /// Whether paths scattered in it sample lights (Mitsuba's
     /// `sample_emitters`; without, they find them only by phase sampling).
     pub sample_emitters: bool,
+    /// A subsurface medium ([`Medium::subsurface`]): paths cross it by a
+    /// random walk (no light samples, scattering events not counted as
+    /// bounces, the distance channel chosen once per walk).
+    pub random_walk: bool,
 }
 
 /// A heterogeneous medium (Mitsuba's `heterogeneous`): extinction
@@ -193,7 +198,44 @@ impl Medium {
             sigma_s: albedo * sigma_t,
             phase,
             sample_emitters: true,
+            random_walk: false,
         })
+    }
+
+    /// The inside of a subsurface-scattering object (Cycles' random walk,
+    /// glTF's `KHR_materials_volume_scatter`): extinction `sigma_t`, and the
+    /// single-scattering albedo whose half-space shows the colour `rho`
+    /// ([`albedo::single_scattering_albedo`]), scattering with mean cosine
+    /// `g`. Paths inside walk from boundary to boundary
+    /// ([`Homogeneous::random_walk`]).
+    pub fn subsurface(sigma_t: Vec3A, rho: Vec3A, g: f32) -> Medium {
+        let alpha = Vec3A::from(
+            rho.to_array()
+                .map(|r| albedo::single_scattering_albedo(r, g)),
+        );
+        let phase = if g == 0.0 {
+            Phase::Isotropic
+        } else {
+            Phase::HenyeyGreenstein {
+                g: g.clamp(-phase::MAX_G, phase::MAX_G),
+            }
+        };
+        Medium::Homogeneous(Homogeneous {
+            sigma_t,
+            sigma_s: alpha * sigma_t,
+            phase,
+            sample_emitters: false,
+            random_walk: true,
+        })
+    }
+
+    /// The medium as a subsurface one, if paths cross it by a random walk.
+    #[inline]
+    pub fn random_walk(&self) -> Option<&Homogeneous> {
+        match self {
+            Medium::Homogeneous(h) if h.random_walk => Some(h),
+            _ => None,
+        }
     }
 
     /// Whether paths scattered in it sample lights (else only the phase

@@ -29,6 +29,7 @@ mod samples;
 mod scalar;
 mod vertex;
 mod volume;
+mod walk;
 
 pub use direct::DirectSamples;
 pub use options::{HideEmitters, PathOptions, RR_DEPTH, RR_SCALE};
@@ -36,3 +37,4 @@ pub use samples::{PathSampler, SOBOL_BOUNCES, SOBOL_PAIRS, SamplerKind, SobolSam
 pub use scalar::{radiance, radiance_from, radiance_observed, radiance_traced};
 pub use vertex::{PathEvent, PathTracer, consistent_normal, power_heuristic};
 pub(crate) use vertex::{coat_normal, shading};
+pub use walk::MAX_WALK_STEPS;

@@ -28,6 +28,10 @@
 //!   transmittance of every medium on the way; any other surface blocks
 //!   them.
 //!
+//! - **Subsurface media** ([`crate::media::Medium::subsurface`]) are
+//!   crossed by a random walk ([`super::walk`]) from the surface a path
+//!   enters by to the one it leaves by.
+//!
 //! Camera rays start in [`crate::scene::SceneMedia::camera`]. The rules for
 //! `max_depth` are Mitsuba's: a path has at most `max_depth` segments, not
 //! counting the crossings of index-matched boundaries.
@@ -39,6 +43,7 @@ use super::samples::PathSampler;
 use super::vertex::{
     emission, light_terms, power_heuristic, take_wavelength, vertex_frame, vertex_numbers,
 };
+use super::walk::walk;
 use crate::geometry::ray::{Hit, Ray, SHADOW_EPSILON};
 use crate::materials::Material;
 use crate::media::Flight;
@@ -82,59 +87,85 @@ pub(super) fn radiance(
         let t_surface = next_hit.map_or(f32::INFINITY, |h| h.t);
         if let Some(m) = medium {
             let medium_here = &media.media[m as usize];
-            match medium_here.sample_flight(&ray, t_surface, &mut || sampler.next_1d()) {
-                Flight::Pass { weight } => beta *= weight,
-                Flight::Scatter { t, weight } => {
-                    beta *= weight;
-                    depth += 1;
-                    if depth >= options.max_depth || beta == Vec3A::ZERO {
-                        break;
-                    }
-                    crossings = 0;
-                    let p = ray.origin + ray.dir * t;
-                    let phase = medium_here.phase();
-                    // Next-event estimation from the scattering point
-                    // (unless the medium says not to: Mitsuba's
-                    // `sample_emitters`, then emission found by the phase
-                    // sample counts in full).
-                    let sample_emitters = medium_here.sample_emitters();
-                    let u_light = sampler.next_2d();
-                    let u_choice = if lights_need_samples {
-                        sampler.next_2d_minor()
-                    } else {
-                        glam::Vec2::ZERO
-                    };
-                    if sample_emitters
-                        && let Some(light) = scene.sample_light(p, Facing::Any, u_choice, u_light)
-                    {
-                        let (target, arriving, light_pdf) = light_terms(p, light);
-                        if !arriving.is_zero() {
-                            let wi = (target - p).normalize();
-                            let f = phase.eval(ray.dir, wi);
-                            let dist = (target - p).length();
-                            let skip = dist * SHADOW_EPSILON;
-                            let shadow = Ray::new(p, wi);
-                            let tr =
-                                transmittance(scene, shadow, dist - skip, medium, sampler, rays);
-                            if tr != Vec3A::ZERO {
-                                let weight = light_pdf.map_or(1.0, |pdf| power_heuristic(pdf, f));
-                                l += beta * tr * arriving.value(scene) * (f * weight);
+            if let Some(h) = medium_here.random_walk() {
+                // Subsurface: a random walk to the surface the path leaves
+                // by, shaded below as any hit.
+                let Some(exit) = walk(scene, h, ray, next_hit, sampler, rays) else {
+                    break;
+                };
+                beta *= exit.weight;
+                ray = exit.ray;
+                next_hit = Some(exit.hit);
+                if exit.scattered {
+                    // No light was sampled in the walk: what it finds
+                    // counts in full.
+                    specular = true;
+                    from = ray.origin;
+                    from_facing = Facing::Any;
+                }
+            } else {
+                match medium_here.sample_flight(&ray, t_surface, &mut || sampler.next_1d()) {
+                    Flight::Pass { weight } => beta *= weight,
+                    Flight::Scatter { t, weight } => {
+                        beta *= weight;
+                        depth += 1;
+                        if depth >= options.max_depth || beta == Vec3A::ZERO {
+                            break;
+                        }
+                        crossings = 0;
+                        let p = ray.origin + ray.dir * t;
+                        let phase = medium_here.phase();
+                        // Next-event estimation from the scattering point
+                        // (unless the medium says not to: Mitsuba's
+                        // `sample_emitters`, then emission found by the phase
+                        // sample counts in full).
+                        let sample_emitters = medium_here.sample_emitters();
+                        let u_light = sampler.next_2d();
+                        let u_choice = if lights_need_samples {
+                            sampler.next_2d_minor()
+                        } else {
+                            glam::Vec2::ZERO
+                        };
+                        if sample_emitters
+                            && let Some(light) =
+                                scene.sample_light(p, Facing::Any, u_choice, u_light)
+                        {
+                            let (target, arriving, light_pdf) = light_terms(p, light);
+                            if !arriving.is_zero() {
+                                let wi = (target - p).normalize();
+                                let f = phase.eval(ray.dir, wi);
+                                let dist = (target - p).length();
+                                let skip = dist * SHADOW_EPSILON;
+                                let shadow = Ray::new(p, wi);
+                                let tr = transmittance(
+                                    scene,
+                                    shadow,
+                                    dist - skip,
+                                    medium,
+                                    sampler,
+                                    rays,
+                                );
+                                if tr != Vec3A::ZERO {
+                                    let weight =
+                                        light_pdf.map_or(1.0, |pdf| power_heuristic(pdf, f));
+                                    l += beta * tr * arriving.value(scene) * (f * weight);
+                                }
                             }
                         }
+                        // Leave by the phase function (its weight is 1).
+                        let (d, pdf) = phase.sample(ray.dir, sampler.next_2d());
+                        specular = !sample_emitters;
+                        bsdf_pdf = pdf;
+                        from = p;
+                        from_facing = Facing::Any;
+                        ray = Ray::new(p, d);
+                        if !roulette(&mut beta, depth, sampler) {
+                            break;
+                        }
+                        *rays += 1;
+                        next_hit = scene.intersect(&ray, f32::INFINITY);
+                        continue;
                     }
-                    // Leave by the phase function (its weight is 1).
-                    let (d, pdf) = phase.sample(ray.dir, sampler.next_2d());
-                    specular = !sample_emitters;
-                    bsdf_pdf = pdf;
-                    from = p;
-                    from_facing = Facing::Any;
-                    ray = Ray::new(p, d);
-                    if !roulette(&mut beta, depth, sampler) {
-                        break;
-                    }
-                    *rays += 1;
-                    next_hit = scene.intersect(&ray, f32::INFINITY);
-                    continue;
                 }
             }
             if beta == Vec3A::ZERO {

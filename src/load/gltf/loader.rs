@@ -132,6 +132,8 @@ impl Loader<'_> {
             })
             .collect();
         self.parts.lights.splice(0..0, rest);
+        crate::load::volumes::add_volume_media(&mut self.parts)
+            .map_err(|e| GltfError::invalid(format!("KHR_materials_volume_scatter: {e}")))?;
         if self.parts.instance_of.iter().all(|&i| i == NO_INSTANCE) {
             self.parts.instance_of.clear();
         }

@@ -11,6 +11,7 @@ use super::loader::Loader;
 use crate::materials::surface::{
     AlphaMode, GltfMaterial, MaterialKind, SpecularGlossiness, SurfaceMaterial,
 };
+use crate::media::phase::MAX_G;
 
 /// The clear coat extension's name.
 const CLEARCOAT: &str = "KHR_materials_clearcoat";
@@ -118,6 +119,20 @@ struct DiffuseTransmission {
     diffuse_transmission_color_texture: Option<json::texture::Info>,
 }
 
+/// The volume scattering extension's name (the Khronos draft of
+/// glTF pull request 2453).
+pub(super) const VOLUME_SCATTER: &str = "KHR_materials_volume_scatter";
+
+/// `KHR_materials_volume_scatter`'s object.
+#[derive(serde::Deserialize)]
+#[serde(rename_all = "camelCase")]
+struct VolumeScatter {
+    #[serde(default)]
+    multiscatter_color: [f32; 3],
+    #[serde(default)]
+    scatter_anisotropy: f32,
+}
+
 /// `[1, 1, 1]`, a colour factor's default.
 fn white() -> [f32; 3] {
     [1.0; 3]
@@ -167,6 +182,7 @@ impl Loader<'_> {
                     IRIDESCENCE,
                     ANISOTROPY,
                     DIFFUSE_TRANSMISSION,
+                    VOLUME_SCATTER,
                 ];
                 if !read.contains(&name.as_str()) {
                     self.warn_once(name, format!("ignoring the material extension {name}"));
@@ -293,6 +309,18 @@ impl Loader<'_> {
         }
         if let Some(value) = ext.and_then(|e| e.others.get(DIFFUSE_TRANSMISSION)) {
             self.diffuse_transmission(value, &mut g, &what)?;
+        }
+        if let Some(value) = ext.and_then(|e| e.others.get(VOLUME_SCATTER)) {
+            let v: VolumeScatter = serde_json::from_value(value.clone())
+                .map_err(|e| GltfError::invalid(format!("{what}: {VOLUME_SCATTER}: {e}")))?;
+            let color = Vec3A::from(v.multiscatter_color);
+            if !color.is_finite() || !v.scatter_anisotropy.is_finite() {
+                return Err(GltfError::invalid(format!(
+                    "{what}: {VOLUME_SCATTER}: multiscatterColor and scatterAnisotropy must be finite"
+                )));
+            }
+            g.multiscatter_color = Some(color.clamp(Vec3A::ZERO, Vec3A::ONE));
+            g.scatter_anisotropy = v.scatter_anisotropy.clamp(-MAX_G, MAX_G);
         }
         let strength = ext
             .and_then(|e| e.emissive_strength.as_ref())

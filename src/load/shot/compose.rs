@@ -281,6 +281,10 @@ pub fn compose_posed(
         }
         let to_world = placement(path, m, &what, &model.parts)?;
         model.parts.transform(to_world);
+        // Subsurface [[material]]s given to the model (their mean free
+        // paths are in scene units, so after the placement).
+        crate::load::volumes::add_volume_media(&mut model.parts)
+            .map_err(|e| invalid(path, format!("{what}: {e}")))?;
         if let Some(mut c) = model.lab_camera.take()
             && index == 0
         {

@@ -40,7 +40,7 @@ pub(super) fn file_material(
     let emission = m.emission.unwrap_or([0.0; 3]);
     check(path, &format!("{what} emission"), &emission, true)?;
     let transmission = unit("transmission", m.transmission, 0.0)?;
-    let gltf = GltfMaterial {
+    let mut gltf = GltfMaterial {
         base_color: Vec3A::from(base).extend(1.0),
         metallic: unit("metallic", m.metallic, 0.0)?,
         roughness: unit("roughness", m.roughness, 0.5)?,
@@ -50,6 +50,34 @@ pub(super) fn file_material(
         thin_walled: false,
         ..GltfMaterial::default()
     };
+    if let Some(mfp) = m.subsurface {
+        if !mfp.iter().all(|d| d.is_finite() && *d > 0.0) {
+            return Err(invalid(
+                path,
+                format!("{what} subsurface = {mfp:?}: expected mean free paths > 0"),
+            ));
+        }
+        let g = m.subsurface_anisotropy.unwrap_or(0.0);
+        if !(-0.99..=0.99).contains(&g) {
+            return Err(invalid(
+                path,
+                format!("{what} subsurface_anisotropy = {g}: expected -0.99 to 0.99"),
+            ));
+        }
+        // Light enters by a Lambertian lobe (unless it refracts in) and
+        // walks inside (`crate::load::volumes`).
+        if transmission == 0.0 {
+            gltf.diffuse_transmission = 1.0;
+        }
+        gltf.attenuation = Vec3A::ONE / Vec3A::from(mfp);
+        gltf.multiscatter_color = Some(Vec3A::from(base).min(Vec3A::ONE));
+        gltf.scatter_anisotropy = g;
+    } else if m.subsurface_anisotropy.is_some() {
+        return Err(invalid(
+            path,
+            format!("{what}: subsurface_anisotropy without subsurface"),
+        ));
+    }
     Ok(SurfaceMaterial {
         name: m.name.clone(),
         reflectance: Vec3A::from(base).min(Vec3A::ONE),

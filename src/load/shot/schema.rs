@@ -186,6 +186,13 @@ pub struct MaterialSection {
     pub transmission: Option<f32>,
     /// Emitted radiance, W·sr⁻¹·m⁻² (front faces).
     pub emission: Option<[f32; 3]>,
+    /// Subsurface scattering: the mean free path inside, per channel, in
+    /// scene units (the base colour is then the colour a thick piece
+    /// shows); the model's meshes must be closed.
+    pub subsurface: Option<[f32; 3]>,
+    /// The Henyey–Greenstein mean cosine of the scattering inside
+    /// (default 0).
+    pub subsurface_anisotropy: Option<f32>,
 }
 
 /// `[[light]]`, by `type`.
