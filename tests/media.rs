@@ -7,6 +7,10 @@
 
 mod common;
 
+#[allow(dead_code)]
+#[path = "common/gltf_builder.rs"]
+mod builder;
+
 use std::path::Path;
 
 use raylab::job::JobOptions;
@@ -415,4 +419,142 @@ fn fog_fills_the_scene_bounds() {
             .is_some_and(|e| e.contains("--fog") && !e.contains('\n')),
         "{e:?}"
     );
+}
+
+/// A scene file of one glTF cube ([−1, 1]³, made invisible: `glass:1.0`,
+/// an index-matched boundary) under a uniform sky of radiance 1, seen from
+/// +z by a 16 × 16 camera, with `extra` sections.
+fn cube_scene(dir: &Path, extra: &str) -> std::path::PathBuf {
+    use builder::{Gltf, U32};
+    use serde_json::json;
+    let mut g = Gltf::new();
+    let m = g.material(json!({ "pbrMetallicRoughness": { "metallicFactor": 0 } }));
+    let corners: Vec<[f32; 3]> = (0..8)
+        .map(|i| {
+            [(i & 1) as f32, ((i >> 1) & 1) as f32, ((i >> 2) & 1) as f32].map(|c| 2.0 * c - 1.0)
+        })
+        .collect();
+    let pos = g.floats(&corners);
+    let faces: [[u32; 4]; 6] = [
+        [0, 2, 3, 1],
+        [4, 5, 7, 6],
+        [0, 1, 5, 4],
+        [2, 6, 7, 3],
+        [0, 4, 6, 2],
+        [1, 3, 7, 5],
+    ];
+    let idx: Vec<u32> = faces
+        .iter()
+        .flat_map(|f| [f[0], f[1], f[2], f[0], f[2], f[3]])
+        .collect();
+    let idx = g.indices(U32, &idx);
+    let mesh = g.mesh(vec![
+        json!({ "attributes": { "POSITION": pos }, "indices": idx, "material": m }),
+    ]);
+    g.root(json!({ "mesh": mesh }));
+    g.write(dir, "cube.gltf");
+    let path = dir.join("cube.toml");
+    std::fs::write(
+        &path,
+        format!(
+            "[render]\nwidth = 16\nheight = 16\n\n[environment]\ncolor = [1, 1, 1]\n\n\
+             [camera]\nposition = [0, 0, 6]\ntarget = [0, 0, 0]\nfov = 30\n\n\
+             [[model]]\nname = \"cube\"\nfile = \"cube.gltf\"\nmaterials = {{ \"*\" = \"glass:1.0\" }}\n\n{extra}"
+        ),
+    )
+    .unwrap();
+    path
+}
+
+/// `[[medium]]` in scene files: fog is `--fog` (the same image, bit for
+/// bit), and an absorbing medium inside a model transmits `exp(−σ·2)`
+/// straight through the cube (the mean of 20,000 paths within 4 standard
+/// errors); bad sections are one line naming the file.
+#[test]
+fn scene_file_media_are_fog_and_media_inside_models() {
+    let dir = tempfile::tempdir().unwrap();
+    let sigma = 0.6f32;
+    let fog = cube_scene(
+        dir.path(),
+        &format!("[[medium]]\ntype = \"fog\"\ndensity = {sigma}\ncolor = [0, 0, 0]\n"),
+    );
+    let mut options = JobOptions::new(fog.to_str().unwrap());
+    options.spp = Some(16);
+    let from_file = common::job_pixels(options);
+    let plain = cube_scene(dir.path(), "");
+    let mut options = JobOptions::new(plain.to_str().unwrap());
+    options.spp = Some(16);
+    options.scene.fog = Some((sigma, glam::Vec3A::ZERO));
+    let from_option = common::job_pixels(options);
+    assert_eq!(from_file, from_option, "[[medium]] fog is --fog");
+    assert!(from_file.iter().any(|p| p[0] < 0.9), "the fog shows");
+
+    let inside = cube_scene(
+        dir.path(),
+        &format!(
+            "[[medium]]\ntype = \"inside\"\nmodel = \"cube\"\ndensity = [{sigma}, {sigma}, {}]\ncolor = [0, 0, 0]\n",
+            2.0 * sigma
+        ),
+    );
+    let loaded = raylab::load::load(inside.to_str().unwrap(), &Default::default()).unwrap();
+    let opts = raylab::integrators::path::PathOptions::default();
+    let n = 20_000u64;
+    let mut sum = glam::DVec3::ZERO;
+    let mut rays = 0;
+    for i in 0..n {
+        let (x, y) = (
+            (i % 101) as f32 / 101.0 - 0.5,
+            (i / 101 % 97) as f32 / 97.0 - 0.5,
+        );
+        let ray = raylab::Ray::new(glam::Vec3A::new(x, y, 5.0), glam::Vec3A::NEG_Z);
+        let mut rng = raylab::sampling::sampler::Rng::new(i, 3);
+        let l =
+            raylab::integrators::path::radiance(&loaded.scene, &ray, &opts, &mut rng, &mut rays);
+        sum += glam::DVec3::new(l.x.into(), l.y.into(), l.z.into());
+    }
+    let mean = sum / n as f64;
+    eprintln!(
+        "through the cube: {mean} (exp(-2 sigma): {}, {})",
+        (-1.2f64).exp(),
+        (-2.4f64).exp()
+    );
+    for (c, s) in [(0, sigma), (2, 2.0 * sigma)] {
+        let p = (-2.0 * f64::from(s)).exp();
+        // A path passes with probability p (weight 1 each for a grey
+        // medium; a chromatic one weighs by the mean of the channels').
+        let se = (p * (1.0 - p) / n as f64).sqrt() * 3.0;
+        assert!(
+            (mean[c] - p).abs() < 4.0 * se,
+            "channel {c}: {} vs exp(-2 sigma) {p}",
+            mean[c]
+        );
+    }
+
+    for (extra, says) in [
+        (
+            "[[medium]]\ntype = \"inside\"\nmodel = \"teapot\"\ndensity = 1\n",
+            "no [[model]] of that name",
+        ),
+        (
+            "[[medium]]\ntype = \"fog\"\ndensity = 1\n\n[[medium]]\ntype = \"fog\"\ndensity = 2\n",
+            "a second fog",
+        ),
+        (
+            "[[medium]]\ntype = \"fog\"\ndensity = 1\ncolor = [2, 0, 0]\n",
+            "albedo from 0 to 1",
+        ),
+        ("[[medium]]\ntype = \"fog\"\ndensity = -1\n", "density"),
+        ("[[medium]]\ntype = \"smoke\"\ndensity = 1\n", "smoke"),
+    ] {
+        let path = cube_scene(dir.path(), extra);
+        let err = raylab::load::load(path.to_str().unwrap(), &Default::default())
+            .err()
+            .map(|e| e.to_string())
+            .unwrap_or_else(|| panic!("{extra} loaded"));
+        assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+        assert!(
+            err.contains("cube.toml") && err.contains(says),
+            "{extra}: {err}"
+        );
+    }
 }

@@ -298,4 +298,5 @@ fn the_documented_example_composes() {
     // The box's point light and the file's first point light: the box's is the key.
     assert!(shot.parts.light.power.max_element() > 0.0);
     assert_eq!(shot.settings.max_depth, Some(16));
+    assert!(shot.settings.fog.is_some(), "the example's [[medium]] fog");
 }

@@ -629,6 +629,11 @@ pub fn load(name: &str, options: &LoadOptions) -> Result<Loaded, LoadError> {
         scene
             .add_fog(density, albedo)
             .map_err(|e| LoadError::Usage(format!("--fog: {e}")))?;
+    } else if let Some((sigma_t, albedo, phase)) = settings.fog {
+        // The scene file's fog (checked when the file was read).
+        scene
+            .add_fog_with(sigma_t, albedo, phase)
+            .map_err(|e| LoadError::Usage(format!("[[medium]] fog: {e}")))?;
     }
     if options.light_selection != scene.light_selection() {
         scene.set_light_selection(options.light_selection);

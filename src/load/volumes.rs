@@ -82,6 +82,33 @@ pub(crate) fn add_volume_media(parts: &mut SceneParts) -> Result<(), String> {
     Ok(())
 }
 
+/// Fills the model `parts` with `medium`: the interior of every one of its
+/// materials (a material that bounds a medium already is refused), after
+/// checking that its meshes are closed.
+pub(crate) fn fill(parts: &mut SceneParts, medium: Medium) -> Result<(), String> {
+    medium.check()?;
+    if parts.triangles.is_empty() {
+        return Err("the model has no triangles to hold it".into());
+    }
+    check_closed(parts, |_| true)?;
+    let media = &mut parts.media;
+    if media.interfaces.is_empty() {
+        media.interfaces = vec![MediumInterface::default(); parts.materials.len()];
+    }
+    let index = media.media.len() as u32;
+    for (i, f) in media.interfaces.iter_mut().enumerate() {
+        if f.interior.is_some() {
+            return Err(format!(
+                "its material \"{}\" bounds a medium already",
+                crate::guard::one_line(&parts.materials[i].name)
+            ));
+        }
+        f.interior = Some(index);
+    }
+    media.media.push(medium);
+    Ok(())
+}
+
 /// Refuses a scattering volume whose triangles leave an edge open: an
 /// edge (between positions welded by their bits) used by an odd number of
 /// the triangles whose material `scatters`.
@@ -111,8 +138,8 @@ fn check_closed(parts: &SceneParts, scatters: impl Fn(u32) -> bool) -> Result<()
             format!("material \"{}\"", crate::guard::one_line(name))
         };
         return Err(format!(
-            "{named} scatters light in its volume (subsurface), which needs closed meshes, \
-             but {} of their edges are open",
+            "{named} bounds a medium, which needs closed meshes, but {} of their edges \
+             are open (used by an odd number of triangles)",
             open.count()
         ));
     }

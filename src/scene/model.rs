@@ -627,10 +627,36 @@ impl Scene {
     /// names no medium the fog is, and the camera starts in it. Fails on a
     /// density or albedo out of range.
     pub fn add_fog(&mut self, density: f32, albedo: Vec3A) -> Result<(), String> {
-        use crate::media::{Field, FieldValues, Heterogeneous, Medium, Phase};
         if !(density.is_finite() && density >= 0.0) {
             return Err(format!("fog density {density} (must be finite and >= 0)"));
         }
+        self.add_fog_with(
+            Vec3A::splat(density),
+            albedo,
+            crate::media::Phase::Isotropic,
+        )
+    }
+
+    /// [`Scene::add_fog`] with an extinction per channel (`sigma_t`, per
+    /// scene unit) and a phase function (a scene file's `[[medium]] type =
+    /// "fog"`).
+    pub fn add_fog_with(
+        &mut self,
+        sigma_t: Vec3A,
+        albedo: Vec3A,
+        phase: crate::media::Phase,
+    ) -> Result<(), String> {
+        use crate::media::{Field, FieldValues, Heterogeneous, Medium};
+        if !(sigma_t.is_finite() && sigma_t.min_element() >= 0.0) {
+            return Err(format!("fog density {sigma_t} (must be finite and >= 0)"));
+        }
+        // The densest channel is the scale (a grey fog's field is 1).
+        let density = sigma_t.max_element();
+        let relative = if density > 0.0 {
+            sigma_t / density
+        } else {
+            Vec3A::ONE
+        };
         if !(albedo.is_finite() && albedo.min_element() >= 0.0 && albedo.max_element() <= 1.0) {
             return Err(format!(
                 "fog colour {albedo} (each channel is an albedo in [0, 1])"
@@ -647,10 +673,10 @@ impl Scene {
         let everywhere = |v: Vec3A| Field::new(FieldValues::Constant(v), to_world);
         self.media
             .add_fog(Medium::Heterogeneous(Box::new(Heterogeneous {
-                sigma_t: everywhere(Vec3A::ONE),
+                sigma_t: everywhere(relative),
                 albedo: everywhere(albedo),
                 scale: density,
-                phase: Phase::Isotropic,
+                phase,
                 sample_emitters: true,
             })));
         Ok(())

@@ -13,7 +13,9 @@ use super::camera::{ShotCamera, camera};
 use super::error::{ShotError, check, invalid};
 use super::materials::{file_material, override_material};
 use super::model::{load_model, placement};
-use super::schema::{AnimationKey, EnvironmentSection, LightSection, ShotFile, parse};
+use super::schema::{
+    AnimationKey, EnvironmentSection, LightSection, MediumSection, Scale, ShotFile, parse,
+};
 use super::settings::{ShotSettings, settings};
 use crate::camera::SceneCamera;
 use crate::geometry::triangle::Triangle;
@@ -21,6 +23,8 @@ use crate::lights::Light;
 use crate::load::error::LoadError;
 use crate::load::gltf::AnimationOptions;
 use crate::materials::surface::SurfaceMaterial;
+use crate::media::Phase;
+use crate::media::phase::MAX_G;
 use crate::scene::{PointLight, SceneParts};
 
 /// A scene file read and composed into scene parts.
@@ -160,6 +164,9 @@ pub fn compose_posed(
         )
         .into());
     }
+    let (fog, mut inside) = media_sections(path, &file.media)?;
+    let mut settings = settings;
+    settings.fog = fog;
     let mut all = SceneParts {
         two_sided: true,
         ..SceneParts::default()
@@ -285,6 +292,10 @@ pub fn compose_posed(
         // paths are in scene units, so after the placement).
         crate::load::volumes::add_volume_media(&mut model.parts)
             .map_err(|e| invalid(path, format!("{what}: {e}")))?;
+        if let Some(medium) = inside.remove(&name) {
+            crate::load::volumes::fill(&mut model.parts, medium)
+                .map_err(|e| invalid(path, format!("{what}: [[medium]] inside it: {e}")))?;
+        }
         if let Some(mut c) = model.lab_camera.take()
             && index == 0
         {
@@ -299,6 +310,13 @@ pub fn compose_posed(
         let start = all.cameras.len();
         model_cameras.push((name, start..start + model.parts.cameras.len()));
         all.append(model.parts);
+    }
+    if let Some(model) = inside.keys().next() {
+        return Err(invalid(
+            path,
+            format!("[[medium]] inside '{model}': no [[model]] of that name"),
+        )
+        .into());
     }
     let mut has_lights = !all.lights.is_empty();
     for (i, l) in file.lights.iter().enumerate() {
@@ -517,6 +535,81 @@ pub fn compose_posed(
         variant: variant.map(str::to_string),
         animations,
     })
+}
+
+/// The `[[medium]]` sections checked: the fog (at most one: extinction,
+/// albedo, phase function) and the media inside models, by model name.
+#[allow(clippy::type_complexity)]
+fn media_sections(
+    path: &Path,
+    sections: &[MediumSection],
+) -> Result<
+    (
+        Option<(Vec3A, Vec3A, Phase)>,
+        BTreeMap<String, crate::media::Medium>,
+    ),
+    ShotError,
+> {
+    let mut fog = None;
+    let mut inside = BTreeMap::new();
+    for (i, m) in sections.iter().enumerate() {
+        let what = format!("[[medium]] {}", i + 1);
+        let (density, color, anisotropy) = match m {
+            MediumSection::Fog {
+                density,
+                color,
+                anisotropy,
+            }
+            | MediumSection::Inside {
+                density,
+                color,
+                anisotropy,
+                ..
+            } => (density, color, anisotropy),
+        };
+        let sigma_t = match density {
+            Scale::Uniform(d) => Vec3A::splat(*d),
+            Scale::PerAxis(d) => Vec3A::from(*d),
+        };
+        check(path, &format!("{what} density"), &sigma_t.to_array(), true)?;
+        let albedo = color.unwrap_or([1.0; 3]);
+        if !albedo.iter().all(|a| (0.0..=1.0).contains(a)) {
+            return Err(invalid(
+                path,
+                format!("{what} color = {albedo:?}: each channel is an albedo from 0 to 1"),
+            ));
+        }
+        let g = anisotropy.unwrap_or(0.0);
+        if !(-MAX_G..=MAX_G).contains(&g) {
+            return Err(invalid(
+                path,
+                format!("{what} anisotropy = {g}: expected -{MAX_G} to {MAX_G}"),
+            ));
+        }
+        let phase = if g == 0.0 {
+            Phase::Isotropic
+        } else {
+            Phase::HenyeyGreenstein { g }
+        };
+        match m {
+            MediumSection::Fog { .. } => {
+                if fog.is_some() {
+                    return Err(invalid(path, format!("{what}: a second fog")));
+                }
+                fog = Some((sigma_t, Vec3A::from(albedo), phase));
+            }
+            MediumSection::Inside { model, .. } => {
+                let medium = crate::media::Medium::homogeneous(sigma_t, Vec3A::from(albedo), phase);
+                if inside.insert(model.clone(), medium).is_some() {
+                    return Err(invalid(
+                        path,
+                        format!("{what}: a second medium inside '{model}'"),
+                    ));
+                }
+            }
+        }
+    }
+    Ok((fog, inside))
 }
 
 #[cfg(test)]

@@ -29,6 +29,36 @@ pub struct ShotFile {
     /// `[[light]]`.
     #[serde(default, rename = "light")]
     pub lights: Vec<LightSection>,
+    /// `[[medium]]`: participating media.
+    #[serde(default, rename = "medium")]
+    pub media: Vec<MediumSection>,
+}
+
+/// `[[medium]]`, by `type`: what fills space (see docs/media.md).
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
+pub enum MediumSection {
+    /// Fog wherever no other medium is, within the scene's bounds (as
+    /// `--fog`).
+    Fog {
+        /// Extinction per scene unit: one number or one per channel.
+        density: Scale,
+        /// The single-scattering albedo (default white).
+        color: Option<[f32; 3]>,
+        /// The Henyey–Greenstein mean cosine (default 0: isotropic).
+        anisotropy: Option<f32>,
+    },
+    /// A homogeneous medium filling a model (whose meshes must be closed).
+    Inside {
+        /// The `[[model]]`'s name.
+        model: String,
+        /// Extinction per scene unit: one number or one per channel.
+        density: Scale,
+        /// The single-scattering albedo (default white).
+        color: Option<[f32; 3]>,
+        /// The Henyey–Greenstein mean cosine (default 0: isotropic).
+        anisotropy: Option<f32>,
+    },
 }
 
 /// `[render]`: each key optional; the command line's options win.

@@ -41,6 +41,9 @@ pub struct ShotSettings {
     pub at: Option<f32>,
     /// Frames per second of `--frames`.
     pub fps: Option<f64>,
+    /// A `[[medium]] type = "fog"` (checked): extinction per scene unit,
+    /// albedo and phase function ([`crate::Scene::add_fog_with`]).
+    pub fog: Option<(glam::Vec3A, glam::Vec3A, crate::media::Phase)>,
 }
 
 /// Reads only a scene file's `[render]` settings (checked), without loading
@@ -143,6 +146,7 @@ pub(super) fn settings(path: &Path, r: &RenderSection) -> Result<ShotSettings, S
         integrator,
         max_depth: r.max_depth,
         filter: None,
+        fog: None,
         tonemap,
         exposure: r.exposure,
         denoise: r.denoise,
