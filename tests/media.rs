@@ -425,32 +425,12 @@ fn fog_fills_the_scene_bounds() {
 /// an index-matched boundary) under a uniform sky of radiance 1, seen from
 /// +z by a 16 × 16 camera, with `extra` sections.
 fn cube_scene(dir: &Path, extra: &str) -> std::path::PathBuf {
-    use builder::{Gltf, U32};
+    use builder::Gltf;
     use serde_json::json;
     let mut g = Gltf::new();
     let m = g.material(json!({ "pbrMetallicRoughness": { "metallicFactor": 0 } }));
-    let corners: Vec<[f32; 3]> = (0..8)
-        .map(|i| {
-            [(i & 1) as f32, ((i >> 1) & 1) as f32, ((i >> 2) & 1) as f32].map(|c| 2.0 * c - 1.0)
-        })
-        .collect();
-    let pos = g.floats(&corners);
-    let faces: [[u32; 4]; 6] = [
-        [0, 2, 3, 1],
-        [4, 5, 7, 6],
-        [0, 1, 5, 4],
-        [2, 6, 7, 3],
-        [0, 4, 6, 2],
-        [1, 3, 7, 5],
-    ];
-    let idx: Vec<u32> = faces
-        .iter()
-        .flat_map(|f| [f[0], f[1], f[2], f[0], f[2], f[3]])
-        .collect();
-    let idx = g.indices(U32, &idx);
-    let mesh = g.mesh(vec![
-        json!({ "attributes": { "POSITION": pos }, "indices": idx, "material": m }),
-    ]);
+    let cube = builder::cuboid(&mut g, [-1.0; 3], [1.0; 3], m);
+    let mesh = g.mesh(vec![cube]);
     g.root(json!({ "mesh": mesh }));
     g.write(dir, "cube.gltf");
     let path = dir.join("cube.toml");

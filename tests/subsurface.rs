@@ -25,7 +25,7 @@ mod builder;
 
 use std::path::Path;
 
-use builder::{Gltf, U32, load_with};
+use builder::{Gltf, U32, cuboid, load_with};
 use glam::Vec3A;
 use raylab::Ray;
 use raylab::integrators::path::{PathOptions, radiance};
@@ -33,34 +33,6 @@ use raylab::load::{DefaultLight, EnvSource, EnvironmentOptions, LoadOptions, Loa
 use raylab::media::albedo::{half_space_reflectance, multiple_scattering_albedo};
 use raylab::sampling::sampler::Rng;
 use serde_json::{Value, json};
-
-/// An axis-aligned box from `lo` to `hi`, outward-facing.
-fn cuboid(g: &mut Gltf, lo: [f32; 3], hi: [f32; 3], material: usize) -> Value {
-    let p = |i: usize| {
-        [
-            if i & 1 == 0 { lo[0] } else { hi[0] },
-            if i & 2 == 0 { lo[1] } else { hi[1] },
-            if i & 4 == 0 { lo[2] } else { hi[2] },
-        ]
-    };
-    let corners: Vec<[f32; 3]> = (0..8).map(p).collect();
-    let pos = g.floats(&corners);
-    // Counter-clockwise seen from outside.
-    let faces: [[u32; 4]; 6] = [
-        [0, 2, 3, 1], // -z
-        [4, 5, 7, 6], // +z
-        [0, 1, 5, 4], // -y
-        [2, 6, 7, 3], // +y
-        [0, 4, 6, 2], // -x
-        [1, 3, 7, 5], // +x
-    ];
-    let idx: Vec<u32> = faces
-        .iter()
-        .flat_map(|f| [f[0], f[1], f[2], f[0], f[2], f[3]])
-        .collect();
-    let idx = g.indices(U32, &idx);
-    json!({ "attributes": { "POSITION": pos }, "indices": idx, "material": material })
-}
 
 /// A subsurface material: no specular layer, all of the diffuse part
 /// transmitted, a volume of extinction `sigma_t` (per unit length) that

@@ -6,6 +6,7 @@
 
 use std::path::{Path, PathBuf};
 
+use glam::Vec3A;
 use raylab::load::vdb::{VdbGrid, parse_vdb, read_vdb};
 use raylab::memory::{Ledger, MemoryBudget};
 
@@ -247,5 +248,103 @@ fn uncompressed_and_zipped_files_read_alike() {
         for n in (0..file.len()).step_by(37) {
             assert!(parse_vdb(&file[..n], None).is_err());
         }
+    }
+}
+
+/// A scene file's `[[medium]] type = "vdb"`: the grid, placed by the
+/// file's transform then the section's, in an invisible box. Absorbing only
+/// (colour 0), a path along a ray through it gets through with probability
+/// `exp(−density ∫ grid)`: the mean of 20,000 paths against the integral
+/// along the ray by the midpoint rule on the same grid (4 standard errors).
+/// Bad sections are one line naming the scene file.
+#[test]
+fn a_scene_file_places_a_vdb_volume() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = fixture("puff.vdb");
+    let (density, scale, translate) = (4.0f32, 2.0f32, glam::Vec3::new(0.5, -0.25, 0.0));
+    let toml = |extra: &str| {
+        format!(
+            "[environment]\ncolor = [1, 1, 1]\n\n[camera]\nposition = [0, 0, 8]\ntarget = [0, 0, 0]\n\n\
+             [[medium]]\ntype = \"vdb\"\nfile = {:?}\ndensity = {density}\ncolor = [0, 0, 0]\n\
+             scale = {scale}\ntranslate = [{}, {}, {}]\n{extra}",
+            file.display().to_string(),
+            translate.x,
+            translate.y,
+            translate.z
+        )
+    };
+    let path = dir.path().join("puff.toml");
+    std::fs::write(&path, toml("")).unwrap();
+    let loaded = raylab::load::load(path.to_str().unwrap(), &Default::default())
+        .unwrap_or_else(|e| panic!("{e}"));
+    // The same field, placed by hand.
+    let vdb = read_vdb(&file, None, &raylab::memory::Ledger::unlimited()).unwrap();
+    let to_world = glam::Affine3A::from_translation(translate)
+        * glam::Affine3A::from_scale(glam::Vec3::splat(scale));
+    let field = raylab::media::Field::sparse(vdb.grid, to_world * vdb.index_to_world);
+    let (lo, hi) = field.bounds;
+    let centre = (lo + hi) * 0.5;
+    let opts = raylab::integrators::path::PathOptions::default();
+    for (k, offset) in [
+        (0, Vec3A::ZERO),
+        (1, (hi - lo) * Vec3A::new(0.15, -0.1, 0.0)),
+    ] {
+        let origin = centre + offset + Vec3A::new(0.0, 0.0, 10.0);
+        let ray = raylab::Ray::new(origin, Vec3A::NEG_Z);
+        // The optical depth by the midpoint rule, 20,000 steps over 20 units.
+        let steps = 20_000;
+        let tau: f64 = (0..steps)
+            .map(|i| {
+                let t = 20.0 * (i as f32 + 0.5) / steps as f32;
+                f64::from(field.eval(origin + Vec3A::NEG_Z * t).x) * 20.0 / steps as f64
+            })
+            .sum::<f64>()
+            * f64::from(density);
+        let want = (-tau).exp();
+        let n = 20_000u64;
+        let mut rays = 0;
+        let got = (0..n)
+            .map(|i| {
+                let mut rng = raylab::sampling::sampler::Rng::new(i, 5 + k);
+                let l = raylab::integrators::path::radiance(
+                    &loaded.scene,
+                    &ray,
+                    &opts,
+                    &mut rng,
+                    &mut rays,
+                );
+                f64::from(l.x)
+            })
+            .sum::<f64>()
+            / n as f64;
+        let se = (want * (1.0 - want) / n as f64).sqrt();
+        eprintln!("ray {k}: through the puff {got}, exp(-tau) {want} (tau {tau})");
+        assert!(tau > 0.05, "the ray misses the puff (tau {tau})");
+        assert!(
+            (got - want).abs() < 4.0 * se + 0.003,
+            "ray {k}: {got} vs {want}"
+        );
+    }
+    for (extra, says) in [
+        ("grid = \"temperature\"\n", "temperature"),
+        ("scale = 0\n", "scale"),
+    ] {
+        let text = toml(extra);
+        // A second `scale` key replaces the first: write the bad one alone.
+        let text = if extra.starts_with("scale") {
+            text.replace(&format!("scale = {scale}\n"), "")
+        } else {
+            text
+        };
+        std::fs::write(&path, text).unwrap();
+        let err = raylab::load::load(path.to_str().unwrap(), &Default::default())
+            .err()
+            .map(|e| e.to_string())
+            .unwrap_or_else(|| panic!("{extra} loaded"));
+        assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+        assert!(
+            err.contains("puff.toml") && err.contains(says),
+            "{extra}: {err}"
+        );
     }
 }

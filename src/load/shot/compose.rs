@@ -14,7 +14,8 @@ use super::error::{ShotError, check, invalid};
 use super::materials::{file_material, override_material};
 use super::model::{load_model, placement};
 use super::schema::{
-    AnimationKey, EnvironmentSection, LightSection, MediumSection, Scale, ShotFile, parse,
+    AnimationKey, EnvironmentSection, LightSection, MediumSection, ModelSection, Scale, ShotFile,
+    parse,
 };
 use super::settings::{ShotSettings, settings};
 use crate::camera::SceneCamera;
@@ -157,14 +158,19 @@ pub fn compose_posed(
             );
         }
     }
-    if file.models.is_empty() && file.lights.is_empty() {
+    let volumes = (file.media.iter()).any(|m| matches!(m, MediumSection::Vdb { .. }));
+    if file.models.is_empty() && file.lights.is_empty() && !volumes {
         return Err(invalid(
             path,
-            "no [[model]] and no [[light]]: nothing to render".into(),
+            "no [[model]], no [[light]] and no .vdb [[medium]]: nothing to render".into(),
         )
         .into());
     }
-    let (fog, mut inside) = media_sections(path, &file.media)?;
+    let MediaSections {
+        fog,
+        mut inside,
+        vdbs,
+    } = media_sections(path, &file.media)?;
     let mut settings = settings;
     settings.fog = fog;
     let mut all = SceneParts {
@@ -310,6 +316,9 @@ pub fn compose_posed(
         let start = all.cameras.len();
         model_cameras.push((name, start..start + model.parts.cameras.len()));
         all.append(model.parts);
+    }
+    for v in &vdbs {
+        all.append(vdb_parts(path, &base, v, ledger)?);
     }
     if let Some(model) = inside.keys().next() {
         return Err(invalid(
@@ -537,24 +546,15 @@ pub fn compose_posed(
     })
 }
 
-/// The `[[medium]]` sections checked: the fog (at most one: extinction,
-/// albedo, phase function) and the media inside models, by model name.
-#[allow(clippy::type_complexity)]
-fn media_sections(
-    path: &Path,
-    sections: &[MediumSection],
-) -> Result<
-    (
-        Option<(Vec3A, Vec3A, Phase)>,
-        BTreeMap<String, crate::media::Medium>,
-    ),
-    ShotError,
-> {
+/// The `[[medium]]` sections checked (at most one fog, one medium inside
+/// a model).
+fn media_sections(path: &Path, sections: &[MediumSection]) -> Result<MediaSections, ShotError> {
     let mut fog = None;
     let mut inside = BTreeMap::new();
+    let mut vdbs = Vec::new();
     for (i, m) in sections.iter().enumerate() {
         let what = format!("[[medium]] {}", i + 1);
-        let (density, color, anisotropy) = match m {
+        let (sigma_t, color, anisotropy) = match m {
             MediumSection::Fog {
                 density,
                 color,
@@ -565,11 +565,20 @@ fn media_sections(
                 color,
                 anisotropy,
                 ..
-            } => (density, color, anisotropy),
-        };
-        let sigma_t = match density {
-            Scale::Uniform(d) => Vec3A::splat(*d),
-            Scale::PerAxis(d) => Vec3A::from(*d),
+            } => (
+                match density {
+                    Scale::Uniform(d) => Vec3A::splat(*d),
+                    Scale::PerAxis(d) => Vec3A::from(*d),
+                },
+                color,
+                anisotropy,
+            ),
+            MediumSection::Vdb {
+                density,
+                color,
+                anisotropy,
+                ..
+            } => (Vec3A::splat(*density), color, anisotropy),
         };
         check(path, &format!("{what} density"), &sigma_t.to_array(), true)?;
         let albedo = color.unwrap_or([1.0; 3]);
@@ -598,6 +607,31 @@ fn media_sections(
                 }
                 fog = Some((sigma_t, Vec3A::from(albedo), phase));
             }
+            MediumSection::Vdb {
+                file,
+                grid,
+                scale,
+                rotate,
+                translate,
+                ..
+            } => {
+                let placed = ModelSection {
+                    scale: scale.clone(),
+                    rotate: *rotate,
+                    translate: *translate,
+                    ..ModelSection::default()
+                };
+                let to_world = placement(path, &placed, &what, &SceneParts::default())?;
+                vdbs.push(VdbMedium {
+                    what,
+                    file: file.clone(),
+                    grid: grid.clone(),
+                    density: sigma_t.x,
+                    albedo: Vec3A::from(albedo),
+                    phase,
+                    to_world,
+                });
+            }
             MediumSection::Inside { model, .. } => {
                 let medium = crate::media::Medium::homogeneous(sigma_t, Vec3A::from(albedo), phase);
                 if inside.insert(model.clone(), medium).is_some() {
@@ -609,7 +643,111 @@ fn media_sections(
             }
         }
     }
-    Ok((fog, inside))
+    Ok(MediaSections { fog, inside, vdbs })
+}
+
+/// A `[[medium]] type = "vdb"`, checked and placed.
+struct VdbMedium {
+    /// `[[medium]] N`, for messages.
+    what: String,
+    file: std::path::PathBuf,
+    grid: Option<String>,
+    density: f32,
+    albedo: Vec3A,
+    phase: Phase,
+    to_world: glam::Affine3A,
+}
+
+/// The `[[medium]]` sections checked.
+struct MediaSections {
+    /// The fog: extinction, albedo, phase function.
+    fog: Option<(Vec3A, Vec3A, Phase)>,
+    /// The media inside models, by model name.
+    inside: BTreeMap<String, crate::media::Medium>,
+    /// The `.vdb` volumes.
+    vdbs: Vec<VdbMedium>,
+}
+
+/// A `.vdb` volume as scene parts: the grid's medium inside an
+/// index-matched box around the grid's world bounds.
+fn vdb_parts(
+    path: &Path,
+    base: &Path,
+    v: &VdbMedium,
+    ledger: &crate::memory::Ledger,
+) -> Result<SceneParts, ShotError> {
+    use crate::materials::Material;
+    use crate::media::{Field, FieldValues, Heterogeneous, Medium};
+    use crate::scene::{MediumInterface, SceneMedia};
+    let vdb = crate::load::vdb::read_vdb(&base.join(&v.file), v.grid.as_deref(), ledger)
+        .map_err(|e| invalid(path, format!("{}: {e}", v.what)))?;
+    let sigma_t = Field::sparse(vdb.grid, v.to_world * vdb.index_to_world);
+    let (lo, hi) = sigma_t.bounds;
+    if !(lo.is_finite() && hi.is_finite() && lo.cmplt(hi).all()) {
+        return Err(invalid(
+            path,
+            format!(
+                "{}: the grid has no extent (an empty grid, or a zero scale)",
+                v.what
+            ),
+        ));
+    }
+    let albedo = Field::new(FieldValues::Constant(v.albedo), glam::Affine3A::IDENTITY);
+    let medium = Medium::Heterogeneous(Box::new(Heterogeneous {
+        sigma_t,
+        albedo,
+        scale: v.density,
+        phase: v.phase,
+        sample_emitters: true,
+    }));
+    medium
+        .check()
+        .map_err(|e| invalid(path, format!("{}: {e}", v.what)))?;
+    // The box: 12 triangles facing out.
+    let corner = |i: usize| {
+        Vec3A::new(
+            if i & 1 == 0 { lo.x } else { hi.x },
+            if i & 2 == 0 { lo.y } else { hi.y },
+            if i & 4 == 0 { lo.z } else { hi.z },
+        )
+    };
+    let faces: [[usize; 4]; 6] = [
+        [0, 2, 3, 1],
+        [4, 5, 7, 6],
+        [0, 1, 5, 4],
+        [2, 6, 7, 3],
+        [0, 4, 6, 2],
+        [1, 3, 7, 5],
+    ];
+    let mut triangles = Vec::new();
+    for f in faces {
+        for [a, b, c] in [[f[0], f[1], f[2]], [f[0], f[2], f[3]]] {
+            triangles.push(Triangle::new(corner(a), corner(b), corner(c)));
+        }
+    }
+    let normals = triangles
+        .iter()
+        .map(|t| (t.v[1] - t.v[0]).cross(t.v[2] - t.v[0]).normalize())
+        .collect();
+    let mut boundary = SurfaceMaterial::diffuse(Vec3A::ZERO);
+    boundary.name = format!("{} boundary", v.what);
+    boundary.kind =
+        crate::materials::surface::MaterialKind::Fixed(Material::Dielectric { ior: 1.0 });
+    Ok(SceneParts {
+        material_of: vec![0; triangles.len()],
+        triangles,
+        normals,
+        materials: vec![boundary],
+        media: SceneMedia {
+            media: vec![medium],
+            interfaces: vec![MediumInterface {
+                interior: Some(0),
+                exterior: None,
+            }],
+            camera: None,
+        },
+        ..SceneParts::default()
+    })
 }
 
 #[cfg(test)]

@@ -48,6 +48,26 @@ pub enum MediumSection {
         /// The Henyey–Greenstein mean cosine (default 0: isotropic).
         anisotropy: Option<f32>,
     },
+    /// An OpenVDB file's float grid (the extinction, times `density`) in
+    /// an invisible box around it, placed as a model is.
+    Vdb {
+        /// The `.vdb` file (relative to the scene file).
+        file: PathBuf,
+        /// The grid's name (default: the file's first float grid).
+        grid: Option<String>,
+        /// Multiplies the grid's values into the extinction per scene unit.
+        density: f32,
+        /// The single-scattering albedo (default white).
+        color: Option<[f32; 3]>,
+        /// The Henyey–Greenstein mean cosine (default 0: isotropic).
+        anisotropy: Option<f32>,
+        /// Scale (after the file's own transform).
+        scale: Option<Scale>,
+        /// Then rotate by these degrees about x, then y, then z.
+        rotate: Option<[f32; 3]>,
+        /// Then move.
+        translate: Option<[f32; 3]>,
+    },
     /// A homogeneous medium filling a model (whose meshes must be closed).
     Inside {
         /// The `[[model]]`'s name.
