@@ -59,9 +59,10 @@ pub(crate) fn add_volume_media(parts: &mut SceneParts) -> Result<(), String> {
         scatters.get(m as usize).copied().unwrap_or(false)
     })?;
     let media = &mut parts.media;
-    if media.interfaces.is_empty() {
-        media.interfaces = vec![MediumInterface::default(); parts.materials.len()];
-    }
+    // (Overrides may have added materials since the interfaces were made.)
+    media
+        .interfaces
+        .resize(parts.materials.len(), MediumInterface::default());
     for (i, m) in parts.materials.iter().enumerate() {
         if media.interfaces[i].interior.is_some() {
             continue;
@@ -92,9 +93,10 @@ pub(crate) fn fill(parts: &mut SceneParts, medium: Medium) -> Result<(), String>
     }
     check_closed(parts, |_| true)?;
     let media = &mut parts.media;
-    if media.interfaces.is_empty() {
-        media.interfaces = vec![MediumInterface::default(); parts.materials.len()];
-    }
+    // (Overrides may have added materials since the interfaces were made.)
+    media
+        .interfaces
+        .resize(parts.materials.len(), MediumInterface::default());
     let index = media.media.len() as u32;
     for (i, f) in media.interfaces.iter_mut().enumerate() {
         if f.interior.is_some() {

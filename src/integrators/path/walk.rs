@@ -30,8 +30,9 @@ use crate::media::Homogeneous;
 use crate::scene::Scene;
 
 /// The most collisions a walk makes; one that would make more is lost (its
-/// light is missing from the image: at an albedo of 1 in an object 10 mean
-/// free paths across, fewer than 1 walk in 10⁴ is that long).
+/// light is missing from the image). The white furnace of
+/// `tests/subsurface.rs`, a box 8 mean free paths across that absorbs
+/// nothing, loses no measurable light (0.9998 ± 0.0013 of the sky).
 pub const MAX_WALK_STEPS: u32 = 1024;
 
 /// Collisions before Russian roulette may end a walk.
