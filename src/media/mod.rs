@@ -213,13 +213,7 @@ impl Medium {
             rho.to_array()
                 .map(|r| albedo::single_scattering_albedo(r, g)),
         );
-        let phase = if g == 0.0 {
-            Phase::Isotropic
-        } else {
-            Phase::HenyeyGreenstein {
-                g: g.clamp(-phase::MAX_G, phase::MAX_G),
-            }
-        };
+        let phase = Phase::of_mean_cosine(g);
         Medium::Homogeneous(Homogeneous {
             sigma_t,
             sigma_s: alpha * sigma_t,

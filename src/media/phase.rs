@@ -33,6 +33,18 @@ pub enum Phase {
 pub const MAX_G: f32 = 0.999;
 
 impl Phase {
+    /// The phase function of mean cosine `g`: isotropic for 0, else
+    /// Henyey–Greenstein (`g` clamped to [`MAX_G`]).
+    pub fn of_mean_cosine(g: f32) -> Phase {
+        if g == 0.0 {
+            Phase::Isotropic
+        } else {
+            Phase::HenyeyGreenstein {
+                g: g.clamp(-MAX_G, MAX_G),
+            }
+        }
+    }
+
     /// The phase function's value for a path arriving along `d_in` and
     /// leaving along `d_out` (both unit), which is also the pdf of
     /// [`Phase::sample`] choosing `d_out`.

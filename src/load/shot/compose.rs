@@ -595,11 +595,7 @@ fn media_sections(path: &Path, sections: &[MediumSection]) -> Result<MediaSectio
                 format!("{what} anisotropy = {g}: expected -{MAX_G} to {MAX_G}"),
             ));
         }
-        let phase = if g == 0.0 {
-            Phase::Isotropic
-        } else {
-            Phase::HenyeyGreenstein { g }
-        };
+        let phase = Phase::of_mean_cosine(g);
         match m {
             MediumSection::Fog { .. } => {
                 if fog.is_some() {
