@@ -136,6 +136,7 @@ fn spot_light_samples_follow_the_cone_falloff() {
         let Some(LightSample::Point {
             position,
             intensity: i,
+            ..
         }) = sample
         else {
             panic!("θ = {theta}: {sample:?}");
@@ -251,6 +252,7 @@ fn light_samples_are_unbiased_over_the_light_choice() {
                     Some(LightSample::Point {
                         position,
                         intensity,
+                        ..
                     }) => from_point(position, intensity),
                     Some(LightSample::Directional {
                         to_light,

@@ -203,18 +203,7 @@ fn a_non_absorbing_medium_under_a_uniform_sky_is_invisible() {
 fn a_constant_grid_renders_as_a_homogeneous_medium() {
     let dir = tempfile::tempdir().unwrap();
     // A 2×2×2 grid of one channel, all 0.8 (× scale 2.5 = 2).
-    let mut vol = b"VOL".to_vec();
-    vol.push(3);
-    for v in [1i32, 2, 2, 2, 1] {
-        vol.extend_from_slice(&v.to_le_bytes());
-    }
-    for v in [0.0f32, 0.0, 0.0, 1.0, 1.0, 1.0] {
-        vol.extend_from_slice(&v.to_le_bytes());
-    }
-    for _ in 0..8 {
-        vol.extend_from_slice(&0.8f32.to_le_bytes());
-    }
-    std::fs::write(dir.path().join("flat.vol"), vol).unwrap();
+    std::fs::write(dir.path().join("flat.vol"), common::constant_vol(0.8)).unwrap();
     let homogeneous = r#"<medium type="homogeneous" id="m"><float name="sigma_t" value="2"/><rgb name="albedo" value="0.9, 0.6, 0.3"/></medium>"#;
     let grid = r#"<medium type="heterogeneous" id="m">
         <float name="scale" value="2.5"/>

@@ -31,6 +31,10 @@ Scenes (glTF 2.0, read by both renderers under docs/scene-conventions.md):
                  glass tubes and a glass pane on a table with a high-frequency mosaic texture, two
                  point lights; made to fool a denoiser's blend, issue 42; tools/make_glass_lamps.py),
                  --size.
+  showcase-fog   the showcase in fog (issue 44): raylab `--fog 0.15` (extinction 0.15 per unit,
+                 all scattering, isotropic, over the meshes' bounding box); Cycles through
+                 tools/cycles_fog.py, a Volume Scatter box of density 0.15 over the same box
+                 (volume bounces as many as the others); not with --adaptive.
 
 Renderers, same size, same threads (--threads, default 2), same seeds:
   raylab  `raylab render SCENE --spp N --threads T --seed S --width W --height H
@@ -149,17 +153,20 @@ EXTRA_PIP = ("flip-evaluator", "matplotlib")
 REEXEC = "COMPARE_CYCLES_REEXEC"
 PROG = "compare_cycles"
 
-# name: (glTF file in the project, environment map under assets/ or None, rotation, box?)
+# name: (glTF file in the project, environment map under assets/ or None, rotation, box?,
+#        fog density or None)
 SCENES = {
     "helmet-venice": ("scenes/helmet-venice/helmet-venice.gltf",
-                      "envmaps/venice_sunset_1k.hdr", 200.0, False),
-    "showcase": ("scenes/showcase/showcase.gltf", None, 0.0, False),
-    "cornell-glass": ("scenes/cornell-glass/cornell-glass.gltf", None, 0.0, True),
-    "street": ("scenes/street/street.gltf", None, 0.0, False),
-    "glass-lamps": ("scenes/glass-lamps/glass-lamps.gltf", None, 0.0, False),
+                      "envmaps/venice_sunset_1k.hdr", 200.0, False, None),
+    "showcase": ("scenes/showcase/showcase.gltf", None, 0.0, False, None),
+    "cornell-glass": ("scenes/cornell-glass/cornell-glass.gltf", None, 0.0, True, None),
+    "street": ("scenes/street/street.gltf", None, 0.0, False, None),
+    "glass-lamps": ("scenes/glass-lamps/glass-lamps.gltf", None, 0.0, False, None),
+    "showcase-fog": ("scenes/showcase/showcase.gltf", None, 0.0, False, 0.15),
 }
 REF_SEED = 1 << 20
 ADAPTIVE_WRAPPER = os.path.join(ROOT, "tools", "cycles_adaptive.py")
+FOG_WRAPPER = os.path.join(ROOT, "tools", "cycles_fog.py")
 # --curve: a denoised error at most this fraction above the noisy one is a tie, not worse.
 TIE = 0.002
 
@@ -420,13 +427,14 @@ def run(cmd, timeout, what):
 
 class Scene:
     def __init__(self, name, args):
-        rel, env, rotate, box = SCENES[name]
-        self.name, self.box = name, box
+        rel, env, rotate, box, fog = SCENES[name]
+        self.name, self.box, self.fog = name, box, fog
         self.file = os.path.join(ROOT, rel)
         if not os.path.isfile(self.file):
             hint = {"cornell-glass": " (python3 tools/make_cornell_glass.py makes it)",
                     "helmet-venice": " (python3 tools/make_helmet_venice.py makes it)",
                     "showcase": " (python3 tools/make_showcase.py makes it)",
+                    "showcase-fog": " (python3 tools/make_showcase.py makes it)",
                     "street": " (python3 tools/make_street.py makes it)",
                     "glass-lamps": " (python3 tools/make_glass_lamps.py makes it)"}[name]
             raise Fail(f"scene file {rel} not found{hint}")
@@ -450,6 +458,8 @@ class Scene:
                     out.append(os.path.normpath(os.path.join(base, unquote(uri))))
         if self.env:
             out.append(self.env)
+        if self.fog is not None:
+            out.append(FOG_WRAPPER)
         return out
 
     def key(self, renderer_id, spp):
@@ -457,12 +467,17 @@ class Scene:
         for p in self.files():
             with open(p, "rb") as f:
                 h.update(hashlib.sha256(f.read()).digest())
-        h.update(json.dumps([renderer_id, self.rotate, self.width, self.height, spp,
-                             REF_SEED]).encode())
+        key = [renderer_id, self.rotate, self.width, self.height, spp, REF_SEED]
+        if self.fog is not None:
+            key.append(self.fog)
+        h.update(json.dumps(key).encode())
         return h.hexdigest()[:12]
 
     def env_args(self):
         return ["--env", self.env, "--env-rotate", f"{self.rotate:g}"] if self.env else []
+
+    def fog_args(self):
+        return ["--fog", f"{self.fog:g}"] if self.fog is not None else []
 
 
 class Result:
@@ -508,7 +523,7 @@ class Raylab:
         out = out or os.path.join(self.tmp, "raylab.exr")
         cmd = [self.binary, "render", scene.file, "--spp", str(spp), "--threads", str(self.threads),
                "--seed", str(seed), "--width", str(scene.width), "--height", str(scene.height),
-               "--default-light", "off", *scene.env_args(), "-o", out]
+               "--default-light", "off", *scene.env_args(), *scene.fog_args(), "-o", out]
         if denoise:
             cmd.append("--denoise")
         if noise_threshold is not None:
@@ -576,11 +591,17 @@ class Cycles:
         out = out or os.path.join(self.tmp, "cycles.exr")
         script = [self.script]
         if noise_threshold is not None:
+            if scene.fog is not None:
+                raise Fail(f"{scene.name}: --adaptive does not take the fog scene")
             script = [ADAPTIVE_WRAPPER, "--render-gltf", self.script,
                       "--noise-threshold", f"{noise_threshold:g}"]
+        elif scene.fog is not None:
+            # (The wrapper finds render_gltf.py by RAYLAB_RENDER_GLTF.)
+            os.environ["RAYLAB_RENDER_GLTF"] = self.script
+            script = [FOG_WRAPPER]
         cmd = [self.py, *script, scene.file, "-o", out, "--width", str(scene.width),
                "--height", str(scene.height), "--spp", str(spp), "--threads", str(self.threads),
-               "--seed", str(seed), "--quiet", *scene.env_args()]
+               "--seed", str(seed), "--quiet", *scene.env_args(), *scene.fog_args()]
         if denoise:
             cmd.append("--denoise")
         what = (f"Cycles {scene.name} {spp} spp{' --denoise' if denoise else ''}"
@@ -1290,8 +1311,10 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0],
                                  formatter_class=argparse.RawDescriptionHelpFormatter,
                                  epilog="See the module docstring (the top of this file) for details.")
-    ap.add_argument("--scenes", type=parse_scenes, default=list(SCENES),
-                    help=f"comma-separated, from {', '.join(SCENES)} (default all)")
+    ap.add_argument("--scenes", type=parse_scenes,
+                    default=[s for s, v in SCENES.items() if v[4] is None],
+                    help=f"comma-separated, from {', '.join(SCENES)} (default all but the fog "
+                    "scene)")
     ap.add_argument("--spp", type=parse_list, default=[16, 64], help="default 16,64")
     ap.add_argument("--rounds", type=int, default=1, help="interleaved rounds, seeds 1..N (default 1)")
     ap.add_argument("--threads", type=int, default=2, help="threads of each renderer (default 2)")

@@ -23,18 +23,14 @@ inversion makes a half-space of Base Color 0.5 reflect 0.438 (raylab:
 is for have no specular layer: specularFactor 0); the importer's volume
 absorption is unlinked.
 """
-import importlib.util
 import json
 import math
 import os
 import sys
 
-here = os.path.dirname(os.path.abspath(__file__))
-rg_path = os.environ.get("RAYLAB_RENDER_GLTF",
-                         os.path.join(here, "..", "..", "shared", "cycles", "render_gltf.py"))
-spec = importlib.util.spec_from_file_location("render_gltf", rg_path)
-rg = importlib.util.module_from_spec(spec)
-spec.loader.exec_module(rg)
+import cycles_peer
+
+rg = cycles_peer.render_gltf()
 
 if len(sys.argv) < 2 or sys.argv[1].startswith("-"):
     sys.exit(__doc__)

@@ -45,6 +45,46 @@ pub struct Homogeneous {
     /// random walk (no light samples, scattering events not counted as
     /// bounces, the distance channel chosen once per walk).
     pub random_walk: bool,
+    /// The box `(lo, hi)` the medium fills, if it does not fill all the
+    /// space it is bound to (`--fog` and scene files' fog: the scene's
+    /// bounding box, so that light from outside reaches in); nothing
+    /// outside it.
+    pub bounds: Option<(Vec3A, Vec3A)>,
+}
+
+impl Homogeneous {
+    /// The stretch `[t0, t1]` of `ray` (unit direction) within `[0, t_max]`
+    /// that lies in the medium; `None` if none does.
+    #[inline]
+    pub fn span(&self, ray: &Ray, t_max: f32) -> Option<(f32, f32)> {
+        let Some((lo, hi)) = self.bounds else {
+            return (t_max > 0.0).then_some((0.0, t_max));
+        };
+        box_span(lo, hi, ray, t_max)
+    }
+
+    /// The density per unit length with which [`Medium::sample_flight`]
+    /// stops a flight along a ray at distance `t` of its span `[t0, t1]`
+    /// ([`Homogeneous::span`]): the mean over the channels of
+    /// `σt exp(−σt (t − t0))`, the one-sample spectral MIS pdf.
+    #[inline]
+    pub fn flight_pdf(&self, t0: f32, t: f32) -> f32 {
+        let tr = (-self.sigma_t * (t - t0)).exp();
+        (self.sigma_t * tr).element_sum() / 3.0
+    }
+}
+
+/// The stretch of `ray` (unit direction) within `[0, t_max]` inside the box
+/// `lo..hi`; `None` if it misses it.
+#[inline]
+fn box_span(lo: Vec3A, hi: Vec3A, ray: &Ray, t_max: f32) -> Option<(f32, f32)> {
+    let inv = ray.dir.recip();
+    let a = (lo - ray.origin) * inv;
+    let b = (hi - ray.origin) * inv;
+    // (NaN from 0·∞ on a face is dropped by max/min.)
+    let t0 = a.min(b).max_element().max(0.0);
+    let t1 = a.max(b).min_element().min(t_max);
+    (t0 < t1).then_some((t0, t1))
 }
 
 /// A heterogeneous medium (Mitsuba's `heterogeneous`): extinction
@@ -131,13 +171,7 @@ impl Heterogeneous {
     #[inline]
     fn span(&self, ray: &Ray, t_max: f32) -> Option<(f32, f32)> {
         let (lo, hi) = self.sigma_t.bounds;
-        let inv = ray.dir.recip();
-        let a = (lo - ray.origin) * inv;
-        let b = (hi - ray.origin) * inv;
-        // (NaN from 0·∞ on a face is dropped by max/min.)
-        let t0 = a.min(b).max_element().max(0.0);
-        let t1 = a.max(b).min_element().min(t_max);
-        (t0 < t1).then_some((t0, t1))
+        box_span(lo, hi, ray, t_max)
     }
 }
 
@@ -199,7 +233,24 @@ impl Medium {
             phase,
             sample_emitters: true,
             random_walk: false,
+            bounds: None,
         })
+    }
+
+    /// [`Medium::homogeneous`] filling only the box `lo..hi`
+    /// ([`Homogeneous::bounds`]).
+    pub fn homogeneous_box(
+        sigma_t: Vec3A,
+        albedo: Vec3A,
+        phase: Phase,
+        lo: Vec3A,
+        hi: Vec3A,
+    ) -> Medium {
+        let mut m = Self::homogeneous(sigma_t, albedo, phase);
+        if let Medium::Homogeneous(h) = &mut m {
+            h.bounds = Some((lo, hi));
+        }
+        m
     }
 
     /// The inside of a subsurface-scattering object (Cycles' random walk,
@@ -220,6 +271,7 @@ impl Medium {
             phase,
             sample_emitters: false,
             random_walk: true,
+            bounds: None,
         })
     }
 
@@ -293,16 +345,19 @@ impl Medium {
                 end.unwrap_or(Flight::Pass { weight })
             }
             Medium::Homogeneous(h) => {
+                let Some((t0, t1)) = h.span(ray, t_max) else {
+                    return Flight::Pass { weight: Vec3A::ONE };
+                };
                 let channel = ((u() * 3.0) as usize).min(2);
                 let sigma = h.sigma_t[channel];
                 let ud = u();
                 let t = if sigma > 0.0 {
-                    -(1.0 - ud).ln() / sigma
+                    t0 + -(1.0 - ud).ln() / sigma
                 } else {
                     f32::INFINITY
                 };
-                if t < t_max {
-                    let tr = (-h.sigma_t * t).exp();
+                if t < t1 {
+                    let tr = (-h.sigma_t * (t - t0)).exp();
                     let pdf = (h.sigma_t * tr).element_sum() / 3.0;
                     return Flight::Scatter {
                         t,
@@ -313,7 +368,7 @@ impl Medium {
                         },
                     };
                 }
-                let tr = transmit(h.sigma_t, t_max);
+                let tr = transmit(h.sigma_t, t1 - t0);
                 let p = tr.element_sum() / 3.0;
                 Flight::Pass {
                     weight: if p > 0.0 { tr / p } else { Vec3A::ZERO },
@@ -329,7 +384,9 @@ impl Medium {
     #[inline]
     pub fn transmittance(&self, ray: &Ray, t_max: f32, u: &mut impl FnMut() -> f32) -> Vec3A {
         match self {
-            Medium::Homogeneous(h) => transmit(h.sigma_t, t_max),
+            Medium::Homogeneous(h) => h
+                .span(ray, t_max)
+                .map_or(Vec3A::ONE, |(t0, t1)| transmit(h.sigma_t, t1 - t0)),
             Medium::Heterogeneous(h) => {
                 let Some((t0, t1)) = h.span(ray, t_max).filter(|_| h.majorant() > 0.0) else {
                     return Vec3A::ONE;
@@ -361,6 +418,23 @@ impl Medium {
             Medium::Homogeneous(h) => {
                 h.sigma_t /= s;
                 h.sigma_s /= s;
+                // (The box of the corners moved: exact for the placements
+                // without rotation that bounded media get.)
+                if let Some((lo, hi)) = h.bounds {
+                    let corners = (0..8).map(|k| {
+                        let pick = |bit: u32, a: f32, b: f32| if k >> bit & 1 == 0 { a } else { b };
+                        to_world.transform_point3a(Vec3A::new(
+                            pick(0, lo.x, hi.x),
+                            pick(1, lo.y, hi.y),
+                            pick(2, lo.z, hi.z),
+                        ))
+                    });
+                    let (a, b) = corners.fold(
+                        (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY)),
+                        |(a, b), c| (a.min(c), b.max(c)),
+                    );
+                    h.bounds = Some((a, b));
+                }
             }
             Medium::Heterogeneous(h) => {
                 h.scale /= s;

@@ -2,6 +2,7 @@
 //! Owen-scrambled Sobol' points.
 
 pub mod distribution;
+pub mod equiangular;
 pub mod filter;
 pub mod sampler;
 pub mod sobol;

@@ -11,7 +11,9 @@ use glam::{Vec2, Vec3A};
 use rayon::prelude::*;
 
 use super::analytic::{AnalyticShape, SceneShape};
-use super::light_table::{AreaLights, LightNumbers, LightRef, LightSelection, LightTable};
+use super::light_table::{
+    AreaLights, KEY_LIGHT, LightNumbers, LightRef, LightSelection, LightTable, PositionalLight,
+};
 use super::light_tree::{self, Facing, Fraction, LightBounds, LightTree, TreeLight};
 use super::model::Scene;
 use crate::geometry::ray::Hit;
@@ -142,7 +144,37 @@ impl Scene {
             (LightTree::default(), Vec::new(), 0.0)
         };
         let alias_total = alias.total() as f32;
+        let mean = |v: Vec3A| (v.as_dvec3().element_sum() / 3.0) as f32;
+        let key = (self.point_power() > 0.0).then(|| PositionalLight {
+            light: KEY_LIGHT,
+            position: self.light.position,
+            intensity: self.point_power() * (0.25 / PI),
+        });
+        let others = self.lights.iter().enumerate().filter_map(|(i, l)| {
+            let (position, intensity) = match *l {
+                Light::Point {
+                    position,
+                    intensity,
+                }
+                | Light::Spot {
+                    position,
+                    intensity,
+                    ..
+                } => (position, mean(intensity)),
+                Light::Beam(ref b) => (b.position, mean(b.intensity)),
+                Light::Directional { .. } => return None,
+            };
+            (intensity > 0.0 && intensity.is_finite() && l.power(radius) > 0.0).then_some(
+                PositionalLight {
+                    light: i as u32,
+                    position,
+                    intensity,
+                },
+            )
+        });
+        let positional = key.into_iter().chain(others).collect();
         self.light_table = LightTable {
+            positional,
             total: alias_total,
             alias,
             entries,
@@ -244,7 +276,11 @@ impl Scene {
             0.0
         };
         (
-            LightTree::build(lights, self.triangles.len() + self.shapes.len()),
+            LightTree::build(
+                lights,
+                self.triangles.len() + self.shapes.len(),
+                self.lights.len(),
+            ),
             directional,
             env_importance,
         )
@@ -363,6 +399,7 @@ impl Scene {
         LightSample::Point {
             position: self.light.position,
             intensity: self.light.power * (1.0 / (4.0 * PI * probability)),
+            light: KEY_LIGHT,
         }
     }
 
@@ -390,6 +427,7 @@ impl Scene {
             } => LightSample::Point {
                 position,
                 intensity: intensity * scale,
+                light: i,
             },
             Incident::FromDirection {
                 to_light,
@@ -515,6 +553,78 @@ impl Scene {
     #[inline]
     pub fn light_needs_samples(&self) -> bool {
         self.light_table.total > 0.0
+    }
+
+    /// The lights at a point that send light ([`PositionalLight`]): the
+    /// key light, then the point lights, spots and beams in the order of
+    /// [`Scene::lights`].
+    #[inline]
+    pub fn positional_lights(&self) -> &[PositionalLight] {
+        &self.light_table.positional
+    }
+
+    /// Where positional light `light` ([`LightSample::Point::light`]) is and
+    /// the intensity it sends towards `p` (W/sr); `None` when it sends none.
+    #[inline]
+    pub fn point_light_towards(&self, light: u32, p: Vec3A) -> Option<(Vec3A, Vec3A)> {
+        if light == KEY_LIGHT {
+            return Some((self.light.position, self.light.power * (0.25 / PI)));
+        }
+        match self
+            .lights
+            .get(light as usize)?
+            .incident(p, &self.textures)?
+        {
+            Incident::FromPoint {
+                position,
+                intensity,
+            } => Some((position, intensity)),
+            Incident::FromDirection { .. } => None,
+        }
+    }
+
+    /// The probability that [`Scene::sample_light`] picks positional light
+    /// `light` ([`LightSample::Point::light`]) to light a point `p` in a
+    /// medium ([`Facing::Any`]), whichever light selection is in use.
+    pub fn point_light_pmf(&self, light: u32, p: Vec3A) -> f32 {
+        let facing = Facing::Any;
+        if self.uses_tree() {
+            let weights = self.top_level(p, facing);
+            if light == KEY_LIGHT {
+                return weights.share(weights.key);
+            }
+            let pmf = self
+                .light_table
+                .tree
+                .punctual_pmf(weights.root, light, p, facing);
+            return pmf * weights.share(weights.tree);
+        }
+        let key = self.key_weight();
+        let rest = self.light_table.total;
+        let total = key + rest;
+        if !(total > 0.0 && total.is_finite()) {
+            return 0.0;
+        }
+        if light == KEY_LIGHT {
+            return key / total;
+        }
+        let table = &self.light_table;
+        if table.by_importance {
+            let importance = |l: &Light| Self::punctual_importance(l, p, facing, &self.textures);
+            let all: f32 = self.lights.iter().map(importance).sum();
+            let Some(this) = self.lights.get(light as usize).map(importance) else {
+                return 0.0;
+            };
+            if !(all > 0.0 && all.is_finite()) {
+                return 0.0;
+            }
+            return this / all * table.punctual_pmf * (rest / total);
+        }
+        table
+            .entries
+            .iter()
+            .position(|e| *e == LightRef::Punctual(light))
+            .map_or(0.0, |entry| self.entry_probability(entry))
     }
 
     /// Picks a light with `u_select` (by power: the key light `P`; other
@@ -790,6 +900,8 @@ pub enum LightSample {
         /// Its intensity towards the point (W/sr) divided by the probability of
         /// choosing it.
         intensity: Vec3A,
+        /// Which light: an index of [`Scene::lights`], or [`KEY_LIGHT`].
+        light: u32,
     },
     /// A directional light.
     Directional {

@@ -35,6 +35,24 @@ pub enum LightSelection {
     Uniform,
 }
 
+/// [`LightSample::Point::light`](crate::scene::LightSample::Point::light) of the key light (the scene's
+/// [`PointLight`](crate::scene::PointLight)).
+pub const KEY_LIGHT: u32 = u32::MAX;
+
+/// A light at a point (the key light, a point light, a spot or a beam), as
+/// the volumetric path tracer chooses among them for the stretches of rays
+/// in media ([`Scene::positional_lights`](crate::scene::Scene::positional_lights)).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PositionalLight {
+    /// Which light: an index of [`Scene::lights`](crate::scene::Scene::lights), or [`KEY_LIGHT`].
+    pub light: u32,
+    /// Where it is.
+    pub position: glam::Vec3A,
+    /// Its greatest intensity (W/sr, the mean over the colour channels): a
+    /// spot's on its axis.
+    pub intensity: f32,
+}
+
 /// A light other than the key light, as the light table names it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(super) enum LightRef {
@@ -50,6 +68,8 @@ pub(super) enum LightRef {
 /// them by weight.
 #[derive(Clone, Debug, Default)]
 pub(super) struct LightTable {
+    /// The lights at a point ([`Scene::positional_lights`](crate::scene::Scene::positional_lights)).
+    pub(super) positional: Vec<PositionalLight>,
     /// The table's probability of picking one of the punctual lights.
     pub(super) punctual_pmf: f32,
     /// Whether the punctual light picked is chosen by importance at the point

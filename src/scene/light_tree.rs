@@ -393,6 +393,10 @@ pub(super) struct LightTree {
     /// child taken at depth `k`; `u64::MAX` for a triangle the tree does not
     /// hold. Empty when the tree holds no triangle.
     prim_trail: Vec<u64>,
+    /// Every punctual light's path from the root, as `prim_trail`'s
+    /// (`u64::MAX` for a light the tree does not hold); empty when it holds
+    /// none.
+    punctual_trail: Vec<u64>,
 }
 
 /// Buckets per axis of the split search.
@@ -405,8 +409,13 @@ const COST_DEPTH: u32 = 31;
 
 impl LightTree {
     /// The tree over `lights` (each with bounds of positive `phi`); `triangles`
-    /// is how many triangles the scene has (for the triangles' paths).
-    pub(super) fn build(mut lights: Vec<(LightBounds, TreeLight)>, triangles: usize) -> Self {
+    /// and `punctuals` are how many triangles and punctual lights the scene
+    /// has (for their paths).
+    pub(super) fn build(
+        mut lights: Vec<(LightBounds, TreeLight)>,
+        triangles: usize,
+        punctuals: usize,
+    ) -> Self {
         lights.retain(|(b, _)| b.phi > 0.0 && b.phi.is_finite());
         let mut tree = Self::default();
         if lights.is_empty() {
@@ -417,6 +426,12 @@ impl LightTree {
             .any(|(_, l)| matches!(l, TreeLight::Triangle(_)))
         {
             tree.prim_trail = vec![u64::MAX; triangles];
+        }
+        if lights
+            .iter()
+            .any(|(_, l)| matches!(l, TreeLight::Punctual(_)))
+        {
+            tree.punctual_trail = vec![u64::MAX; punctuals];
         }
         let mut binary = Vec::with_capacity(2 * lights.len() - 1);
         let root = build_binary(&mut binary, &mut lights, 0, 0);
@@ -458,8 +473,9 @@ impl LightTree {
             let trail = trail | (k as u64) << (2 * depth);
             match binary[c].kind {
                 BinaryKind::Light(light) => {
-                    if let TreeLight::Triangle(prim) = self.lights[light as usize] {
-                        self.prim_trail[prim as usize] = trail;
+                    match self.lights[light as usize] {
+                        TreeLight::Triangle(prim) => self.prim_trail[prim as usize] = trail,
+                        TreeLight::Punctual(i) => self.punctual_trail[i as usize] = trail,
                     }
                     self.nodes[index].child[k] = light;
                     self.nodes[index].leaves |= 1 << k;
@@ -519,7 +535,21 @@ impl LightTree {
     /// `root` is [`LightTree::root_importances`] at `p`.
     #[inline]
     pub(super) fn triangle_pmf(&self, root: Vec4, prim: u32, p: Vec3A, facing: Facing) -> f32 {
-        let Some(&trail) = self.prim_trail.get(prim as usize) else {
+        self.trail_pmf(root, self.prim_trail.get(prim as usize), p, facing)
+    }
+
+    /// The probability that [`LightTree::sample`] chooses punctual light `i`
+    /// (of the scene's lights) for a surface at `p`; zero for one the tree
+    /// does not hold. `root` is [`LightTree::root_importances`] at `p`.
+    #[inline]
+    pub(super) fn punctual_pmf(&self, root: Vec4, i: u32, p: Vec3A, facing: Facing) -> f32 {
+        self.trail_pmf(root, self.punctual_trail.get(i as usize), p, facing)
+    }
+
+    /// The probability of the choices down `trail` (none: zero).
+    #[inline]
+    fn trail_pmf(&self, root: Vec4, trail: Option<&u64>, p: Vec3A, facing: Facing) -> f32 {
+        let Some(&trail) = trail else {
             return 0.0;
         };
         if trail == u64::MAX {
@@ -831,7 +861,7 @@ mod tests {
     fn the_choices_add_up_to_one_and_sampling_follows_them() {
         let mut rng = Lcg(7);
         let n = 300;
-        let tree = LightTree::build(random_lights(&mut rng, n), n);
+        let tree = LightTree::build(random_lights(&mut rng, n), n, 0);
         assert!(tree.depth() < 64);
         for trial in 0..40 {
             let p = rng.vec(12.0);

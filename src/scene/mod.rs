@@ -33,7 +33,7 @@ mod surface;
 
 pub use analytic::{AnalyticShape, SceneShape};
 pub use light_sampling::{LightSample, MAX_IMPORTANCE_LIGHTS};
-pub use light_table::{LightNumbers, LightSelection};
+pub use light_table::{KEY_LIGHT, LightNumbers, LightSelection, PositionalLight};
 pub use light_tree::Facing;
 pub use media::{MediumInterface, SceneMedia};
 pub use mesh::{Instance, MeshData, Tangents};

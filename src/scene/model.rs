@@ -646,17 +646,9 @@ impl Scene {
         albedo: Vec3A,
         phase: crate::media::Phase,
     ) -> Result<(), String> {
-        use crate::media::{Field, FieldValues, Heterogeneous, Medium};
         if !(sigma_t.is_finite() && sigma_t.min_element() >= 0.0) {
             return Err(format!("fog density {sigma_t} (must be finite and >= 0)"));
         }
-        // The densest channel is the scale (a grey fog's field is 1).
-        let density = sigma_t.max_element();
-        let relative = if density > 0.0 {
-            sigma_t / density
-        } else {
-            Vec3A::ONE
-        };
         if !(albedo.is_finite() && albedo.min_element() >= 0.0 && albedo.max_element() <= 1.0) {
             return Err(format!(
                 "fog colour {albedo} (each channel is an albedo in [0, 1])"
@@ -665,20 +657,13 @@ impl Scene {
         let (lo, hi) = self.bounds;
         // A flat scene's box gets a little depth (a thousandth of its size).
         let size = (hi - lo).max(Vec3A::splat(1e-3 * (hi - lo).length().max(1e-3)));
-        let to_world = glam::Affine3A::from_scale_rotation_translation(
-            size.into(),
-            glam::Quat::IDENTITY,
-            lo.into(),
-        );
-        let everywhere = |v: Vec3A| Field::new(FieldValues::Constant(v), to_world);
-        self.media
-            .add_fog(Medium::Heterogeneous(Box::new(Heterogeneous {
-                sigma_t: everywhere(relative),
-                albedo: everywhere(albedo),
-                scale: density,
-                phase,
-                sample_emitters: true,
-            })));
+        self.media.add_fog(crate::media::Medium::homogeneous_box(
+            sigma_t,
+            albedo,
+            phase,
+            lo,
+            lo + size,
+        ));
         Ok(())
     }
 

@@ -165,3 +165,20 @@ pub fn look_camera(
     let lens = raylab::camera::Lens::from_yfov(fov_deg.to_radians());
     raylab::Camera::with_lens(position, rotation, lens, w, h)
 }
+
+/// A Mitsuba `.vol` grid of 2 × 2 × 2 samples of one channel, all `value`,
+/// over the unit box (its `to_world` places it).
+pub fn constant_vol(value: f32) -> Vec<u8> {
+    let mut vol = b"VOL".to_vec();
+    vol.push(3);
+    for v in [1i32, 2, 2, 2, 1] {
+        vol.extend_from_slice(&v.to_le_bytes());
+    }
+    for v in [0.0f32, 0.0, 0.0, 1.0, 1.0, 1.0] {
+        vol.extend_from_slice(&v.to_le_bytes());
+    }
+    for _ in 0..8 {
+        vol.extend_from_slice(&value.to_le_bytes());
+    }
+    vol
+}

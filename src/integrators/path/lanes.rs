@@ -149,6 +149,7 @@ pub(crate) fn trace(
             Some(LightSample::Point {
                 position,
                 intensity,
+                ..
             }) => Some((position, intensity)),
             _ => None,
         }

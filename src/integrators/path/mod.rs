@@ -23,6 +23,7 @@
 //! values bit for bit.
 
 mod direct;
+mod equiangular;
 pub(crate) mod lanes;
 mod options;
 mod samples;

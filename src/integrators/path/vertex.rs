@@ -283,6 +283,7 @@ pub(crate) fn light_terms(p: Vec3A, light: LightSample) -> (Vec3A, Arriving, Opt
         LightSample::Point {
             position,
             intensity,
+            ..
         } => {
             let r2 = (position - p).length_squared();
             (position, Arriving::Value(intensity / r2), None)

@@ -38,6 +38,7 @@
 
 use glam::Vec3A;
 
+use super::equiangular::Segment;
 use super::options::{HideEmitters, PathOptions, RR_DEPTH, RR_SCALE};
 use super::samples::PathSampler;
 use super::vertex::{
@@ -46,8 +47,9 @@ use super::vertex::{
 use super::walk::walk;
 use crate::geometry::ray::{Hit, Ray, SHADOW_EPSILON};
 use crate::materials::Material;
-use crate::media::Flight;
-use crate::scene::{Facing, Scene, SurfaceHit};
+use crate::media::{Flight, Homogeneous, Medium};
+use crate::sampling::equiangular;
+use crate::scene::{Facing, LightSample, Scene, SurfaceHit};
 
 /// The most surfaces a shadow ray crosses (index-matched boundaries) before
 /// it is taken as blocked, and the most a path crosses in a row without a
@@ -104,6 +106,25 @@ pub(super) fn radiance(
                     from_facing = Facing::Any;
                 }
             } else {
+                // Lights at points, sampled equiangularly along the stretch
+                // in a homogeneous medium (weighed against the light sample
+                // at the collision below).
+                let segment = match medium_here {
+                    Medium::Homogeneous(h)
+                        if h.sample_emitters
+                            && depth + 1 < options.max_depth
+                            && h.sigma_s != Vec3A::ZERO
+                            && !scene.positional_lights().is_empty() =>
+                    {
+                        h.span(&ray, t_surface)
+                            .and_then(|(t0, t1)| Segment::new(scene, &ray, t0, t1))
+                            .map(|s| (s, h))
+                    }
+                    _ => None,
+                };
+                if let Some((segment, h)) = &segment {
+                    l += beta * equiangular_light(scene, segment, h, medium, sampler, rays);
+                }
                 match medium_here.sample_flight(&ray, t_surface, &mut || sampler.next_1d()) {
                     Flight::Pass { weight } => beta *= weight,
                     Flight::Scatter { t, weight } => {
@@ -146,8 +167,20 @@ pub(super) fn radiance(
                                     rays,
                                 );
                                 if tr != Vec3A::ZERO {
-                                    let weight =
-                                        light_pdf.map_or(1.0, |pdf| power_heuristic(pdf, f));
+                                    let weight = match (light, &segment) {
+                                        // A light at a point: against the
+                                        // equiangular strategy.
+                                        (
+                                            LightSample::Point {
+                                                position, light, ..
+                                            },
+                                            Some((segment, h)),
+                                        ) => power_heuristic(
+                                            segment.flight_pdf(scene, h, light, t),
+                                            segment.pdf(segment.pmf(scene, light), position, t),
+                                        ),
+                                        _ => light_pdf.map_or(1.0, |pdf| power_heuristic(pdf, f)),
+                                    };
                                     l += beta * tr * arriving.value(scene) * (f * weight);
                                 }
                             }
@@ -316,6 +349,60 @@ pub(super) fn radiance(
         next_hit = scene.intersect(&ray, f32::INFINITY);
     }
     l
+}
+
+/// Light scattered towards the ray from the stretch `segment` of it in the
+/// homogeneous medium `h` (index `medium`), by the equiangular strategy: a
+/// light at a point chosen by the stretch, a point on it equiangularly
+/// towards the light, weighed by the power heuristic against next-event
+/// estimation at the flight's collision (which may have chosen the same
+/// light at the same point).
+fn equiangular_light(
+    scene: &Scene,
+    segment: &Segment,
+    h: &Homogeneous,
+    medium: Option<u32>,
+    sampler: &mut impl PathSampler,
+    rays: &mut u64,
+) -> Vec3A {
+    let (u_choice, u_t) = (sampler.next_1d(), sampler.next_1d());
+    let Some((light, pmf)) = segment.choose(scene, u_choice) else {
+        return Vec3A::ZERO;
+    };
+    let (origin, dir) = (segment.origin, segment.dir);
+    let Some((t, pdf_t)) =
+        equiangular::sample(light.position, origin, dir, segment.t0, segment.t1, u_t)
+    else {
+        return Vec3A::ZERO;
+    };
+    let x = origin + dir * t;
+    let Some((position, intensity)) = scene.point_light_towards(light.light, x) else {
+        return Vec3A::ZERO;
+    };
+    let to_light = position - x;
+    let dist2 = to_light.length_squared();
+    let dist = dist2.sqrt();
+    if dist.is_nan() || dist <= 0.0 {
+        return Vec3A::ZERO;
+    }
+    let wi = to_light / dist;
+    let f = h.phase.eval(dir, wi);
+    let shadow = Ray::new(x, wi);
+    let tr = transmittance(
+        scene,
+        shadow,
+        dist - dist * SHADOW_EPSILON,
+        medium,
+        sampler,
+        rays,
+    );
+    if tr == Vec3A::ZERO || f == 0.0 {
+        return Vec3A::ZERO;
+    }
+    let pdf = pmf * pdf_t;
+    let weight = power_heuristic(pdf, segment.flight_pdf(scene, h, light.light, t));
+    let tr_camera = (-h.sigma_t * (t - segment.t0)).exp();
+    tr_camera * h.sigma_s * tr * intensity * (f * weight / (pdf * dist2))
 }
 
 /// Russian roulette after `depth` bounces, as `path` plays it; false when
