@@ -194,6 +194,24 @@ pub struct Field {
     pub majorants: Option<Arc<Majorants>>,
 }
 
+/// The world bounds `(min, max)` of the box `lo..hi` placed by `to_world`:
+/// the box around its eight corners (exact without rotation).
+pub(crate) fn world_box(lo: Vec3A, hi: Vec3A, to_world: Affine3A) -> (Vec3A, Vec3A) {
+    (0..8).fold(
+        (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY)),
+        |(a, b), i: u32| {
+            let pick = |bit: u32, l: f32, h: f32| if i >> bit & 1 == 0 { l } else { h };
+            let c = Vec3A::new(
+                pick(0, lo.x, hi.x),
+                pick(1, lo.y, hi.y),
+                pick(2, lo.z, hi.z),
+            );
+            let w = to_world.transform_point3a(c);
+            (a.min(w), b.max(w))
+        },
+    )
+}
+
 impl Field {
     /// A sparse grid placed by `index_to_world` (invertible), the map from
     /// its index space to the world.
@@ -205,14 +223,7 @@ impl Field {
 
     /// `values` over the unit cube placed by `to_world` (invertible).
     pub fn new(values: FieldValues, to_world: Affine3A) -> Field {
-        let mut lo = Vec3A::splat(f32::INFINITY);
-        let mut hi = Vec3A::splat(f32::NEG_INFINITY);
-        for i in 0..8 {
-            let c = Vec3A::new((i & 1) as f32, ((i >> 1) & 1) as f32, ((i >> 2) & 1) as f32);
-            let w = to_world.transform_point3a(c);
-            lo = lo.min(w);
-            hi = hi.max(w);
-        }
+        let (lo, hi) = world_box(Vec3A::ZERO, Vec3A::ONE, to_world);
         let m = to_world.matrix3;
         let axis_aligned = m.x_axis.y == 0.0
             && m.x_axis.z == 0.0

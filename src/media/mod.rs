@@ -421,19 +421,7 @@ impl Medium {
                 // (The box of the corners moved: exact for the placements
                 // without rotation that bounded media get.)
                 if let Some((lo, hi)) = h.bounds {
-                    let corners = (0..8).map(|k| {
-                        let pick = |bit: u32, a: f32, b: f32| if k >> bit & 1 == 0 { a } else { b };
-                        to_world.transform_point3a(Vec3A::new(
-                            pick(0, lo.x, hi.x),
-                            pick(1, lo.y, hi.y),
-                            pick(2, lo.z, hi.z),
-                        ))
-                    });
-                    let (a, b) = corners.fold(
-                        (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY)),
-                        |(a, b), c| (a.min(c), b.max(c)),
-                    );
-                    h.bounds = Some((a, b));
+                    h.bounds = Some(grid::world_box(lo, hi, to_world));
                 }
             }
             Medium::Heterogeneous(h) => {
