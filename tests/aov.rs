@@ -449,3 +449,46 @@ fn gltf_albedo_follows_the_bsdf_and_normals_face_the_camera() {
         .unwrap();
     assert_eq!(vec3(aovs.get(Aov::Normal, 20, 10).unwrap()), Vec3A::NEG_Z);
 }
+
+/// In fog, the guides are what a path meets first, in expectation: the fog's
+/// albedo where it scatters, the surface behind where it does not. The lab
+/// box filled with fog of density σ and albedo `a` (the fog fills the box,
+/// `[-1, 1]³`): a ray to the back wall crosses `d = 2 / dir.z` of it, so each
+/// back-wall pixel's albedo guide is `(1 − T) a + T ρ` and its normal `T n`
+/// with `T = exp(−σ d)` (at the pixel's centre: its samples' `d` differ by
+/// under 1e-3).
+#[test]
+fn fog_guides_blend_the_fog_albedo_with_the_surface_behind() {
+    let mut scene = cornell::scene();
+    let (sigma, a) = (0.4f32, Vec3A::new(0.9, 0.8, 0.7));
+    scene.add_fog(sigma, a).unwrap();
+    let cam = lab_camera(64, 48);
+    let r = render_aovs(&scene, &cam, Integrator::path(), 8, 2);
+    let aovs = r.aovs.expect("AOVs asked for");
+    let mut checked = 0;
+    for y in 0..cam.height {
+        for x in 0..cam.width {
+            let Some(wall) = interior_wall(&scene, &cam, x, y).filter(|w| w.name == "back") else {
+                continue;
+            };
+            let dir = cam.ray(x as f32 + 0.5, y as f32 + 0.5).dir;
+            let t = (-sigma * 2.0 / dir.z).exp();
+            let want = (Vec3A::ONE - Vec3A::splat(t)) * a + t * wall.albedo;
+            let what = format!("pixel ({x}, {y})");
+            assert_near(
+                vec3(aovs.get(Aov::Albedo, x, y).unwrap()),
+                want,
+                2e-3,
+                &what,
+            );
+            assert_near(
+                vec3(aovs.get(Aov::Normal, x, y).unwrap()),
+                t * wall.normal,
+                2e-3,
+                &what,
+            );
+            checked += 1;
+        }
+    }
+    assert!(checked > 100, "{checked} back-wall pixels");
+}

@@ -78,11 +78,42 @@ pub struct Guides {
 pub fn guides(scene: &Scene, ray: &Ray, s: &SurfaceHit, bsdf: &Material) -> Guides {
     let mut g = Guides::default();
     visit(scene, ray.dir, s, bsdf, Vec3A::ONE, 1.0, 0, &mut g);
+    if let Some((tr, albedo)) = camera_medium(scene, ray, (s.point.p - ray.origin).length()) {
+        // In front of the surface, the medium the camera is in: what the
+        // path scatters off first, in expectation.
+        g.albedo = (Vec3A::ONE - tr) * albedo + tr * g.albedo;
+        g.normal *= (tr.x + tr.y + tr.z) / 3.0;
+    }
     g.albedo = g.albedo.clamp(Vec3A::ZERO, Vec3A::ONE);
     if !g.albedo.is_finite() || !g.normal.is_finite() {
         return Guides::default();
     }
     g
+}
+
+/// The transmittance of the camera's medium along `ray` up to `t_max`, and
+/// the albedo it scatters with (Cycles gives its denoiser a volume's albedo
+/// where a path scatters first; here in expectation, so the guides keep
+/// no noise): only a homogeneous medium the camera starts in (fog), `None`
+/// otherwise or where the ray does not cross it.
+#[inline]
+pub(crate) fn camera_medium(scene: &Scene, ray: &Ray, t_max: f32) -> Option<(Vec3A, Vec3A)> {
+    let media = scene.media();
+    let m = media.camera?;
+    let crate::media::Medium::Homogeneous(h) = &media.media[m as usize] else {
+        return None;
+    };
+    if h.random_walk {
+        return None;
+    }
+    let (t0, t1) = h.span(ray, t_max)?;
+    let tr = (-h.sigma_t * (t1 - t0)).exp();
+    let albedo = Vec3A::select(
+        h.sigma_t.cmpgt(Vec3A::ZERO),
+        h.sigma_s / h.sigma_t,
+        Vec3A::ZERO,
+    );
+    (tr.is_finite() && albedo.is_finite()).then_some((tr, albedo.clamp(Vec3A::ZERO, Vec3A::ONE)))
 }
 
 /// `L/(1 + L)` per channel: light as a guide value in `[0, 1)`.

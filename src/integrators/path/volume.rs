@@ -129,6 +129,9 @@ pub(super) fn radiance(
                     Flight::Pass { weight } => beta *= weight,
                     Flight::Scatter { t, weight } => {
                         beta *= weight;
+                        // The surfaces found after a scattering are not the
+                        // camera ray's: the AOVs shade its hit themselves.
+                        observed = true;
                         depth += 1;
                         if depth >= options.max_depth || beta == Vec3A::ZERO {
                             break;
