@@ -29,6 +29,7 @@ use glam::{Mat3A, Vec3A};
 use crate::camera::{DepthOfField, FilmWindow, Lens, SceneCamera, Y_UP_TOWARDS_MINUS_Z};
 use crate::geometry::triangle::Triangle;
 use crate::lights::environment::Environment;
+use crate::media::Medium;
 use crate::memory::{GEOMETRY_BYTES_PER_TRIANGLE, Ledger, MemoryBudget, MemoryError, Needs};
 use crate::scene::{PointLight, Scene};
 use cornell::MaterialChoice;
@@ -691,13 +692,16 @@ fn emitters_light(scene: &Scene) -> bool {
 /// Adds raylab's default lighting (a key light above and to the right of the
 /// starting camera giving [`DEFAULT_LIGHT_IRRADIANCE`] at the scene's centre,
 /// and a grey sky) when `when` says so: `auto` adds it to a scene that is not
-/// `lit` (no punctual lights, no environment) and whose emitters are too weak
-/// to light it. Returns whether it was added.
+/// `lit` (no punctual lights, no environment), whose emitters are too weak
+/// to light it and whose media emit nothing. Returns whether it was added.
 fn add_default_light(scene: &mut Scene, view: &InitialView, when: DefaultLight, lit: bool) -> bool {
     let add = match when {
         DefaultLight::On => true,
         DefaultLight::Off => false,
-        DefaultLight::Auto => !lit && !emitters_light(scene),
+        // (A medium that glows lights the scene as an emitter does.)
+        DefaultLight::Auto => {
+            !lit && !emitters_light(scene) && !scene.media().media.iter().any(Medium::emits)
+        }
     };
     if add {
         // A key light above and to the right of the starting camera,

@@ -92,11 +92,15 @@
 //! * `disk.rs`: the concentric mapping of the square onto the disk;
 //! * [`sheen`], [`thin_film`] and [`spectrum`]: the sheen's microfibre BRDF,
 //!   the iridescent film's Fresnel term and single wavelengths for dispersion;
+//! * [`cie`] and [`blackbody`]: the CIE 1931 tables, and the colour of a
+//!   blackbody at a temperature (emissive media's temperature grids);
 //! * [`surface`]: the scene's material table (fixed BSDFs and glTF materials
 //!   with their textures).
 
+pub mod blackbody;
 mod blend;
 mod bsdf;
+pub mod cie;
 mod dielectric;
 mod disk;
 mod frame;

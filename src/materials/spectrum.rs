@@ -121,7 +121,7 @@ pub fn cie_xyz(lambda: f32) -> Vec3A {
 
 /// CIE XYZ to linear Rec. 709 (sRGB primaries, D65 white), the usual matrix.
 #[inline]
-fn xyz_to_rec709(c: Vec3A) -> Vec3A {
+pub fn xyz_to_rec709(c: Vec3A) -> Vec3A {
     Vec3A::new(
         3.240_454_2 * c.x - 1.537_138_5 * c.y - 0.498_531_4 * c.z,
         -0.969_266 * c.x + 1.876_010_8 * c.y + 0.041_556 * c.z,

@@ -12,6 +12,17 @@
 //! uniformly, the distance drawn from its extinction, and the sample is
 //! weighed by the mean of the three channels' pdfs, so no channel's weight
 //! grows without bound.
+//!
+//! # Emission
+//!
+//! A medium may emit light ([`Homogeneous::emission`],
+//! [`Heterogeneous::emission`]), as pbrt-v4's media do: its radiance `Le`
+//! is that of the medium where it is optically thick, and the light it
+//! emits per unit length is `σa · Le` (Kirchhoff's law: what absorbs,
+//! emits), so a medium that absorbs nothing emits nothing. Along a flight
+//! the emission is estimated with the flight ([`Flight`]'s `emitted`):
+//! exactly for a homogeneous medium, by the collision estimator at delta
+//! tracking's tentative collisions for a heterogeneous one (unbiased).
 
 pub mod albedo;
 pub mod grid;
@@ -50,6 +61,9 @@ pub struct Homogeneous {
     /// bounding box, so that light from outside reaches in); nothing
     /// outside it.
     pub bounds: Option<(Vec3A, Vec3A)>,
+    /// The radiance `Le` it emits with (light per unit length `σa · Le`;
+    /// [module docs](self)); zero for none.
+    pub emission: Vec3A,
 }
 
 impl Homogeneous {
@@ -107,6 +121,95 @@ pub struct Heterogeneous {
     pub phase: Phase,
     /// Whether paths scattered in it sample lights.
     pub sample_emitters: bool,
+    /// What it emits, if anything.
+    pub emission: Option<Emission>,
+}
+
+/// The radiance `Le(p)` a heterogeneous medium emits with (light per unit
+/// length `σa(p) · Le(p)`; [module docs](self)).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Emission {
+    /// `scale · le(p)` (RGB).
+    Radiance {
+        /// The radiance before `scale`.
+        le: Field,
+        /// Its factor.
+        scale: f32,
+    },
+    /// A blackbody at a temperature from a field: `scale · B((T(p) −
+    /// offset) · t_scale)`, `B` pbrt-v4's peak-normalised blackbody
+    /// ([`crate::materials::blackbody`]), as pbrt-v4's `nanovdb` medium's
+    /// `Lescale`, `temperatureoffset` and `temperaturescale`.
+    Temperature {
+        /// The temperature before `offset` and `t_scale` (its first
+        /// channel).
+        temperature: Field,
+        /// Subtracted from the temperature.
+        offset: f32,
+        /// Multiplies the temperature after `offset`, to kelvin.
+        t_scale: f32,
+        /// Factor of the radiance.
+        scale: f32,
+    },
+}
+
+impl Emission {
+    /// `Le` at `p`.
+    #[inline]
+    pub fn eval(&self, p: Vec3A) -> Vec3A {
+        match self {
+            Emission::Radiance { le, scale } => *scale * le.eval(p),
+            Emission::Temperature {
+                temperature,
+                offset,
+                t_scale,
+                scale,
+            } => {
+                let kelvin = (temperature.eval(p).x - offset) * t_scale;
+                *scale * crate::materials::blackbody::blackbody_rgb(kelvin)
+            }
+        }
+    }
+
+    fn transform(&mut self, to_world: Affine3A) {
+        match self {
+            Emission::Radiance { le: f, .. } | Emission::Temperature { temperature: f, .. } => {
+                f.transform(to_world)
+            }
+        }
+    }
+
+    fn check(&self) -> Result<(), String> {
+        let finite = |name: &str, v: f32| {
+            if v.is_finite() && v >= 0.0 {
+                Ok(())
+            } else {
+                Err(format!(
+                    "a medium's {name} must be finite and >= 0 (got {v})"
+                ))
+            }
+        };
+        let (field, scale) = match self {
+            Emission::Radiance { le, scale } => (le, scale),
+            Emission::Temperature {
+                temperature, scale, ..
+            } => (temperature, scale),
+        };
+        finite("emission scale", *scale)?;
+        finite("emission", field.max())?;
+        if let Emission::Temperature {
+            offset, t_scale, ..
+        } = self
+        {
+            finite("temperature scale", *t_scale)?;
+            if !offset.is_finite() {
+                return Err(format!(
+                    "a medium's temperature offset must be finite (got {offset})"
+                ));
+            }
+        }
+        Ok(())
+    }
 }
 
 impl Heterogeneous {
@@ -204,6 +307,9 @@ pub enum Medium {
 }
 
 /// Where a path's flight through a medium ends ([`Medium::sample_flight`]).
+/// Both carry `emitted`: an estimate of the light the medium emits towards
+/// the ray's origin along the whole segment (`∫ T σa Le dt`; zero for a
+/// medium that emits nothing), to add times the throughput before `weight`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Flight {
     /// It scatters at distance `t`; the throughput is multiplied by `weight`
@@ -213,6 +319,8 @@ pub enum Flight {
         t: f32,
         /// Factor for the path's throughput.
         weight: Vec3A,
+        /// Emitted light ([`Flight`]).
+        emitted: Vec3A,
     },
     /// It reaches the end of the segment (the next surface, or infinity);
     /// the throughput is multiplied by `weight` (`T` over the probability of
@@ -220,8 +328,26 @@ pub enum Flight {
     Pass {
         /// Factor for the path's throughput.
         weight: Vec3A,
+        /// Emitted light ([`Flight`]).
+        emitted: Vec3A,
     },
 }
+
+impl Flight {
+    /// The light emitted along the segment ([`Flight`]).
+    #[inline]
+    pub fn emitted(&self) -> Vec3A {
+        match self {
+            Flight::Scatter { emitted, .. } | Flight::Pass { emitted, .. } => *emitted,
+        }
+    }
+}
+
+/// A flight that passes with weight 1 and no emission.
+const CLEAR: Flight = Flight::Pass {
+    weight: Vec3A::ONE,
+    emitted: Vec3A::ZERO,
+};
 
 impl Medium {
     /// A homogeneous medium of extinction `sigma_t` and single-scattering
@@ -234,6 +360,7 @@ impl Medium {
             sample_emitters: true,
             random_walk: false,
             bounds: None,
+            emission: Vec3A::ZERO,
         })
     }
 
@@ -272,6 +399,7 @@ impl Medium {
             sample_emitters: false,
             random_walk: true,
             bounds: None,
+            emission: Vec3A::ZERO,
         })
     }
 
@@ -291,6 +419,16 @@ impl Medium {
         match self {
             Medium::Homogeneous(h) => h.sample_emitters,
             Medium::Heterogeneous(h) => h.sample_emitters,
+        }
+    }
+
+    /// Whether it emits light ([module docs](self)).
+    pub fn emits(&self) -> bool {
+        match self {
+            Medium::Homogeneous(h) => {
+                h.emission != Vec3A::ZERO && (h.sigma_t - h.sigma_s).max_element() > 0.0
+            }
+            Medium::Heterogeneous(h) => h.emission.is_some(),
         }
     }
 
@@ -318,13 +456,20 @@ impl Medium {
         match self {
             Medium::Heterogeneous(h) => {
                 let Some((t0, t1)) = h.span(ray, t_max).filter(|_| h.majorant() > 0.0) else {
-                    return Flight::Pass { weight: Vec3A::ONE };
+                    return CLEAR;
                 };
                 let mut weight = Vec3A::ONE;
+                let mut emitted = Vec3A::ZERO;
                 let end = h.track(ray, t0, t1, u, |t, mu, u| {
                     let p = ray.origin + ray.dir * t;
                     let sigma_t = h.scale * h.sigma_t.eval(p);
                     let sigma_s = sigma_t * h.albedo.eval(p);
+                    if let Some(e) = &h.emission {
+                        // The collision estimator: every tentative
+                        // collision (density μ̄ times what `weight` stands
+                        // for) adds σa Le over μ̄.
+                        emitted += weight * (sigma_t - sigma_s).max(Vec3A::ZERO) * e.eval(p) / mu;
+                    }
                     let sigma_n = (Vec3A::splat(mu) - sigma_t).max(Vec3A::ZERO);
                     // A real collision with the mean extinction's share of
                     // the majorant (then weighed by the scattering over that
@@ -334,19 +479,32 @@ impl Medium {
                         return ControlFlow::Break(Flight::Scatter {
                             t,
                             weight: weight * sigma_s / (mu * p_real),
+                            emitted,
                         });
                     }
                     weight *= sigma_n / (mu * (1.0 - p_real));
                     if weight == Vec3A::ZERO {
-                        return ControlFlow::Break(Flight::Pass { weight });
+                        return ControlFlow::Break(Flight::Pass { weight, emitted });
                     }
                     ControlFlow::Continue(())
                 });
-                end.unwrap_or(Flight::Pass { weight })
+                end.unwrap_or(Flight::Pass { weight, emitted })
             }
             Medium::Homogeneous(h) => {
                 let Some((t0, t1)) = h.span(ray, t_max) else {
-                    return Flight::Pass { weight: Vec3A::ONE };
+                    return CLEAR;
+                };
+                // ∫ T σa Le over the span, exactly.
+                let emitted = if h.emission == Vec3A::ZERO {
+                    Vec3A::ZERO
+                } else {
+                    let sigma_a = (h.sigma_t - h.sigma_s).max(Vec3A::ZERO);
+                    let absorbed = Vec3A::ONE - transmit(h.sigma_t, t1 - t0);
+                    Vec3A::select(
+                        h.sigma_t.cmpgt(Vec3A::ZERO),
+                        sigma_a / h.sigma_t * absorbed * h.emission,
+                        Vec3A::ZERO,
+                    )
                 };
                 let channel = ((u() * 3.0) as usize).min(2);
                 let sigma = h.sigma_t[channel];
@@ -366,12 +524,14 @@ impl Medium {
                         } else {
                             Vec3A::ZERO
                         },
+                        emitted,
                     };
                 }
                 let tr = transmit(h.sigma_t, t1 - t0);
                 let p = tr.element_sum() / 3.0;
                 Flight::Pass {
                     weight: if p > 0.0 { tr / p } else { Vec3A::ZERO },
+                    emitted,
                 }
             }
         }
@@ -428,6 +588,9 @@ impl Medium {
                 h.scale /= s;
                 h.sigma_t.transform(to_world);
                 h.albedo.transform(to_world);
+                if let Some(e) = &mut h.emission {
+                    e.transform(to_world);
+                }
             }
         }
     }
@@ -447,6 +610,12 @@ impl Medium {
                 }
                 if h.sigma_s.cmpgt(h.sigma_t * 1.000_001).any() {
                     return Err("a medium's albedo must be at most 1".into());
+                }
+                if !ok(h.emission) {
+                    return Err(format!(
+                        "a medium's emission must be finite and >= 0 (got {:?})",
+                        h.emission.to_array()
+                    ));
                 }
                 if let Phase::HenyeyGreenstein { g } = h.phase
                     && (g.is_nan() || g.abs() > phase::MAX_G)
@@ -471,7 +640,7 @@ impl Medium {
                 if !h.majorant().is_finite() {
                     return Err("a medium's extinction must be finite".into());
                 }
-                Ok(())
+                h.emission.as_ref().map_or(Ok(()), Emission::check)
             }
         }
     }
@@ -516,8 +685,8 @@ mod tests {
         let (mut pass, mut scatter) = (glam::DVec3::ZERO, glam::DVec3::ZERO);
         for _ in 0..n {
             match m.sample_flight(&ray(), l, &mut || rng.next_f32()) {
-                Flight::Pass { weight } => pass += weight.as_dvec3(),
-                Flight::Scatter { t, weight } => {
+                Flight::Pass { weight, .. } => pass += weight.as_dvec3(),
+                Flight::Scatter { t, weight, .. } => {
                     assert!(t < l);
                     scatter += (weight * f(t)).as_dvec3()
                 }
@@ -558,7 +727,7 @@ mod tests {
         let n = 300_000;
         let mut pass = Vec3A::ZERO;
         for _ in 0..n {
-            if let Flight::Pass { weight } =
+            if let Flight::Pass { weight, .. } =
                 m.sample_flight(&ray(), f32::INFINITY, &mut || rng.next_f32())
             {
                 assert!(weight.is_finite());
@@ -595,6 +764,7 @@ mod tests {
             scale: 1.0,
             phase: Phase::Isotropic,
             sample_emitters: true,
+            emission: None,
         }));
         let mut rng = Rng::new(5, 0);
         for r in 0..4 {
@@ -616,7 +786,9 @@ mod tests {
             let (mut ratio, mut pass) = (0.0f64, 0.0f64);
             for _ in 0..runs {
                 ratio += f64::from(m.transmittance(&ray, l, &mut || rng.next_f32()).x);
-                if let Flight::Pass { weight } = m.sample_flight(&ray, l, &mut || rng.next_f32()) {
+                if let Flight::Pass { weight, .. } =
+                    m.sample_flight(&ray, l, &mut || rng.next_f32())
+                {
                     pass += f64::from(weight.x);
                 }
             }
@@ -629,6 +801,152 @@ mod tests {
                 (pass - f64::from(want)).abs() < 4e-3,
                 "ray {r}: delta {pass} vs {want}"
             );
+        }
+    }
+
+    /// `∫₀ᴸ T(t) σa(t) Le(t) dt` per channel along `ray` through `m` (a
+    /// heterogeneous medium), by the midpoint rule in f64.
+    fn emitted_by_quadrature(m: &Heterogeneous, ray: &Ray, l: f32) -> glam::DVec3 {
+        let steps = 40_000;
+        let dt = f64::from(l) / f64::from(steps);
+        let (lo, hi) = m.sigma_t.bounds;
+        let (mut depth, mut sum) = (glam::DVec3::ZERO, glam::DVec3::ZERO);
+        for i in 0..steps {
+            let p = ray.origin + ray.dir * ((i as f32 + 0.5) * l / steps as f32);
+            if !(p.cmpge(lo).all() && p.cmple(hi).all()) {
+                continue;
+            }
+            let sigma_t = (m.scale * m.sigma_t.eval(p)).as_dvec3();
+            let sigma_a = sigma_t * (glam::DVec3::ONE - m.albedo.eval(p).as_dvec3());
+            let le = m.emission.as_ref().unwrap().eval(p).as_dvec3();
+            // (T at the step's middle: half its own depth.)
+            let tr = (-(depth + 0.5 * sigma_t * dt)).exp();
+            sum += tr * sigma_a * le * dt;
+            depth += sigma_t * dt;
+        }
+        sum
+    }
+
+    /// A homogeneous medium's emission along a flight is exact:
+    /// `σa Le (1 − e^{−σt L}) / σt` per channel, in a chromatic medium with
+    /// a clear channel (which emits nothing), on every flight; and the
+    /// segment to infinity gives the thick medium's `σa/σt Le`.
+    #[test]
+    fn homogeneous_emission_is_the_exact_integral() {
+        let mut m = Medium::homogeneous(
+            Vec3A::new(2.0, 0.5, 0.0),
+            Vec3A::new(0.25, 0.5, 1.0),
+            Phase::Isotropic,
+        );
+        let Medium::Homogeneous(h) = &mut m else {
+            unreachable!()
+        };
+        h.emission = Vec3A::new(3.0, 2.0, 5.0);
+        let l = 1.3f32;
+        let mut rng = Rng::new(1, 0);
+        for _ in 0..100 {
+            let e = m.sample_flight(&ray(), l, &mut || rng.next_f32()).emitted();
+            let want = [
+                0.75 * 3.0 * (1.0 - (-2.6f32).exp()),
+                0.5 * 2.0 * (1.0 - (-0.65f32).exp()),
+                0.0,
+            ];
+            for c in 0..3 {
+                assert!((e[c] - want[c]).abs() < 1e-5, "{e:?} vs {want:?}");
+            }
+        }
+        let thick = m
+            .sample_flight(&ray(), f32::INFINITY, &mut || rng.next_f32())
+            .emitted();
+        assert!((thick - Vec3A::new(2.25, 1.0, 0.0)).abs().max_element() < 1e-6);
+    }
+
+    /// Delta tracking's collision estimator of a heterogeneous medium's
+    /// emission is unbiased: over a random grid of chromatic extinction
+    /// (empty cells, a majorant grid, null weights other than 1), a
+    /// chromatic albedo and a grid of emitted radiance, the mean `emitted`
+    /// of many flights matches the quadrature of `∫ T σa Le` per channel
+    /// within four standard errors (and 0.3 % of the quadrature for its own
+    /// error), also for a blackbody temperature field.
+    #[test]
+    fn heterogeneous_emission_is_unbiased() {
+        let to_world = Affine3A::from_scale_rotation_translation(
+            glam::Vec3::new(2.0, 1.0, 1.5),
+            glam::Quat::IDENTITY,
+            glam::Vec3::new(-1.0, -0.5, -0.75),
+        );
+        let n = [9, 6, 7];
+        let grid = |seed: u32, empty, scale| grid::random_grid(n, seed, empty, scale);
+        let field = |g: Grid| {
+            Field::new(
+                FieldValues::Grid {
+                    grid: std::sync::Arc::new(g),
+                    nearest: false,
+                },
+                to_world,
+            )
+        };
+        // Three random grids as one of three channels.
+        let (r, g, b) = (grid(17, 0.4, 3.0), grid(19, 0.3, 1.0), grid(21, 0.4, 4.0));
+        let mut rgb = Vec::new();
+        for z in 0..n[2] {
+            for y in 0..n[1] {
+                for x in 0..n[0] {
+                    rgb.extend([
+                        r.sample(x, y, z).x,
+                        g.sample(x, y, z).x,
+                        b.sample(x, y, z).x,
+                    ]);
+                }
+            }
+        }
+        let sigma_t = field(Grid::new(n, 3, rgb).unwrap());
+        let constant = |c| Field::new(FieldValues::Constant(c), Affine3A::IDENTITY);
+        for emission in [
+            Emission::Radiance {
+                le: field(grid(23, 0.0, 2.0)),
+                scale: 1.5,
+            },
+            Emission::Temperature {
+                temperature: field(grid(29, 0.0, 3000.0)),
+                offset: 200.0,
+                t_scale: 1.2,
+                scale: 4.0,
+            },
+        ] {
+            let m = Heterogeneous {
+                sigma_t: sigma_t.clone(),
+                albedo: constant(Vec3A::new(0.2, 0.5, 0.9)),
+                scale: 1.0,
+                phase: Phase::Isotropic,
+                sample_emitters: true,
+                emission: Some(emission),
+            };
+            let medium = Medium::Heterogeneous(Box::new(m.clone()));
+            let mut rng = Rng::new(9, 0);
+            for r in 0..3 {
+                let origin = Vec3A::new(-2.0, -0.3 + 0.25 * r as f32, -0.2);
+                let ray = Ray::new(origin, Vec3A::new(1.0, 0.1, 0.15 * r as f32).normalize());
+                let l = 4.0;
+                let want = emitted_by_quadrature(&m, &ray, l);
+                let runs = 200_000;
+                let (mut sum, mut sq) = (glam::DVec3::ZERO, glam::DVec3::ZERO);
+                for _ in 0..runs {
+                    let f = medium.sample_flight(&ray, l, &mut || rng.next_f32());
+                    let e = f.emitted().as_dvec3();
+                    sum += e;
+                    sq += e * e;
+                }
+                let got = sum / f64::from(runs);
+                let se = ((sq / f64::from(runs) - got * got) / f64::from(runs)).map(f64::sqrt);
+                for c in 0..3 {
+                    assert!(
+                        (got[c] - want[c]).abs() <= 4.0 * se[c] + 3e-3 * want[c],
+                        "ray {r}: emitted {got} vs quadrature {want} (standard errors {se})"
+                    );
+                    assert!(want[c] > 0.0);
+                }
+            }
         }
     }
 

@@ -182,3 +182,17 @@ pub fn constant_vol(value: f32) -> Vec<u8> {
     }
     vol
 }
+
+/// The error loading the scene at `path` gives (panicking if it loads),
+/// checked to be one line that names the file (its file name).
+#[allow(dead_code)]
+pub fn load_error(path: &std::path::Path) -> String {
+    let err = raylab::load::load(path.to_str().unwrap(), &Default::default())
+        .err()
+        .map(|e| e.to_string())
+        .unwrap_or_else(|| panic!("{} loaded", path.display()));
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    let name = path.file_name().unwrap().to_string_lossy();
+    assert!(err.contains(&*name), "{err} does not name {name}");
+    err
+}

@@ -125,9 +125,16 @@ pub(super) fn radiance(
                 if let Some((segment, h)) = &segment {
                     l += beta * equiangular_light(scene, segment, h, medium, sampler, rays);
                 }
-                match medium_here.sample_flight(&ray, t_surface, &mut || sampler.next_1d()) {
-                    Flight::Pass { weight } => beta *= weight,
-                    Flight::Scatter { t, weight } => {
+                let flight = medium_here.sample_flight(&ray, t_surface, &mut || sampler.next_1d());
+                // Light the medium emits along the segment (found by paths
+                // only: no light sample aims at it).
+                let emitted = flight.emitted();
+                if emitted != Vec3A::ZERO && depth < options.max_depth {
+                    l += beta * emitted;
+                }
+                match flight {
+                    Flight::Pass { weight, .. } => beta *= weight,
+                    Flight::Scatter { t, weight, .. } => {
                         beta *= weight;
                         // The surfaces found after a scattering are not the
                         // camera ray's: the AOVs shade its hit themselves.

@@ -596,6 +596,21 @@ fn media_sections(path: &Path, sections: &[MediumSection]) -> Result<MediaSectio
             ));
         }
         let phase = Phase::of_mean_cosine(g);
+        let albedo3 = Vec3A::from(albedo);
+        // What it emits with, checked: a medium emits σa Le per unit
+        // length, so one that absorbs nothing where it emits is an error.
+        let emits = |le: Vec3A, name: &str| -> Result<(), ShotError> {
+            check(path, &format!("{what} {name}"), &le.to_array(), true)?;
+            if le != Vec3A::ZERO && !(le.cmpgt(Vec3A::ZERO) & albedo3.cmplt(Vec3A::ONE)).any() {
+                return Err(invalid(
+                    path,
+                    format!(
+                        "{what}: {name} needs absorption (a medium emits absorption x emission per unit length): set a color below 1"
+                    ),
+                ));
+            }
+            Ok(())
+        };
         match m {
             MediumSection::Fog { .. } => {
                 if fog.is_some() {
@@ -609,8 +624,64 @@ fn media_sections(path: &Path, sections: &[MediumSection]) -> Result<MediaSectio
                 scale,
                 rotate,
                 translate,
+                emission,
+                temperature,
+                temperature_scale,
+                temperature_offset,
+                emission_scale,
                 ..
             } => {
+                let emission_scale = emission_scale.unwrap_or(1.0);
+                check(
+                    path,
+                    &format!("{what} emission_scale"),
+                    &[emission_scale],
+                    true,
+                )?;
+                let glow = match (emission, temperature) {
+                    (Some(_), Some(_)) => {
+                        return Err(invalid(
+                            path,
+                            format!(
+                                "{what}: emission and temperature both given (one or the other)"
+                            ),
+                        ));
+                    }
+                    (Some(le), None) => {
+                        let le = Vec3A::from(*le) * emission_scale;
+                        emits(le, "emission")?;
+                        Some(VdbGlow::Radiance(le))
+                    }
+                    (None, Some(grid)) => {
+                        let t_scale = temperature_scale.unwrap_or(1.0);
+                        let offset = temperature_offset.unwrap_or(0.0);
+                        check(path, &format!("{what} temperature_scale"), &[t_scale], true)?;
+                        check(
+                            path,
+                            &format!("{what} temperature_offset"),
+                            &[offset],
+                            false,
+                        )?;
+                        emits(Vec3A::splat(emission_scale), "temperature")?;
+                        Some(VdbGlow::Temperature {
+                            grid: grid.clone(),
+                            offset,
+                            t_scale,
+                            scale: emission_scale,
+                        })
+                    }
+                    (None, None) => {
+                        if temperature_scale.is_some() || temperature_offset.is_some() {
+                            return Err(invalid(
+                                path,
+                                format!(
+                                    "{what}: temperature_scale or temperature_offset without temperature"
+                                ),
+                            ));
+                        }
+                        None
+                    }
+                };
                 let placed = ModelSection {
                     scale: scale.clone(),
                     rotate: *rotate,
@@ -626,10 +697,19 @@ fn media_sections(path: &Path, sections: &[MediumSection]) -> Result<MediaSectio
                     albedo: Vec3A::from(albedo),
                     phase,
                     to_world,
+                    glow,
                 });
             }
-            MediumSection::Inside { model, .. } => {
-                let medium = crate::media::Medium::homogeneous(sigma_t, Vec3A::from(albedo), phase);
+            MediumSection::Inside {
+                model, emission, ..
+            } => {
+                let mut medium =
+                    crate::media::Medium::homogeneous(sigma_t, Vec3A::from(albedo), phase);
+                if let (Some(le), crate::media::Medium::Homogeneous(h)) = (emission, &mut medium) {
+                    let le = Vec3A::from(*le);
+                    emits(le, "emission")?;
+                    h.emission = le;
+                }
                 if inside.insert(model.clone(), medium).is_some() {
                     return Err(invalid(
                         path,
@@ -652,6 +732,20 @@ struct VdbMedium {
     albedo: Vec3A,
     phase: Phase,
     to_world: glam::Affine3A,
+    glow: Option<VdbGlow>,
+}
+
+/// What a `.vdb` volume emits with (`Le`, scaled).
+enum VdbGlow {
+    /// A constant radiance.
+    Radiance(Vec3A),
+    /// A blackbody at the temperature of a grid of the file.
+    Temperature {
+        grid: String,
+        offset: f32,
+        t_scale: f32,
+        scale: f32,
+    },
 }
 
 /// The `[[medium]]` sections checked.
@@ -673,7 +767,7 @@ fn vdb_parts(
     ledger: &crate::memory::Ledger,
 ) -> Result<SceneParts, ShotError> {
     use crate::materials::Material;
-    use crate::media::{Field, FieldValues, Heterogeneous, Medium};
+    use crate::media::{Emission, Field, FieldValues, Heterogeneous, Medium};
     use crate::scene::{MediumInterface, SceneMedia};
     let vdb = crate::load::vdb::read_vdb(&base.join(&v.file), v.grid.as_deref(), ledger)
         .map_err(|e| invalid(path, format!("{}: {e}", v.what)))?;
@@ -689,12 +783,36 @@ fn vdb_parts(
         ));
     }
     let albedo = Field::new(FieldValues::Constant(v.albedo), glam::Affine3A::IDENTITY);
+    let constant = |c: Vec3A| Field::new(FieldValues::Constant(c), glam::Affine3A::IDENTITY);
+    let emission = match &v.glow {
+        None => None,
+        Some(VdbGlow::Radiance(le)) => Some(Emission::Radiance {
+            le: constant(*le),
+            scale: 1.0,
+        }),
+        Some(VdbGlow::Temperature {
+            grid,
+            offset,
+            t_scale,
+            scale,
+        }) => {
+            let t = crate::load::vdb::read_vdb(&base.join(&v.file), Some(grid), ledger)
+                .map_err(|e| invalid(path, format!("{} temperature: {e}", v.what)))?;
+            Some(Emission::Temperature {
+                temperature: Field::sparse(t.grid, v.to_world * t.index_to_world),
+                offset: *offset,
+                t_scale: *t_scale,
+                scale: *scale,
+            })
+        }
+    };
     let medium = Medium::Heterogeneous(Box::new(Heterogeneous {
         sigma_t,
         albedo,
         scale: v.density,
         phase: v.phase,
         sample_emitters: true,
+        emission,
     }));
     medium
         .check()

@@ -67,6 +67,22 @@ pub enum MediumSection {
         rotate: Option<[f32; 3]>,
         /// Then move.
         translate: Option<[f32; 3]>,
+        /// The radiance it emits with where it is thick (light per unit
+        /// length `σa · Le`: it needs a `color` below 1), times
+        /// `emission_scale`.
+        emission: Option<[f32; 3]>,
+        /// Or a grid of the same file holding temperatures: it glows as a
+        /// blackbody at `(T − temperature_offset) · temperature_scale`
+        /// kelvin (pbrt-v4's peak-normalised blackbody), times
+        /// `emission_scale`.
+        temperature: Option<String>,
+        /// Multiplies the temperature after the offset, to kelvin
+        /// (default 1).
+        temperature_scale: Option<f32>,
+        /// Subtracted from the grid's temperature (default 0).
+        temperature_offset: Option<f32>,
+        /// Multiplies the emission (default 1).
+        emission_scale: Option<f32>,
     },
     /// A homogeneous medium filling a model (whose meshes must be closed).
     Inside {
@@ -78,6 +94,9 @@ pub enum MediumSection {
         color: Option<[f32; 3]>,
         /// The Henyey–Greenstein mean cosine (default 0: isotropic).
         anisotropy: Option<f32>,
+        /// The radiance it emits with where it is thick (light per unit
+        /// length `σa · Le`: it needs a `color` below 1).
+        emission: Option<[f32; 3]>,
     },
 }
 

@@ -9,7 +9,7 @@
 
 use glam::{Mat3, Vec3, Vec3A};
 
-use super::cie::{D65, LAMBDA_MAX, LAMBDA_MIN, SAMPLES, XYZ};
+use crate::materials::cie::{D65, LAMBDA_MAX, LAMBDA_MIN, SAMPLES, XYZ, tabulated};
 
 /// What a colour is, which decides how a spectrum becomes RGB.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -33,15 +33,6 @@ pub(super) fn xyz_to_srgb(xyz: Vec3) -> Vec3 {
         Vec3::new(-0.498535, 0.041556, 1.057311),
     );
     m * xyz
-}
-
-/// A table of [`SAMPLES`] values over `[LAMBDA_MIN, LAMBDA_MAX]`,
-/// interpolated linearly at `lambda`.
-fn tabulated(table: &[f32], lambda: f32) -> f32 {
-    let t = (lambda - LAMBDA_MIN) * ((SAMPLES - 1) as f32 / (LAMBDA_MAX - LAMBDA_MIN));
-    let i0 = (t.max(0.0) as usize).min(SAMPLES - 2);
-    let w1 = t - i0 as f32;
-    (1.0 - w1) * table[i0] + w1 * table[i0 + 1]
 }
 
 /// `∫ xyz(λ) s(λ) dλ` normalised so that a flat 1 has luminance 1 (Mitsuba's

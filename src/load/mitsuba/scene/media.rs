@@ -68,6 +68,7 @@ pub(super) fn medium(
                 scale,
                 phase,
                 sample_emitters,
+                emission: None,
             })))
         }
         other => Err(p.error(format!(

@@ -12,7 +12,6 @@
 //! shape groups and instances sharing their meshes) and emitters.
 
 mod bsdfs;
-mod cie;
 mod color;
 mod conductors;
 mod media;

@@ -1,20 +1,21 @@
 //! The CIE 1931 2° colour-matching functions and the CIE D65 illuminant,
 //! tabulated every 5 nm from 360 to 830 nm: the CIE's published values
 //! (CIE 015), in the sampling Mitsuba 3 uses to turn `wavelength:value`
-//! spectra into RGB (`color.rs`).
+//! spectra into RGB (the Mitsuba loader) and to integrate spectra
+//! ([`super::blackbody::blackbody_rgb`]).
 
 /// Samples of each table.
-pub(super) const SAMPLES: usize = 95;
+pub const SAMPLES: usize = 95;
 
 /// First wavelength (nm).
-pub(super) const LAMBDA_MIN: f32 = 360.0;
+pub const LAMBDA_MIN: f32 = 360.0;
 
 /// Last wavelength (nm).
-pub(super) const LAMBDA_MAX: f32 = 830.0;
+pub const LAMBDA_MAX: f32 = 830.0;
 
 /// x̄, then ȳ, then z̄ (95 values each).
 #[rustfmt::skip]
-pub(super) const XYZ: [f32; 3 * SAMPLES] = [
+pub const XYZ: [f32; 3 * SAMPLES] = [
     0.0001299, 0.0002321, 0.0004149, 0.0007416, 0.001368, 0.002236, 0.004243, 0.00765, 0.01431,
     0.02319, 0.04351, 0.07763, 0.13438, 0.21477, 0.2839, 0.3285, 0.34828, 0.34806, 0.3362, 0.3187,
     0.2908, 0.2511, 0.19536, 0.1421, 0.09564, 0.05795001, 0.03201, 0.0147, 0.0049, 0.0024, 0.0093,
@@ -47,7 +48,7 @@ pub(super) const XYZ: [f32; 3 * SAMPLES] = [
 
 /// D65's relative spectral power (100 at 560 nm).
 #[rustfmt::skip]
-pub(super) const D65: [f32; SAMPLES] = [
+pub const D65: [f32; SAMPLES] = [
     46.6383, 49.3637, 52.0891, 51.0323, 49.9755, 52.3118, 54.6482, 68.7015, 82.7549, 87.1204,
     91.486, 92.4589, 93.4318, 90.057, 86.6823, 95.7736, 104.865, 110.936, 117.008, 117.41, 117.812,
     116.336, 114.861, 115.392, 115.923, 112.367, 108.811, 109.082, 109.354, 108.578, 107.802,
@@ -59,3 +60,14 @@ pub(super) const D65: [f32; SAMPLES] = [
     65.0941, 63.3828, 63.8434, 64.304, 61.8779, 59.4519, 55.7054, 51.959, 54.6998, 57.4406,
     58.8765, 60.3125,
 ];
+
+/// A table of [`SAMPLES`] values over `[LAMBDA_MIN, LAMBDA_MAX]` (one of
+/// [`XYZ`]'s three, or [`D65`]), interpolated linearly at `lambda` (nm;
+/// clamped to the ends).
+#[inline]
+pub fn tabulated(table: &[f32], lambda: f32) -> f32 {
+    let t = (lambda - LAMBDA_MIN) * ((SAMPLES - 1) as f32 / (LAMBDA_MAX - LAMBDA_MIN));
+    let i0 = (t.max(0.0) as usize).min(SAMPLES - 2);
+    let w1 = (t - i0 as f32).clamp(0.0, 1.0);
+    (1.0 - w1) * table[i0] + w1 * table[i0 + 1]
+}
