@@ -549,37 +549,49 @@ fn mean_down_z(
     (mean, se)
 }
 
-/// Emissive media (`emission` in `[[medium]]`): a purely absorbing cube
-/// that glows, under a black sky, shows `Le (1 − e^{−2σ})` straight
-/// through (exact on every path: a homogeneous medium's emission is
-/// integrated in closed form), per channel of a chromatic medium; the
+/// Emissive media (`emission` or `temperature` in `[[medium]]`): a purely
+/// absorbing cube that glows, under a black sky, shows `Le (1 − e^{−2σ})`
+/// straight through (exact on every path: a homogeneous medium's emission
+/// is integrated in closed form), per channel of a chromatic medium, for
+/// an RGB `Le` and for a blackbody at 3000 K times `emission_scale`; the
 /// scene needs no other light (no default lighting is added).
 #[test]
 fn a_glowing_absorbing_cube_shows_le_times_its_opacity() {
     let dir = tempfile::tempdir().unwrap();
-    let path = cube_scene(
-        dir.path(),
-        "[[medium]]\ntype = \"inside\"\nmodel = \"cube\"\ndensity = [0.3, 0.6, 1.2]\n\
-         color = [0, 0, 0]\nemission = [2, 1, 0.5]\n",
-    );
-    let text = std::fs::read_to_string(&path)
-        .unwrap()
-        .replace("color = [1, 1, 1]", "color = [0, 0, 0]");
-    std::fs::write(&path, text).unwrap();
-    let loaded = raylab::load::load(path.to_str().unwrap(), &Default::default()).unwrap();
-    assert!(!loaded.default_light, "a glowing medium is a light");
-    let (mean, _) = mean_down_z(&loaded.scene, glam::Vec3A::ZERO, 0.5, 2000);
-    for (c, (le, sigma)) in [(2.0f64, 0.3f64), (1.0, 0.6), (0.5, 1.2)]
-        .iter()
-        .enumerate()
-    {
-        let want = le * (1.0 - (-2.0 * sigma).exp());
-        assert!(
-            (mean[c] - want).abs() < 1e-4 * want,
-            "channel {c}: {} vs Le (1 - exp(-2 sigma)) {want}",
-            mean[c]
+    let blackbody = raylab::materials::blackbody::blackbody_color(3000.0) * 2.5;
+    for (glow, le) in [
+        ("emission = [2, 1, 0.5]", glam::Vec3A::new(2.0, 1.0, 0.5)),
+        ("temperature = 3000\nemission_scale = 2.5", blackbody),
+    ] {
+        let path = cube_scene(
+            dir.path(),
+            &format!(
+                "[[medium]]\ntype = \"inside\"\nmodel = \"cube\"\ndensity = [0.3, 0.6, 1.2]\n\
+                 color = [0, 0, 0]\n{glow}\n"
+            ),
         );
+        let text = std::fs::read_to_string(&path)
+            .unwrap()
+            .replace("color = [1, 1, 1]", "color = [0, 0, 0]");
+        std::fs::write(&path, text).unwrap();
+        let loaded = raylab::load::load(path.to_str().unwrap(), &Default::default()).unwrap();
+        assert!(!loaded.default_light, "a glowing medium is a light");
+        let (mean, _) = mean_down_z(&loaded.scene, glam::Vec3A::ZERO, 0.5, 2000);
+        for (c, sigma) in [0.3f64, 0.6, 1.2].into_iter().enumerate() {
+            let want = f64::from(le[c]) * (1.0 - (-2.0 * sigma).exp());
+            assert!(
+                want > 0.0 && (mean[c] - want).abs() < 1e-4 * want,
+                "{glow}: channel {c}: {} vs Le (1 - exp(-2 sigma)) {want}",
+                mean[c]
+            );
+        }
     }
+    let err = common::load_error(&cube_scene(
+        dir.path(),
+        "[[medium]]\ntype = \"inside\"\nmodel = \"cube\"\ndensity = 1\ncolor = [0, 0, 0]\n\
+         temperature = 2000\nemission = [1, 1, 1]\n",
+    ));
+    assert!(err.contains("both"), "{err}");
 }
 
 /// A `.vdb` that glows by its temperature grid (`temperature = "…"`,

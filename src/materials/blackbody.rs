@@ -1,18 +1,21 @@
 //! The colour of a blackbody: Planck's law, normalised as pbrt-v4's
 //! `BlackbodySpectrum` is (its peak is 1, whatever the temperature), taken
-//! to linear Rec. 709 through the CIE 1931 2° tables ([`super::cie`]).
+//! to linear Rec. 709 through the CIE 1931 2° tables ([`super::cie`]), in
+//! pbrt-v4's two conventions:
 //!
-//! So a temperature says a colour and a brightness of at most about 1:
-//! `blackbody_rgb(6500.0)` is a near-white of luminance 0.89,
-//! `blackbody_rgb(2400.0)` an orange of 0.16, `blackbody_rgb(1500.0)` a deep
-//! red of 0.003; a scale says how bright. Emissive media use it for temperature
-//! grids (pbrt-v4's `nanovdb` medium: `Le = Lescale · B((T − offset) ·
-//! scale)`).
+//! - [`blackbody_rgb`]: the radiance of that spectrum, `∫ B̂(λ) (x̄, ȳ, z̄)
+//!   dλ` with `λ` in nm, as pbrt-v4's film records a temperature grid's
+//!   emission (its `nanovdb` and `uniformgrid` media: `Le = Lescale · B̂((T −
+//!   offset) · scale)`). Cooler is much dimmer: luminance 0.36 at 1500 K,
+//!   5.2 at 2000 K, 17 at 2400 K, 44 at 3000 K, 95 at 6500 K.
+//! - [`blackbody_color`]: the same colour at luminance 1, as pbrt-v4 takes a
+//!   `"blackbody Le"` spectrum given to a medium or a light (it divides by
+//!   the spectrum's luminance; a scale then says how bright).
 //!
-//! Values come from a table every [`STEP`] K up to [`TABLE_MAX`] K,
+//! [`blackbody_rgb`] reads a table every [`STEP`] K up to [`TABLE_MAX`] K,
 //! interpolated linearly (within 0.5 % of the exact integral where the
-//! colour is bright enough to see, tested), and are integrated exactly
-//! above it.
+//! colour is bright enough to see, tested), and integrates exactly above
+//! it.
 
 use std::sync::OnceLock;
 
@@ -48,21 +51,17 @@ fn wien_peak_nm(kelvin: f64) -> f64 {
     2.897_771_955e-3 / kelvin * 1e9
 }
 
-/// The linear Rec. 709 colour of a blackbody at `kelvin`, its spectrum
-/// normalised to peak 1 ([module docs](self)): `∫ B̂(λ) (x̄, ȳ, z̄) dλ / ∫ ȳ dλ`
-/// (1 nm steps over 360–830 nm) in Rec. 709, clamped at 0 (out of gamut
-/// below about 1900 K). Black at or below 0 K and for NaN; exact, not
-/// tabulated.
-pub fn blackbody_rgb_exact(kelvin: f32) -> Vec3A {
+/// CIE XYZ of the peak-normalised blackbody at `kelvin` (`∫ B̂ (x̄, ȳ, z̄)
+/// dλ`, 1 nm steps over 360–830 nm, `λ` in nm); zero at or below 0 K and
+/// for NaN.
+fn blackbody_xyz(kelvin: f32) -> Vec3A {
     let t = f64::from(kelvin);
     if t.is_nan() || t <= 0.0 {
         return Vec3A::ZERO;
     }
-    if t.is_infinite() {
-        return blackbody_rgb_exact(f32::MAX);
-    }
+    let t = t.min(f64::from(f32::MAX));
     let peak = planck(wien_peak_nm(t), t);
-    let (mut xyz, mut y_norm) = ([0.0f64; 3], 0.0f64);
+    let mut xyz = [0.0f64; 3];
     let steps = (LAMBDA_MAX - LAMBDA_MIN) as usize;
     for i in 0..=steps {
         let lambda = f64::from(LAMBDA_MIN) + i as f64;
@@ -73,16 +72,28 @@ pub fn blackbody_rgb_exact(kelvin: f32) -> Vec3A {
                 lambda as f32,
             ));
         }
-        y_norm += f64::from(tabulated(&XYZ[SAMPLES..2 * SAMPLES], lambda as f32));
     }
-    let xyz = Vec3A::new(
-        (xyz[0] / y_norm) as f32,
-        (xyz[1] / y_norm) as f32,
-        (xyz[2] / y_norm) as f32,
-    );
-    // (Below about 1900 K the locus leaves Rec. 709's gamut: its blue
-    // would be a little negative, and is 0.)
-    xyz_to_rec709(xyz).max(Vec3A::ZERO)
+    Vec3A::new(xyz[0] as f32, xyz[1] as f32, xyz[2] as f32)
+}
+
+/// The linear Rec. 709 radiance of the peak-normalised blackbody at
+/// `kelvin` (pbrt-v4's temperature grids; [module docs](self)), clamped at
+/// 0 (out of gamut below about 1900 K, where its blue would be a little
+/// negative). Black at or below 0 K and for NaN; exact, not tabulated.
+pub fn blackbody_rgb_exact(kelvin: f32) -> Vec3A {
+    xyz_to_rec709(blackbody_xyz(kelvin)).max(Vec3A::ZERO)
+}
+
+/// The colour of a blackbody at `kelvin` at luminance 1 (pbrt-v4's
+/// `"blackbody Le"`; [module docs](self)), in linear Rec. 709 clamped at 0;
+/// black where the blackbody has no luminance to speak of (below some
+/// 400 K).
+pub fn blackbody_color(kelvin: f32) -> Vec3A {
+    let xyz = blackbody_xyz(kelvin);
+    if xyz.y.is_nan() || xyz.y <= 1e-30 {
+        return Vec3A::ZERO;
+    }
+    xyz_to_rec709(xyz / xyz.y).max(Vec3A::ZERO)
 }
 
 /// [`blackbody_rgb_exact`], from a table below [`TABLE_MAX`] (built on first
@@ -143,15 +154,29 @@ mod tests {
         }
     }
 
-    /// Peak-normalised: the luminance is that of a flat spectrum of 1 where
-    /// the visible range is all near the peak, less elsewhere; hotter is
-    /// bluer, and cold is black.
+    /// Peak-normalised: the luminance is `∫ ȳ` (106.86, CIE 1931) times
+    /// a little less than 1 where the visible range is all near the peak,
+    /// less elsewhere; `blackbody_color` has luminance 1; hotter is bluer,
+    /// and cold is black.
     #[test]
     fn brightness_and_colour_follow_the_temperature() {
         let y = |c: Vec3A| 0.212_672_9 * c.x + 0.715_152_2 * c.y + 0.072_175 * c.z;
-        // At 5800 K the peak (500 nm) is mid-visible: Y a little below 1.
-        let sun = y(blackbody_rgb_exact(5800.0));
+        let y_integral: f32 = (0..=470)
+            .map(|i| tabulated(&XYZ[SAMPLES..2 * SAMPLES], 360.0 + i as f32))
+            .sum();
+        assert!((y_integral - 106.857).abs() < 0.2, "{y_integral}");
+        // At 5800 K the peak (500 nm) is mid-visible.
+        let sun = y(blackbody_rgb_exact(5800.0)) / y_integral;
         assert!((0.85..1.0).contains(&sun), "Y(5800 K) = {sun}");
+        for t in [2000.0, 3000.0, 6500.0, 15000.0] {
+            let c = blackbody_color(t);
+            let ratio = blackbody_rgb_exact(t) / c;
+            assert!((y(c) - 1.0).abs() < 1e-3, "{t} K: {c:?}");
+            assert!(
+                ratio.max_element() - ratio.min_element() < 1e-3 * ratio.x,
+                "{t} K"
+            );
+        }
         let warm = blackbody_rgb_exact(1800.0);
         assert!(
             warm.x > warm.y && warm.y > warm.z && warm.z == 0.0,
@@ -162,7 +187,9 @@ mod tests {
         assert_eq!(blackbody_rgb(0.0), Vec3A::ZERO);
         assert_eq!(blackbody_rgb(-5.0), Vec3A::ZERO);
         assert_eq!(blackbody_rgb(f32::NAN), Vec3A::ZERO);
-        assert!(y(blackbody_rgb(300.0)) < 1e-20);
+        assert_eq!(blackbody_color(f32::NAN), Vec3A::ZERO);
+        assert_eq!(blackbody_color(50.0), Vec3A::ZERO);
+        assert!(y(blackbody_rgb(300.0)) < 1e-18);
     }
 
     /// The table is within 0.5 % of the exact integral (per channel, of the

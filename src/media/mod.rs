@@ -137,9 +137,10 @@ pub enum Emission {
         scale: f32,
     },
     /// A blackbody at a temperature from a field: `scale · B((T(p) −
-    /// offset) · t_scale)`, `B` pbrt-v4's peak-normalised blackbody
-    /// ([`crate::materials::blackbody`]), as pbrt-v4's `nanovdb` medium's
-    /// `Lescale`, `temperatureoffset` and `temperaturescale`.
+    /// offset) · t_scale)`, `B` the radiance of pbrt-v4's peak-normalised
+    /// blackbody ([`crate::materials::blackbody::blackbody_rgb`]), as
+    /// pbrt-v4's `nanovdb` and `uniformgrid` media's `Lescale`,
+    /// `temperatureoffset` and `temperaturescale`.
     Temperature {
         /// The temperature before `offset` and `t_scale` (its first
         /// channel).

@@ -611,6 +611,12 @@ fn media_sections(path: &Path, sections: &[MediumSection]) -> Result<MediaSectio
             }
             Ok(())
         };
+        let both = || {
+            invalid(
+                path,
+                format!("{what}: emission and temperature both given (one or the other)"),
+            )
+        };
         match m {
             MediumSection::Fog { .. } => {
                 if fog.is_some() {
@@ -639,14 +645,7 @@ fn media_sections(path: &Path, sections: &[MediumSection]) -> Result<MediaSectio
                     true,
                 )?;
                 let glow = match (emission, temperature) {
-                    (Some(_), Some(_)) => {
-                        return Err(invalid(
-                            path,
-                            format!(
-                                "{what}: emission and temperature both given (one or the other)"
-                            ),
-                        ));
-                    }
+                    (Some(_), Some(_)) => return Err(both()),
                     (Some(le), None) => {
                         let le = Vec3A::from(*le) * emission_scale;
                         emits(le, "emission")?;
@@ -701,13 +700,29 @@ fn media_sections(path: &Path, sections: &[MediumSection]) -> Result<MediaSectio
                 });
             }
             MediumSection::Inside {
-                model, emission, ..
+                model,
+                emission,
+                temperature,
+                emission_scale,
+                ..
             } => {
                 let mut medium =
                     crate::media::Medium::homogeneous(sigma_t, Vec3A::from(albedo), phase);
-                if let (Some(le), crate::media::Medium::Homogeneous(h)) = (emission, &mut medium) {
-                    let le = Vec3A::from(*le);
-                    emits(le, "emission")?;
+                let scale = emission_scale.unwrap_or(1.0);
+                check(path, &format!("{what} emission_scale"), &[scale], true)?;
+                let le = match (emission, temperature) {
+                    (Some(_), Some(_)) => return Err(both()),
+                    (Some(le), None) => Some((Vec3A::from(*le) * scale, "emission")),
+                    (None, Some(kelvin)) => {
+                        check(path, &format!("{what} temperature"), &[*kelvin], true)?;
+                        let le = crate::materials::blackbody::blackbody_color(*kelvin);
+                        Some((le * scale, "temperature"))
+                    }
+                    (None, None) => None,
+                };
+                if let (Some((le, name)), crate::media::Medium::Homogeneous(h)) = (le, &mut medium)
+                {
+                    emits(le, name)?;
                     h.emission = le;
                 }
                 if inside.insert(model.clone(), medium).is_some() {

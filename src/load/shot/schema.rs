@@ -73,8 +73,8 @@ pub enum MediumSection {
         emission: Option<[f32; 3]>,
         /// Or a grid of the same file holding temperatures: it glows as a
         /// blackbody at `(T − temperature_offset) · temperature_scale`
-        /// kelvin (pbrt-v4's peak-normalised blackbody), times
-        /// `emission_scale`.
+        /// kelvin, times `emission_scale` (pbrt-v4's temperature grids:
+        /// [`crate::materials::blackbody::blackbody_rgb`]).
         temperature: Option<String>,
         /// Multiplies the temperature after the offset, to kelvin
         /// (default 1).
@@ -95,8 +95,15 @@ pub enum MediumSection {
         /// The Henyey–Greenstein mean cosine (default 0: isotropic).
         anisotropy: Option<f32>,
         /// The radiance it emits with where it is thick (light per unit
-        /// length `σa · Le`: it needs a `color` below 1).
+        /// length `σa · Le`: it needs a `color` below 1), times
+        /// `emission_scale`.
         emission: Option<[f32; 3]>,
+        /// Or it glows with the colour of a blackbody at this many kelvin
+        /// at luminance `emission_scale` (pbrt-v4's `"blackbody Le"`:
+        /// [`crate::materials::blackbody::blackbody_color`]).
+        temperature: Option<f32>,
+        /// Multiplies the emission (default 1).
+        emission_scale: Option<f32>,
     },
 }
 
