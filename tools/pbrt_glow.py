@@ -31,7 +31,6 @@ pbrt-v4 is built by ../shared/pbrt-v4/setup.sh (CPU only).
 """
 import argparse
 import math
-import os
 import subprocess
 import sys
 import tempfile

@@ -100,14 +100,16 @@ pub fn guides(scene: &Scene, ray: &Ray, s: &SurfaceHit, bsdf: &Material) -> Guid
 pub(crate) fn camera_medium(scene: &Scene, ray: &Ray, t_max: f32) -> Option<(Vec3A, Vec3A)> {
     let media = scene.media();
     let m = media.camera?;
-    let crate::media::Medium::Homogeneous(h) = &media.media[m as usize] else {
+    let medium = &media.media[m as usize];
+    let crate::media::Medium::Homogeneous(h) = medium else {
         return None;
     };
     if h.random_walk {
         return None;
     }
-    let (t0, t1) = h.span(ray, t_max)?;
-    let tr = (-h.sigma_t * (t1 - t0)).exp();
+    h.span(ray, t_max)?;
+    // (Exact for a homogeneous medium: no random numbers are drawn.)
+    let tr = medium.transmittance(ray, t_max, &mut || 0.5);
     let albedo = Vec3A::select(
         h.sigma_t.cmpgt(Vec3A::ZERO),
         h.sigma_s / h.sigma_t,

@@ -611,6 +611,12 @@ fn media_sections(path: &Path, sections: &[MediumSection]) -> Result<MediaSectio
             }
             Ok(())
         };
+        // `emission_scale`, checked (default 1).
+        let scale_of = |s: &Option<f32>| -> Result<f32, ShotError> {
+            let s = s.unwrap_or(1.0);
+            check(path, &format!("{what} emission_scale"), &[s], true)?;
+            Ok(s)
+        };
         let both = || {
             invalid(
                 path,
@@ -637,13 +643,7 @@ fn media_sections(path: &Path, sections: &[MediumSection]) -> Result<MediaSectio
                 emission_scale,
                 ..
             } => {
-                let emission_scale = emission_scale.unwrap_or(1.0);
-                check(
-                    path,
-                    &format!("{what} emission_scale"),
-                    &[emission_scale],
-                    true,
-                )?;
+                let emission_scale = scale_of(emission_scale)?;
                 let glow = match (emission, temperature) {
                     (Some(_), Some(_)) => return Err(both()),
                     (Some(le), None) => {
@@ -708,8 +708,7 @@ fn media_sections(path: &Path, sections: &[MediumSection]) -> Result<MediaSectio
             } => {
                 let mut medium =
                     crate::media::Medium::homogeneous(sigma_t, Vec3A::from(albedo), phase);
-                let scale = emission_scale.unwrap_or(1.0);
-                check(path, &format!("{what} emission_scale"), &[scale], true)?;
+                let scale = scale_of(emission_scale)?;
                 let le = match (emission, temperature) {
                     (Some(_), Some(_)) => return Err(both()),
                     (Some(le), None) => Some((Vec3A::from(*le) * scale, "emission")),
