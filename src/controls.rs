@@ -12,6 +12,12 @@ pub const TURN_STEP_DEG: f32 = 5.0;
 pub const DRAG_DEG_PER_PIXEL: f32 = 0.25;
 /// Pitch stays within ±this, so the view never flips over.
 pub const MAX_PITCH_DEG: f32 = 89.0;
+/// Factor of the fog's density per press of the fog keys.
+pub const FOG_STEP: f32 = 1.5;
+/// The thinnest fog before none (as a factor of the scene's fog; [`ViewState::fog`]).
+pub const FOG_MIN: f32 = 0.131_687_24; // 1.5^-5
+/// The thickest fog (1.5^10).
+pub const FOG_MAX: f32 = 57.665_04;
 
 /// Something the user asked for.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -44,6 +50,10 @@ pub enum Action {
     Screenshot,
     /// Show the denoised frame once the view rests, or stop showing it.
     ToggleDenoise,
+    /// Make the fog thicker (turn it on if there is none).
+    FogThicker,
+    /// Make the fog thinner (off below [`FOG_MIN`]).
+    FogThinner,
     /// Close the viewer.
     Quit,
 }
@@ -74,6 +84,11 @@ pub struct ViewState {
     /// window), fitted to the image's size ([`FilmWindow::at`]); `None`:
     /// the whole film.
     pub window: Option<FilmWindow>,
+    /// The fog's density as a factor of the scene's own fog (or, for a
+    /// scene without, of a default fog: one mean free path per scene
+    /// radius): 0 is none, else from [`FOG_MIN`] to [`FOG_MAX`] in steps of
+    /// [`FOG_STEP`].
+    pub fog: f32,
 }
 
 impl ViewState {
@@ -119,6 +134,21 @@ impl ViewState {
             Action::LightDown => self.light_pos += step * level.y_axis,
             Action::Reset => *self = *initial,
             Action::Use(integrator) => self.integrator = integrator,
+            Action::FogThicker => {
+                self.fog = if self.fog < FOG_MIN {
+                    FOG_MIN
+                } else {
+                    (self.fog * FOG_STEP).min(FOG_MAX)
+                }
+            }
+            Action::FogThinner => {
+                let thinner = self.fog / FOG_STEP;
+                self.fog = if thinner < FOG_MIN * 0.999 {
+                    0.0
+                } else {
+                    thinner
+                }
+            }
             Action::Screenshot | Action::Quit | Action::ToggleDenoise => {}
         }
         self.yaw_deg = wrap_degrees(self.yaw_deg);
@@ -164,6 +194,7 @@ mod tests {
             lens: Lens::LAB,
             thin_lens: None,
             window: None,
+            fog: 0.0,
         }
     }
 
@@ -256,6 +287,36 @@ mod tests {
             s.light_pos - init.light_pos,
             Vec3A::new(2.0, 2.0, 0.0)
         ));
+    }
+
+    /// The fog keys step the density by 1.5 between off, the thinnest and
+    /// the thickest; a scene's own fog (1) comes back after a press each
+    /// way; reset restores it.
+    #[test]
+    fn fog_keys_thicken_and_thin_the_fog() {
+        let mut init = start();
+        init.fog = 1.0;
+        let mut s = init;
+        assert!(s.apply(Action::FogThicker, &init));
+        assert!((s.fog - 1.5).abs() < 1e-6);
+        s.apply(Action::FogThinner, &init);
+        assert!((s.fog - 1.0).abs() < 1e-6);
+        for _ in 0..5 {
+            s.apply(Action::FogThinner, &init);
+        }
+        assert!((s.fog - FOG_MIN).abs() < 1e-6, "{}", s.fog);
+        assert!(s.apply(Action::FogThinner, &init));
+        assert_eq!(s.fog, 0.0, "off below the thinnest");
+        assert!(!s.apply(Action::FogThinner, &init));
+        assert!(s.apply(Action::FogThicker, &init));
+        assert_eq!(s.fog, FOG_MIN, "on again at the thinnest");
+        for _ in 0..30 {
+            s.apply(Action::FogThicker, &init);
+        }
+        assert!((s.fog - FOG_MAX).abs() < 1e-3, "{}", s.fog);
+        assert!(!s.apply(Action::FogThicker, &init));
+        s.apply(Action::Reset, &init);
+        assert_eq!(s.fog, 1.0);
     }
 
     #[test]

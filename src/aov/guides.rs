@@ -98,15 +98,8 @@ pub fn guides(scene: &Scene, ray: &Ray, s: &SurfaceHit, bsdf: &Material) -> Guid
 /// otherwise or where the ray does not cross it.
 #[inline]
 pub(crate) fn camera_medium(scene: &Scene, ray: &Ray, t_max: f32) -> Option<(Vec3A, Vec3A)> {
-    let media = scene.media();
-    let m = media.camera?;
-    let medium = &media.media[m as usize];
-    let crate::media::Medium::Homogeneous(h) = medium else {
-        return None;
-    };
-    if h.random_walk {
-        return None;
-    }
+    let (m, h) = scene.media().camera_homogeneous()?;
+    let medium = &scene.media().media[m];
     h.span(ray, t_max)?;
     // (Exact for a homogeneous medium: no random numbers are drawn.)
     let tr = medium.transmittance(ray, t_max, &mut || 0.5);

@@ -67,6 +67,8 @@ pub struct Preview {
     /// Tone mapping on screen and in screenshots.
     tonemap: ToneMap,
     scene: Scene,
+    /// The fog the fog keys scale.
+    fog: Fog,
     initial: ViewState,
     /// The camera, light and integrator now.
     pub state: ViewState,
@@ -74,6 +76,63 @@ pub struct Preview {
     /// Sums of `samples` samples per pixel.
     sums: Film,
     samples: u32,
+}
+
+/// The fog the viewer's fog keys thicken and thin
+/// ([`crate::controls::ViewState::fog`]): the scene's own at factor 1, or,
+/// for a scene without, a white isotropic fog of one mean free path per
+/// scene radius, added on the first press.
+struct Fog {
+    /// Extinction and scattering at factor 1.
+    sigma_t: Vec3A,
+    sigma_s: Vec3A,
+    /// The factor the scene's fog has now.
+    applied: f32,
+}
+
+impl Fog {
+    /// The fog of `scene`, whose factor is `factor` (1 if it has fog, 0
+    /// if not).
+    fn of(scene: &Scene, factor: f32) -> Fog {
+        match scene.fog() {
+            Some(h) => Fog {
+                sigma_t: h.sigma_t,
+                sigma_s: h.sigma_s,
+                applied: factor,
+            },
+            None => {
+                let sigma = Vec3A::splat(1.0 / scene.radius().max(1e-6));
+                Fog {
+                    sigma_t: sigma,
+                    sigma_s: sigma,
+                    applied: 0.0,
+                }
+            }
+        }
+    }
+
+    /// Gives the scene's fog the coefficients of `factor` (adding the fog
+    /// if the scene has none yet and `factor` is not 0).
+    fn apply(&mut self, scene: &mut Scene, factor: f32) {
+        if factor == self.applied {
+            return;
+        }
+        if scene.fog().is_none() {
+            // (A fog of zero density: the coefficients follow.)
+            let white = Vec3A::ONE;
+            if scene
+                .add_fog_with(Vec3A::ZERO, white, crate::media::Phase::Isotropic)
+                .is_err()
+            {
+                return;
+            }
+        }
+        if let Some(h) = scene.fog_mut() {
+            h.sigma_t = self.sigma_t * factor;
+            h.sigma_s = self.sigma_s * factor;
+        }
+        self.applied = factor;
+    }
 }
 
 impl Preview {
@@ -102,6 +161,7 @@ impl Preview {
             kind: session.kind,
             tonemap: session.tonemap,
             // The viewer moves the scene's light: its own copy (none when unshared).
+            fog: Fog::of(&session.scene, session.view.fog),
             scene: std::sync::Arc::unwrap_or_clone(session.scene),
             initial: session.view,
             state: session.view,
@@ -230,6 +290,7 @@ impl Preview {
         // samples it would add cannot reach the frame in hand anyway.
         if self.refining() && !self.denoising() {
             self.scene.light.position = self.state.light_pos;
+            self.fog.apply(&mut self.scene, self.state.fog);
             let camera = self.state.camera(w, h);
             let k = self.samples;
             match &mut self.denoise {
@@ -425,5 +486,73 @@ impl Denoising {
             }
         }
         said
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::controls::{FOG_MIN, FOG_STEP};
+
+    /// The fog keys' fog: a scene without one gets a white fog of one
+    /// mean free path per radius, scaled by the factor, on the first
+    /// non-zero factor; a scene with one has its own scaled; factor 0
+    /// clears it; the paths through the box see it (thick white fog lit by
+    /// the box's light: 2.6 times the clear box's light, measured).
+    #[test]
+    fn the_fog_keys_scale_the_scenes_fog() {
+        let mut scene = crate::load::cornell::scene();
+        let mut fog = Fog::of(&scene, 0.0);
+        assert!(scene.fog().is_none());
+        fog.apply(&mut scene, 0.0);
+        assert!(scene.fog().is_none(), "nothing to do at 0");
+        fog.apply(&mut scene, FOG_MIN);
+        let sigma = FOG_MIN / scene.radius();
+        let h = scene.fog().expect("fog added");
+        assert!((h.sigma_t - Vec3A::splat(sigma)).abs().max_element() < 1e-6);
+        assert_eq!(h.sigma_s, h.sigma_t);
+        let radiance = |scene: &Scene| {
+            let camera = crate::camera::Camera::lab(Vec3A::new(0.0, 0.0, -3.0), 0.0, 0.0, 32, 32);
+            let opts = crate::integrators::path::PathOptions::default();
+            let mut rays = 0;
+            let mut sum = 0.0f64;
+            for i in 0..4096u64 {
+                let mut rng = crate::sampling::sampler::Rng::new(i, 1);
+                let ray = camera.ray(16.0 + (i % 7) as f32, 16.0 + (i % 5) as f32);
+                let l = crate::integrators::path::radiance(scene, &ray, &opts, &mut rng, &mut rays);
+                sum += f64::from(l.x + l.y + l.z);
+            }
+            sum
+        };
+        fog.apply(&mut scene, 0.0);
+        assert_eq!(scene.fog().unwrap().sigma_t, Vec3A::ZERO, "off is clear");
+        let clear = radiance(&scene);
+        fog.apply(&mut scene, FOG_MIN * FOG_STEP.powi(12));
+        let thick = radiance(&scene);
+        // (White fog lit by the box's light: brighter than the walls.)
+        assert!(
+            (thick - clear).abs() > 0.2 * clear,
+            "thick fog {thick} vs clear {clear}"
+        );
+
+        // A scene's own fog is the factor's 1.
+        let mut foggy = crate::load::cornell::scene();
+        foggy
+            .add_fog_with(
+                Vec3A::new(0.2, 0.3, 0.4),
+                Vec3A::splat(0.5),
+                crate::media::Phase::Isotropic,
+            )
+            .unwrap();
+        let mut fog = Fog::of(&foggy, 1.0);
+        fog.apply(&mut foggy, 1.5);
+        let h = foggy.fog().unwrap();
+        assert!((h.sigma_t - Vec3A::new(0.3, 0.45, 0.6)).abs().max_element() < 1e-6);
+        assert!(
+            (h.sigma_s - Vec3A::new(0.15, 0.225, 0.3))
+                .abs()
+                .max_element()
+                < 1e-6
+        );
     }
 }

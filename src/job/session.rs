@@ -246,6 +246,7 @@ fn frame(
         lens: initial.lens,
         thin_lens: None,
         window: initial.window,
+        fog: if scene.fog().is_some() { 1.0 } else { 0.0 },
     };
     let pinhole = view.camera(size.0, size.1);
     view.thin_lens = focused_lens(args, initial.depth_of_field, &pinhole, scene)?;

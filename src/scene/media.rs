@@ -5,7 +5,7 @@
 
 use glam::Vec3A;
 
-use crate::media::Medium;
+use crate::media::{Homogeneous, Medium};
 
 /// The media on the two sides of a surface: `interior` behind its front
 /// geometric normal, `exterior` in front of it; `None` is vacuum.
@@ -57,6 +57,17 @@ impl SceneMedia {
     #[inline]
     pub fn is_empty(&self) -> bool {
         self.media.is_empty()
+    }
+
+    /// The homogeneous medium camera rays start in, with its index: the
+    /// fog the denoising guides look through and the viewer thickens. `None`
+    /// for vacuum, a heterogeneous medium or a random-walk (subsurface) one.
+    pub fn camera_homogeneous(&self) -> Option<(usize, &Homogeneous)> {
+        let m = self.camera? as usize;
+        match self.media.get(m)? {
+            Medium::Homogeneous(h) if !h.random_walk => Some((m, h)),
+            _ => None,
+        }
     }
 
     /// The interface of material `material` (none if no material has one).
@@ -141,5 +152,39 @@ impl SceneMedia {
         for m in &mut self.media {
             m.transform(to_world, s);
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::media::Phase;
+
+    /// The fog is the camera's homogeneous medium: not vacuum, not a
+    /// subsurface (random-walk) medium, not a medium the camera is outside.
+    #[test]
+    fn the_camera_fog_is_its_homogeneous_scattering_medium() {
+        let fog = Medium::homogeneous(Vec3A::splat(0.5), Vec3A::splat(0.8), Phase::Isotropic);
+        let skin = Medium::subsurface(Vec3A::splat(2.0), Vec3A::splat(0.7), 0.0);
+        let mut media = SceneMedia {
+            media: vec![skin, fog],
+            interfaces: Vec::new(),
+            camera: None,
+        };
+        assert!(media.camera_homogeneous().is_none(), "vacuum");
+        media.camera = Some(1);
+        let (m, h) = media.camera_homogeneous().expect("fog");
+        assert_eq!(m, 1);
+        assert_eq!(h.sigma_t, Vec3A::splat(0.5));
+        media.camera = Some(0);
+        assert!(
+            media.camera_homogeneous().is_none(),
+            "a random walk is no fog"
+        );
+        media.camera = Some(7);
+        assert!(
+            media.camera_homogeneous().is_none(),
+            "an index past the media"
+        );
     }
 }

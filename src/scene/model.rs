@@ -667,6 +667,30 @@ impl Scene {
         Ok(())
     }
 
+    /// Where the fog ([`Scene::add_fog_with`]) is among the media: the
+    /// medium camera rays start in, if it is a bounded homogeneous one.
+    fn fog_index(&self) -> Option<usize> {
+        let (m, h) = self.media.camera_homogeneous()?;
+        h.bounds.is_some().then_some(m)
+    }
+
+    /// The fog ([`Scene::add_fog_with`]), if the scene has one.
+    pub fn fog(&self) -> Option<&crate::media::Homogeneous> {
+        match &self.media.media[self.fog_index()?] {
+            crate::media::Medium::Homogeneous(h) => Some(h),
+            crate::media::Medium::Heterogeneous(_) => None,
+        }
+    }
+
+    /// The fog, to change its coefficients (the viewer's fog keys).
+    pub fn fog_mut(&mut self) -> Option<&mut crate::media::Homogeneous> {
+        let i = self.fog_index()?;
+        match &mut self.media.media[i] {
+            crate::media::Medium::Homogeneous(h) => Some(h),
+            crate::media::Medium::Heterogeneous(_) => None,
+        }
+    }
+
     /// The scene's participating media and the surfaces that bound them.
     #[inline]
     pub fn media(&self) -> &SceneMedia {

@@ -23,6 +23,8 @@ pub fn action_for_key(key: KeyCode) -> Option<Action> {
         KeyCode::Digit3 | KeyCode::Numpad3 => Action::Use(Integrator::path()),
         KeyCode::KeyP => Action::Screenshot,
         KeyCode::KeyN => Action::ToggleDenoise,
+        KeyCode::BracketRight => Action::FogThicker,
+        KeyCode::BracketLeft => Action::FogThinner,
         KeyCode::Escape => Action::Quit,
         _ => return None,
     })
@@ -52,6 +54,8 @@ mod tests {
             (KeyCode::Numpad3, Action::Use(Integrator::path())),
             (KeyCode::KeyP, Action::Screenshot),
             (KeyCode::KeyN, Action::ToggleDenoise),
+            (KeyCode::BracketRight, Action::FogThicker),
+            (KeyCode::BracketLeft, Action::FogThinner),
             (KeyCode::Escape, Action::Quit),
         ];
         for (key, action) in expect {
