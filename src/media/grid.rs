@@ -81,6 +81,12 @@ impl Grid {
         })
     }
 
+    /// Its channels per sample (1 or 3).
+    #[inline]
+    pub fn channels(&self) -> u32 {
+        self.channels
+    }
+
     /// The largest value of any channel.
     pub fn max(&self) -> f32 {
         self.max
@@ -278,6 +284,16 @@ impl Field {
                 let (lo, hi) = grid.index_box();
                 Vec3A::splat(grid.eval(lo + unit * (hi - lo)))
             }
+        }
+    }
+
+    /// Whether every channel has the same value everywhere (a grey
+    /// field): a constant with equal channels, a one-channel grid.
+    pub fn is_grey(&self) -> bool {
+        match &self.values {
+            FieldValues::Constant(v) => v.x == v.y && v.y == v.z,
+            FieldValues::Grid { grid, .. } => grid.channels() == 1,
+            FieldValues::Sparse(_) => true,
         }
     }
 
