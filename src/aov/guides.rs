@@ -27,6 +27,13 @@
 //! of the image that no surface albedo shows, and a denoiser blurs what its
 //! guides do not show. A chain that escapes adds no normal.
 //!
+//! Media along the chain (fog around the camera, a cloud behind a `null`
+//! boundary, a medium inside a model) show in expectation
+//! ([`crate::media::expected`]): the albedo where a path first scatters in
+//! them and the light they emit join the albedo, and what lies behind is
+//! seen times their transmittance (Cycles gives its denoiser a volume's
+//! albedo where a path first scatters, from one sample).
+//!
 //! The guides use no random numbers: a camera ray always gets the same
 //! guides, so a pixel's guides, the mean over its first [`GUIDE_SAMPLES`]
 //! samples, are antialiased over those sample positions and are otherwise
@@ -38,6 +45,7 @@ use super::set::luminance;
 use crate::geometry::ray::Ray;
 use crate::integrators::path::{coat_normal, shading};
 use crate::materials::{Frame, Material};
+use crate::media::expected;
 use crate::scene::{Scene, SurfaceHit};
 
 /// The samples of a pixel (its first ones, by index) that the `albedo` and
@@ -77,13 +85,10 @@ pub struct Guides {
 /// The guides of camera ray `ray`, whose first hit `s` has the BSDF `bsdf`.
 pub fn guides(scene: &Scene, ray: &Ray, s: &SurfaceHit, bsdf: &Material) -> Guides {
     let mut g = Guides::default();
-    visit(scene, ray.dir, s, bsdf, Vec3A::ONE, 1.0, 0, &mut g);
-    if let Some((tr, albedo)) = camera_medium(scene, ray, (s.point.p - ray.origin).length()) {
-        // In front of the surface, the medium the camera is in: what the
-        // path scatters off first, in expectation.
-        g.albedo = (Vec3A::ONE - tr) * albedo + tr * g.albedo;
-        g.normal *= (tr.x + tr.y + tr.z) / 3.0;
-    }
+    let medium = scene.media().camera;
+    let t = (s.point.p - ray.origin).length();
+    let tr = through(scene, medium, ray, t, Vec3A::ONE, &mut g);
+    visit(scene, ray.dir, s, bsdf, medium, tr, mean(tr), 0, &mut g);
     g.albedo = g.albedo.clamp(Vec3A::ZERO, Vec3A::ONE);
     if !g.albedo.is_finite() || !g.normal.is_finite() {
         return Guides::default();
@@ -91,24 +96,47 @@ pub fn guides(scene: &Scene, ray: &Ray, s: &SurfaceHit, bsdf: &Material) -> Guid
     g
 }
 
-/// The transmittance of the camera's medium along `ray` up to `t_max`, and
-/// the albedo it scatters with (Cycles gives its denoiser a volume's albedo
-/// where a path scatters first; here in expectation, so the guides keep
-/// no noise): only a homogeneous medium the camera starts in (fog), `None`
-/// otherwise or where the ray does not cross it.
-#[inline]
-pub(crate) fn camera_medium(scene: &Scene, ray: &Ray, t_max: f32) -> Option<(Vec3A, Vec3A)> {
-    let (m, h) = scene.media().camera_homogeneous()?;
-    let medium = &scene.media().media[m];
-    h.span(ray, t_max)?;
-    // (Exact for a homogeneous medium: no random numbers are drawn.)
-    let tr = medium.transmittance(ray, t_max, &mut || 0.5);
-    let albedo = Vec3A::select(
-        h.sigma_t.cmpgt(Vec3A::ZERO),
-        h.sigma_s / h.sigma_t,
-        Vec3A::ZERO,
+/// The albedo guide of a camera ray that hits nothing: the camera's medium
+/// (if any) in front of the environment.
+pub(crate) fn escaped(scene: &Scene, ray: &Ray) -> Vec3A {
+    let mut g = Guides::default();
+    let tr = through(
+        scene,
+        scene.media().camera,
+        ray,
+        f32::INFINITY,
+        Vec3A::ONE,
+        &mut g,
     );
-    (tr.is_finite() && albedo.is_finite()).then_some((tr, albedo.clamp(Vec3A::ZERO, Vec3A::ONE)))
+    g.albedo + tr * sky(scene, ray.dir)
+}
+
+/// Adds to `g` what medium `medium` (if any) between `ray`'s origin and
+/// `t_max` shows, seen with tint `tint`: the albedo where a path first
+/// scatters in it and the light it emits, both in expectation
+/// ([`crate::media::expected`]; Cycles gives its denoiser a volume's albedo
+/// where a path scatters first, from one sample). Returns the medium's
+/// transmittance, the factor of what lies behind.
+fn through(
+    scene: &Scene,
+    medium: Option<u32>,
+    ray: &Ray,
+    t_max: f32,
+    tint: Vec3A,
+    g: &mut Guides,
+) -> Vec3A {
+    let Some(m) = medium.and_then(|m| scene.media().media.get(m as usize)) else {
+        return Vec3A::ONE;
+    };
+    let e = expected::along(m, ray, t_max);
+    g.albedo += tint * (e.scattered + squash(e.emitted));
+    e.transmittance
+}
+
+/// The mean of the three channels.
+#[inline]
+fn mean(v: Vec3A) -> f32 {
+    v.element_sum() / 3.0
 }
 
 /// `L/(1 + L)` per channel: light as a guide value in `[0, 1)`.
@@ -129,14 +157,16 @@ pub(crate) fn sky(scene: &Scene, dir: Vec3A) -> Vec3A {
     }
 }
 
-/// Adds to `g` what surface `s` (reached along `dir` with the chain's tint
-/// `tint` and normal weight `share`) and the chain beyond it contribute.
+/// Adds to `g` what surface `s` (reached along `dir` through medium
+/// `medium`, with the chain's tint `tint` and normal weight `share`) and the
+/// chain beyond it contribute.
 #[allow(clippy::too_many_arguments)]
 fn visit(
     scene: &Scene,
     dir: Vec3A,
     s: &SurfaceHit,
     bsdf: &Material,
+    medium: Option<u32>,
     tint: Vec3A,
     share: f32,
     depth: u32,
@@ -178,6 +208,7 @@ fn visit(
                 scene,
                 s,
                 frame.to_world(wi),
+                medium,
                 tint * value,
                 share * luminance(value) / split,
                 depth,
@@ -195,16 +226,28 @@ fn visit(
         };
         if let Some((wi, _)) = stronger {
             let value = reflect + transmit;
-            follow(scene, s, frame.to_world(wi), tint * value, share, depth, g);
+            follow(
+                scene,
+                s,
+                frame.to_world(wi),
+                medium,
+                tint * value,
+                share,
+                depth,
+                g,
+            );
         }
     }
 }
 
-/// Follows the chain from `s` along `wi` (world space).
+/// Follows the chain from `s` (reached through medium `medium`) along `wi`
+/// (world space), into the medium on that side of `s`.
+#[allow(clippy::too_many_arguments)]
 fn follow(
     scene: &Scene,
     s: &SurfaceHit,
     wi: Vec3A,
+    medium: Option<u32>,
     tint: Vec3A,
     share: f32,
     depth: u32,
@@ -214,13 +257,23 @@ fn follow(
         return;
     }
     let wi = wi.normalize();
+    let interface = scene.media().interface(s.material);
+    let medium = if interface.is_transition() {
+        interface.target(s.ng, wi)
+    } else {
+        medium
+    };
     let ray = Ray::new(s.point.offset_origin(wi), wi);
-    match scene.intersect(&ray, f32::INFINITY) {
+    let hit = scene.intersect(&ray, f32::INFINITY);
+    let t = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
+    let tr = through(scene, medium, &ray, t, tint, g);
+    let (tint, share) = (tint * tr, share * mean(tr));
+    match hit {
         Some(hit) => {
             let next = scene.surface(&hit);
             let material = &scene.materials()[next.material as usize];
             let bsdf = material.bsdf(&next.attrs, scene.textures());
-            visit(scene, wi, &next, &bsdf, tint, share, depth + 1, g);
+            visit(scene, wi, &next, &bsdf, medium, tint, share, depth + 1, g);
         }
         None => g.albedo += tint * sky(scene, wi),
     }

@@ -131,10 +131,7 @@ impl Layout {
         }
         let Some(hit) = hit else {
             if let Some(at) = albedo {
-                let mut sky = guides::sky(scene, ray.dir);
-                if let Some((tr, albedo)) = guides::camera_medium(scene, ray, f32::INFINITY) {
-                    sky = (Vec3A::ONE - tr) * albedo + tr * sky;
-                }
+                let sky = guides::escaped(scene, ray);
                 if sky.is_finite() {
                     for (o, c) in out[at..at + 3].iter_mut().zip(sky.to_array()) {
                         *o += crate::fixed::fixed(c);

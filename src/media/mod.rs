@@ -26,6 +26,7 @@
 //! tracking's tentative collisions for a heterogeneous one (unbiased).
 
 pub mod albedo;
+pub mod expected;
 pub mod grid;
 pub mod majorant;
 pub mod phase;
