@@ -7,17 +7,28 @@
 //! albedo's mean, so the guides stay free of noise.
 //!
 //! Homogeneous media in closed form. Heterogeneous ones by the midpoint rule
-//! over [`STEPS`] equal steps of the ray's span in the medium (each step's
-//! coefficients taken as constant over it): a guide needs the picture, not
-//! the last digit, and the same point always gets the same guide.
+//! (each step's coefficients taken as constant over it) over the cells of
+//! the majorant grid the ray crosses, skipping empty ones, in steps of
+//! optical depth at most [`STEP_DEPTH`] against each cell's bound, until the
+//! light left is below [`OPAQUE`]: a guide needs the picture, not the last
+//! digit, and the same point always gets the same guide.
 
 use glam::Vec3A;
 
 use super::{Heterogeneous, Homogeneous, Medium, transmit};
 use crate::geometry::ray::Ray;
 
-/// The steps a heterogeneous medium's span is integrated over.
-pub const STEPS: u32 = 64;
+/// The optical depth (against the majorant) of a step of the midpoint rule
+/// in a heterogeneous medium.
+pub const STEP_DEPTH: f32 = 2.0;
+
+/// The most steps a stretch of constant majorant takes (a medium without a
+/// majorant grid is one stretch).
+pub const MAX_STEPS: u32 = 16;
+
+/// The transmittance below which the rest of a heterogeneous medium is not
+/// looked at (it could add at most this much).
+pub const OPAQUE: f32 = 1e-3;
 
 /// A medium's effect along a ray in expectation ([module docs](self)).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -71,21 +82,36 @@ fn heterogeneous(h: &Heterogeneous, ray: &Ray, t_max: f32) -> Expected {
     let Some((t0, t1)) = h.span(ray, t_max) else {
         return Expected::CLEAR;
     };
-    let dt = (t1 - t0) / STEPS as f32;
     let mut e = Expected::CLEAR;
-    for i in 0..STEPS {
-        let p = ray.origin + ray.dir * (t0 + (i as f32 + 0.5) * dt);
-        let sigma_t = h.scale * h.sigma_t.eval(p);
-        let step = transmit(sigma_t, dt);
-        // Of the light entering the step, `1 − step` collides in it: with
-        // the albedo it scatters, the rest is absorbed (and emits).
-        let collides = e.transmittance * (Vec3A::ONE - step);
-        let albedo = h.albedo.eval(p).clamp(Vec3A::ZERO, Vec3A::ONE);
-        e.scattered += collides * albedo;
-        if let Some(emission) = &h.emission {
-            e.emitted += collides * (Vec3A::ONE - albedo) * emission.eval(p);
+    // The stretches of the majorant grid (or the whole span): empty ones
+    // cost nothing, the others steps of optical depth at most STEP_DEPTH
+    // against their bound (at most MAX_STEPS).
+    for (ta, tb, m) in h.walk(ray, t0, t1) {
+        let mu = h.scale * m;
+        if mu.is_nan() || mu <= 0.0 || tb <= ta {
+            continue;
         }
-        e.transmittance *= step;
+        let n = ((tb - ta) * mu / STEP_DEPTH)
+            .ceil()
+            .clamp(1.0, MAX_STEPS as f32) as u32;
+        let dt = (tb - ta) / n as f32;
+        for i in 0..n {
+            let p = ray.origin + ray.dir * (ta + (i as f32 + 0.5) * dt);
+            let sigma_t = h.scale * h.sigma_t.eval(p);
+            let step = transmit(sigma_t, dt);
+            // Of the light entering the step, `1 − step` collides in it:
+            // with the albedo it scatters, the rest is absorbed (and emits).
+            let collides = e.transmittance * (Vec3A::ONE - step);
+            let albedo = h.albedo.eval(p).clamp(Vec3A::ZERO, Vec3A::ONE);
+            e.scattered += collides * albedo;
+            if let Some(emission) = &h.emission {
+                e.emitted += collides * (Vec3A::ONE - albedo) * emission.eval(p);
+            }
+            e.transmittance *= step;
+            if e.transmittance.max_element() < OPAQUE {
+                return e;
+            }
+        }
     }
     e
 }
