@@ -60,7 +60,7 @@ impl SceneMedia {
     }
 
     /// The homogeneous medium camera rays start in, with its index: the
-    /// fog the denoising guides look through and the viewer thickens. `None`
+    /// fog the viewer thickens ([`crate::Scene::fog`]). `None`
     /// for vacuum, a heterogeneous medium or a random-walk (subsurface) one.
     pub fn camera_homogeneous(&self) -> Option<(usize, &Homogeneous)> {
         let m = self.camera? as usize;

@@ -462,6 +462,7 @@ impl Bvh {
     /// [`Bvh::intersect8`] of eight rays given in lanes, answered in lanes
     /// (the same hits): `None` when this tree does not use AVX2 or the rays
     /// cannot share a packet (then trace them as `[Ray; 8]`).
+    #[inline]
     #[target_feature(enable = "avx2")]
     pub(crate) fn intersect8_lanes(&self, rays: &Rays8, t_max: f32) -> Option<Closest8> {
         if self.isa != Isa::Avx2 {
@@ -483,6 +484,7 @@ impl Bvh {
     /// [`Bvh::occluded8`] of eight rays given in lanes: bit `i` of the answer
     /// set when lane `i` is `active` (bit `i`) and blocked within its `t_max`;
     /// `None` as for [`Bvh::intersect8_lanes`].
+    #[inline]
     #[target_feature(enable = "avx2")]
     pub(crate) fn occluded8_lanes(&self, rays: &Rays8, t_max: F8, active: u32) -> Option<u32> {
         if self.isa != Isa::Avx2 {
