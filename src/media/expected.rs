@@ -67,14 +67,15 @@ fn homogeneous(h: &Homogeneous, ray: &Ray, t_max: f32) -> Expected {
         return Expected::CLEAR;
     };
     let tr = transmit(h.sigma_t, t1 - t0);
-    let over_sigma_t =
-        |v: Vec3A| Vec3A::select(h.sigma_t.cmpgt(Vec3A::ZERO), v / h.sigma_t, Vec3A::ZERO);
-    let absorbed = Vec3A::ONE - tr;
-    let sigma_a = (h.sigma_t - h.sigma_s).max(Vec3A::ZERO);
+    let scattered = Vec3A::select(
+        h.sigma_t.cmpgt(Vec3A::ZERO),
+        h.sigma_s / h.sigma_t * (Vec3A::ONE - tr),
+        Vec3A::ZERO,
+    );
     Expected {
         transmittance: tr,
-        scattered: over_sigma_t(h.sigma_s) * absorbed,
-        emitted: over_sigma_t(sigma_a) * absorbed * h.emission,
+        scattered,
+        emitted: h.emitted_along(t1 - t0),
     }
 }
 

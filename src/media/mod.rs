@@ -79,6 +79,23 @@ impl Homogeneous {
         box_span(lo, hi, ray, t_max)
     }
 
+    /// `∫ T σa Le dt` over `length` of the medium, exactly: the light it
+    /// emits towards the start of a segment that long (zero for a medium
+    /// that emits nothing).
+    #[inline]
+    pub fn emitted_along(&self, length: f32) -> Vec3A {
+        if self.emission == Vec3A::ZERO {
+            return Vec3A::ZERO;
+        }
+        let sigma_a = (self.sigma_t - self.sigma_s).max(Vec3A::ZERO);
+        let absorbed = Vec3A::ONE - transmit(self.sigma_t, length);
+        Vec3A::select(
+            self.sigma_t.cmpgt(Vec3A::ZERO),
+            sigma_a / self.sigma_t * absorbed * self.emission,
+            Vec3A::ZERO,
+        )
+    }
+
     /// The density per unit length with which [`Medium::sample_flight`]
     /// stops a flight along a ray at distance `t` of its span `[t0, t1]`
     /// ([`Homogeneous::span`]): the mean over the channels of
@@ -523,17 +540,7 @@ impl Medium {
                     return CLEAR;
                 };
                 // ∫ T σa Le over the span, exactly.
-                let emitted = if h.emission == Vec3A::ZERO {
-                    Vec3A::ZERO
-                } else {
-                    let sigma_a = (h.sigma_t - h.sigma_s).max(Vec3A::ZERO);
-                    let absorbed = Vec3A::ONE - transmit(h.sigma_t, t1 - t0);
-                    Vec3A::select(
-                        h.sigma_t.cmpgt(Vec3A::ZERO),
-                        sigma_a / h.sigma_t * absorbed * h.emission,
-                        Vec3A::ZERO,
-                    )
-                };
+                let emitted = h.emitted_along(t1 - t0);
                 let channel = ((u() * 3.0) as usize).min(2);
                 let sigma = h.sigma_t[channel];
                 let ud = u();
