@@ -495,6 +495,48 @@ impl Camera {
     pub fn down(&self) -> Vec3A {
         self.rotation.y_axis
     }
+
+    /// Whether the camera is a pinhole (perspective, no thin lens): the one
+    /// camera that light paths can reach ([`Camera::seen_at`]).
+    pub fn is_pinhole(&self) -> bool {
+        self.ortho_px.is_none() && self.thin_lens.is_none()
+    }
+
+    /// Where a pinhole camera sees the world point `p`: its image point (in
+    /// pixels, within the image) and the unit direction from the centre of
+    /// projection to `p`; `None` behind the camera, outside the image, or for
+    /// a camera other than a pinhole.
+    pub fn seen_at(&self, p: Vec3A) -> Option<(Vec2, Vec3A)> {
+        if !self.is_pinhole() {
+            return None;
+        }
+        let d = p - self.position;
+        let local = self.rotation.transpose() * d;
+        if !local.z.gt(&0.0) {
+            return None;
+        }
+        let x = self.centre.x + local.x / local.z * self.focal_px;
+        let y = self.centre.y + local.y / local.z * self.focal_px;
+        let inside = x >= 0.0 && y >= 0.0 && x < self.width as f32 && y < self.height as f32;
+        inside.then(|| (Vec2::new(x, y), d.normalize()))
+    }
+
+    /// The solid-angle density with which a pinhole camera's rays, over the
+    /// whole image (a pixel chosen uniformly, then a point in it), take the
+    /// unit direction `dir`: `f² / (W H cos³θ)` with `f` the focal length in
+    /// pixels and `θ` the angle to the view axis (one pixel spans
+    /// `cos³θ / f²` sr). It is also the camera's importance times `cos θ`,
+    /// which light paths splatted onto the image are weighted by. Zero
+    /// outside the image's cone of directions is the caller's to check
+    /// ([`Camera::seen_at`]).
+    pub fn direction_density(&self, dir: Vec3A) -> f32 {
+        let cos = dir.dot(self.rotation.z_axis);
+        if !cos.gt(&0.0) {
+            return 0.0;
+        }
+        let f2 = self.focal_px * self.focal_px;
+        f2 / (self.width as f32 * self.height as f32 * cos * cos * cos)
+    }
 }
 
 /// The camera-to-world rotation (columns right, down, forward) of a camera at

@@ -24,6 +24,11 @@ pub enum Integrator {
     /// Global illumination in physical units: an unbiased path tracer with
     /// next-event estimation and multiple importance sampling (see [`path`]).
     Path(PathOptions),
+    /// Bidirectional path tracing (see [`crate::integrators::bdpt`]): the
+    /// path tracer's options, its camera subpaths joined to light subpaths
+    /// by every strategy. Its value for a lone ray (without a camera to
+    /// splat to) is `path`'s.
+    Bdpt(PathOptions),
 }
 
 impl Integrator {
@@ -46,19 +51,43 @@ impl Integrator {
         Integrator::Path(PathOptions::default())
     }
 
+    /// The `bdpt` integrator with default options.
+    pub fn bdpt() -> Self {
+        Integrator::Bdpt(PathOptions::default())
+    }
+
+    /// The path tracer's options of `path` and `bdpt`.
+    pub fn path_options(self) -> Option<PathOptions> {
+        match self {
+            Integrator::Path(o) | Integrator::Bdpt(o) => Some(o),
+            _ => None,
+        }
+    }
+
+    /// This integrator with the path tracer's options `options` (for `path`
+    /// and `bdpt`; the others have none).
+    pub fn with_path_options(self, options: PathOptions) -> Self {
+        match self {
+            Integrator::Path(_) => Integrator::Path(options),
+            Integrator::Bdpt(_) => Integrator::Bdpt(options),
+            other => other,
+        }
+    }
+
     /// The name used on the command line.
     pub fn name(self) -> &'static str {
         match self {
             Integrator::Flat => "flat",
             Integrator::Direct => "direct",
             Integrator::Path(_) => "path",
+            Integrator::Bdpt(_) => "bdpt",
         }
     }
 
     /// Whether the integrator computes radiance in physical units (`path`), as
     /// opposed to the lab's units (`flat`, `direct`).
     pub fn is_physical(self) -> bool {
-        matches!(self, Integrator::Path(_))
+        matches!(self, Integrator::Path(_) | Integrator::Bdpt(_))
     }
 }
 
@@ -87,8 +116,11 @@ impl FromStr for Integrator {
     fn from_str(s: &str) -> Result<Self, Self::Err> {
         Integrator::ALL
             .into_iter()
+            .chain([Integrator::bdpt()])
             .find(|i| i.name() == s)
-            .ok_or_else(|| format!("unknown integrator '{s}' (expected flat, direct or path)"))
+            .ok_or_else(|| {
+                format!("unknown integrator '{s}' (expected flat, direct, path or bdpt)")
+            })
     }
 }
 
@@ -102,6 +134,8 @@ mod tests {
             assert_eq!(i.name().parse::<Integrator>(), Ok(i));
         }
         assert_eq!("path".parse::<Integrator>(), Ok(Integrator::path()));
+        assert_eq!("bdpt".parse::<Integrator>(), Ok(Integrator::bdpt()));
+        assert_eq!(Integrator::bdpt().name(), "bdpt");
         assert!("bogus".parse::<Integrator>().is_err());
     }
 }

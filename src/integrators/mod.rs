@@ -2,8 +2,10 @@
 //!
 //! The [`Integrator`] enum and its names are in `integrator`, its radiance
 //! for one ray and for packets in `radiance`; the lab's integrators (`flat`,
-//! `direct`) are in `direct`, the path tracer in [`path`].
+//! `direct`) are in `direct`, the path tracer in [`path`], bidirectional
+//! path tracing in [`bdpt`].
 
+pub mod bdpt;
 pub(crate) mod direct;
 mod integrator;
 pub mod path;

@@ -18,7 +18,7 @@ impl Integrator {
     /// per pixel sample instead (see [`crate::render`]).
     #[inline]
     pub fn radiance(self, scene: &Scene, ray: &Ray, rays: &mut u64) -> Vec3A {
-        if let Integrator::Path(options) = self {
+        if let Some(options) = self.path_options() {
             return path::radiance(scene, ray, &options, &mut Rng::new(0, 0), rays);
         }
         *rays += 1;
@@ -36,7 +36,7 @@ impl Integrator {
         hit: Option<Hit>,
         rays: &mut u64,
     ) -> Vec3A {
-        if let Integrator::Path(options) = self {
+        if let Some(options) = self.path_options() {
             return path_from(scene, ray, hit, &options, rays);
         }
         let Some(hit) = hit else {
@@ -56,7 +56,7 @@ impl Integrator {
     /// together. Gives the same values as four single calls, except at exact ties.
     #[inline]
     pub fn radiance4(self, scene: &Scene, rays: &[Ray; 4], count: &mut u64) -> [Vec3A; 4] {
-        if let Integrator::Path(_) = self {
+        if self.is_physical() {
             return rays.map(|r| self.radiance(scene, &r, count));
         }
         *count += 4;

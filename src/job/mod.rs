@@ -189,6 +189,9 @@ impl Job {
     ) -> anyhow::Result<Rendered> {
         let args = &self.options;
         let camera = session.view.camera(session.size.0, session.size.1);
+        if let Some(why) = bdpt_refusal(args, session, &camera) {
+            anyhow::bail!("{why}");
+        }
         if !args.quiet {
             for warning in settings_warnings(args, session) {
                 hooks.say(&warning);
@@ -238,6 +241,9 @@ impl Job {
         let view = &session.view;
         let camera = view.camera(session.size.0, session.size.1);
         let integrator = view.integrator;
+        if let Some(why) = bdpt_refusal(args, session, &camera) {
+            anyhow::bail!("{why}");
+        }
         if !args.quiet {
             for warning in settings_warnings(args, session) {
                 hooks.say(&warning);
@@ -352,4 +358,40 @@ impl JobOptions {
         }
         (gathered, layers)
     }
+}
+
+/// Why `bdpt` cannot render this job (what it does not support yet:
+/// [`crate::integrators::bdpt`]), as the one line to print; `None` when it
+/// can, or when the integrator is another.
+pub fn bdpt_refusal(
+    args: &JobOptions,
+    session: &Session,
+    camera: &crate::camera::Camera,
+) -> Option<String> {
+    let crate::integrators::Integrator::Bdpt(options) = session.view.integrator else {
+        return None;
+    };
+    let scene = &session.scene;
+    let why = if scene.has_media() {
+        "participating media".to_string()
+    } else if let Some(light) = scene.emission_unsupported() {
+        light
+    } else if !camera.is_pinhole() {
+        "a thin lens or an orthographic camera (bdpt needs a pinhole)".to_string()
+    } else if options.filter != crate::sampling::filter::PixelFilter::Box {
+        format!("the {:?} pixel filter (add --filter box)", options.filter)
+    } else if args.noise_threshold.is_some() {
+        "adaptive sampling (--noise-threshold)".to_string()
+    } else if args.tile.is_some() {
+        "--tile parts (light paths land on every row: split by --samples)".to_string()
+    } else if options.hide_emitters != crate::integrators::path::HideEmitters::No {
+        "hidden emitters (Mitsuba's hide_emitters)".to_string()
+    } else if options.counts_direct() {
+        "counted direct samples (Mitsuba's direct integrator)".to_string()
+    } else {
+        return None;
+    };
+    Some(format!(
+        "bdpt does not render {why} yet: use --integrator path"
+    ))
 }

@@ -392,8 +392,9 @@ impl SceneOptions {
             SceneKind::Gltf | SceneKind::Shot | SceneKind::Mitsuba => Integrator::path(),
             SceneKind::Lab | SceneKind::Mesh => Integrator::Direct,
         };
-        match self.integrator.unwrap_or(default) {
-            Integrator::Path(mut options) => {
+        let chosen = self.integrator.unwrap_or(default);
+        match chosen.path_options() {
+            Some(mut options) => {
                 if let Some(d) = self.max_depth {
                     options.max_depth = d;
                 }
@@ -405,9 +406,9 @@ impl SceneOptions {
                     SceneKind::Mitsuba => crate::sampling::filter::Reconstruction::Splat,
                     _ => crate::sampling::filter::Reconstruction::Sample,
                 });
-                Integrator::Path(options)
+                chosen.with_path_options(options)
             }
-            other => other,
+            None => chosen,
         }
     }
 

@@ -7,6 +7,7 @@
 
 mod accumulator;
 pub mod adaptive;
+mod light_image;
 mod output;
 mod sinks;
 mod split;

@@ -8,15 +8,17 @@ use std::ops::Range;
 use glam::{DVec3, Vec2, Vec3A};
 use rayon::prelude::*;
 
+use super::light_image::LightImage;
 use super::output::Tally;
 use super::sinks::{ExactSums, FilmSums, Sink, SplatSums};
 use super::split::{Split, TILE_ROWS};
 use crate::aov::{Aov, FirstHit, Layout, in_half};
 use crate::camera::Camera;
 use crate::film::Film;
-use crate::fixed::Fixed3;
+use crate::fixed::{self, Fixed3};
 use crate::geometry::ray::{Hit, Ray};
 use crate::integrators::Integrator;
+use crate::integrators::bdpt;
 #[cfg(target_arch = "x86_64")]
 use crate::integrators::direct;
 use crate::integrators::path::{self, PathOptions, PathSampler, SamplerKind};
@@ -93,11 +95,15 @@ pub(super) fn accumulate_into(
     let mut split = Split::WHOLE;
     let mut active = None;
     let mut whole: Option<&mut [Fixed3]> = None;
+    let mut whole_film: Option<&mut [Vec3A]> = None;
+    // `bdpt`'s light subpaths seen by the camera land anywhere on the image.
+    let light = matches!(integrator, Integrator::Bdpt(_))
+        .then(|| LightImage::new(camera.width, camera.height));
     let (tiles, layout, aov_tiles): (Vec<TileSums>, _, Vec<&mut [i128]>) = match target {
         Target::Narrow(film) => {
             assert_eq!((film.width, film.height), (camera.width, camera.height));
-            let tiles: Vec<_> = film
-                .pixels
+            let pixels = whole_film.insert(&mut film.pixels[..]);
+            let tiles: Vec<_> = pixels
                 .chunks_mut(tile_pixels)
                 .map(TileSums::Narrow)
                 .collect();
@@ -164,6 +170,7 @@ pub(super) fn accumulate_into(
                 n_rows,
                 active: active.map(|a| &a[y0 * width..(y0 + n_rows) * width]),
                 splat: splat.is_some(),
+                light: light.as_ref(),
             };
             let mut borders = None;
             // Each target with its own copy of the loop (no per-sample test of
@@ -243,6 +250,23 @@ pub(super) fn accumulate_into(
             (Tally { rays, dropped }, borders)
         })
         .collect();
+    // The light splatted by `bdpt`, onto the whole image (exact sums: the
+    // order does not matter; the viewer's film takes it rounded).
+    if let Some(light) = light {
+        let sums = light.into_sums();
+        if let Some(image) = whole.as_deref_mut() {
+            for (sum, add) in image.iter_mut().zip(&sums) {
+                for c in 0..3 {
+                    sum[c] += add[c];
+                }
+            }
+        }
+        if let Some(film) = whole_film {
+            for (pixel, add) in film.iter_mut().zip(&sums) {
+                *pixel += Vec3A::from_array(add.map(|v| fixed::to_f64(v) as f32));
+            }
+        }
+    }
     // The splatted tiles' borders, into the rows of the tiles around them
     // (exact sums: the order does not matter).
     if let Some(image) = whole {
@@ -328,6 +352,8 @@ struct Tile<'a> {
     /// Whether the samples are splatted: `path`'s image points uniform in
     /// their pixels, handed over with [`Sink::add_at`].
     splat: bool,
+    /// Where `bdpt` splats the light its light subpaths bring to the camera.
+    light: Option<&'a LightImage>,
 }
 
 impl Tile<'_> {
@@ -346,6 +372,9 @@ impl Tile<'_> {
         if let Integrator::Path(options) = self.integrator {
             return self.trace_path::<AOVS>(options, aovs, add, gather);
         }
+        if let Integrator::Bdpt(options) = self.integrator {
+            return self.trace_bdpt::<AOVS>(options, aovs, add, gather);
+        }
         // The lab's loop compiled twice, and with AVX2 where the CPU has it:
         // three-operand instructions and fewer register copies took 6 % off a
         // `direct` frame's instructions (the same values: no fused
@@ -356,6 +385,71 @@ impl Tile<'_> {
             return unsafe { self.trace_lab_avx2::<AOVS>(add, gather) };
         }
         self.trace_lab::<AOVS, false>(add, gather)
+    }
+
+    /// [`Tile::trace`] for `bdpt`: pixel by pixel, each sample's camera
+    /// subpath from the pixel's camera ray (as `path`'s), its value into the
+    /// pixel and its light subpath's splats onto the light image. The AOVs
+    /// take the camera ray's first hit, traced for them.
+    fn trace_bdpt<const AOVS: bool>(
+        &self,
+        options: PathOptions,
+        aovs: Option<&Layout>,
+        add: &mut impl Sink,
+        gather: &mut impl FnMut(usize, &Ray, Option<Hit>, Option<&FirstHit>, Vec3A, u32),
+    ) -> u64 {
+        let (scene, camera, seed) = (self.scene, self.camera, self.seed);
+        let light = self.light.expect("bdpt renders with a light image");
+        let mut scratch = bdpt::Scratch::default();
+        let mut rays = 0u64;
+        let mut splat = |at: Vec2, v: Vec3A| {
+            light.add(at, v);
+        };
+        for s in self.samples.clone() {
+            for y in 0..self.n_rows {
+                for x in 0..self.width {
+                    let mut start = PathStart::new(camera, &options, seed, (x, self.y0 + y), s);
+                    let ray = start.ray;
+                    let v = match &mut start.sampler {
+                        AnySampler::Sobol(smp) => bdpt::sample(
+                            scene,
+                            camera,
+                            &ray,
+                            &options,
+                            smp,
+                            &mut scratch,
+                            &mut rays,
+                            &mut splat,
+                        ),
+                        AnySampler::Independent(rng) => bdpt::sample(
+                            scene,
+                            camera,
+                            &ray,
+                            &options,
+                            rng,
+                            &mut scratch,
+                            &mut rays,
+                            &mut splat,
+                        ),
+                    };
+                    let i = y * self.width + x;
+                    if let Some(layout) = aovs.filter(|_| AOVS) {
+                        let hit = scene.intersect(&ray, f32::INFINITY);
+                        let shaded = hit.map(|h| {
+                            let surface = scene.surface(&h);
+                            let material = &scene.materials()[surface.material as usize];
+                            layout.first_hit(scene, &ray, &surface, s, || {
+                                material.bsdf(&surface.attrs, scene.textures())
+                            })
+                        });
+                        gather(i, &ray, hit, shaded.as_ref(), v, s);
+                    }
+                    add.add_at(i, start.offset, v);
+                }
+            }
+            add.end_sample();
+        }
+        rays
     }
 
     /// [`Tile::trace`] for `path`.
@@ -620,6 +714,7 @@ impl Tile<'_> {
             n_rows,
             active,
             splat: _,
+            light: _,
         } = self;
         let mut rays = 0u64;
         if let Some(active) = active {

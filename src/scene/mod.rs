@@ -16,11 +16,13 @@
 //! participating media are), `model.rs`
 //! ([`Scene`]: building it, the query seam, what it holds), and the rest of
 //! its methods: `surface.rs` (what a hit looks like), `light_sampling.rs`
-//! (choosing lights, their densities) and `lanes.rs` (eight rays in AVX2
+//! (choosing lights, their densities), `emission.rs` (light leaving the
+//! lights, for paths started at them) and `lanes.rs` (eight rays in AVX2
 //! lanes).
 
 pub mod analytic;
 pub mod compose;
+mod emission;
 mod lanes;
 mod light_sampling;
 mod light_table;
@@ -32,6 +34,7 @@ mod parts;
 mod surface;
 
 pub use analytic::{AnalyticShape, SceneShape};
+pub use emission::{Emitter, EmitterPoint, PunctualEmission};
 pub use light_sampling::{LightSample, MAX_IMPORTANCE_LIGHTS};
 pub use light_table::{KEY_LIGHT, LightNumbers, LightSelection, PositionalLight};
 pub use light_tree::Facing;

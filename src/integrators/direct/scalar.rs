@@ -25,7 +25,7 @@ impl Integrator {
         count: &mut u64,
         occluded: impl FnOnce(&[Ray; N], [f32; N], [bool; N]) -> [bool; N],
     ) -> [Vec3A; N] {
-        if let Integrator::Path(options) = self {
+        if let Some(options) = self.path_options() {
             return std::array::from_fn(|i| path_from(scene, &rays[i], hits[i], &options, count));
         }
         // A plain loop: `hits.map` was left as a call (3 % of a `direct` frame).

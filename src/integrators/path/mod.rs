@@ -37,5 +37,5 @@ pub use options::{HideEmitters, PathOptions, RR_DEPTH, RR_SCALE};
 pub use samples::{PathSampler, SOBOL_BOUNCES, SOBOL_PAIRS, SamplerKind, SobolSampler};
 pub use scalar::{radiance, radiance_from, radiance_observed, radiance_traced};
 pub use vertex::{PathEvent, PathTracer, consistent_normal, power_heuristic};
-pub(crate) use vertex::{coat_normal, shading};
+pub(crate) use vertex::{Shading, coat_normal, emission, shading, vertex_frame};
 pub use walk::MAX_WALK_STEPS;

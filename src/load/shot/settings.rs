@@ -121,12 +121,12 @@ pub(super) fn settings(path: &Path, r: &RenderSection) -> Result<ShotSettings, S
                 .map_err(|e| bad(format!("integrator: {e}")))
         })
         .transpose()?;
-    let integrator = integrator.map(|i| match (i, r.max_depth) {
-        (Integrator::Path(mut o), Some(d)) => {
+    let integrator = integrator.map(|i| match (i.path_options(), r.max_depth) {
+        (Some(mut o), Some(d)) => {
             o.max_depth = d;
-            Integrator::Path(o)
+            i.with_path_options(o)
         }
-        (i, _) => i,
+        _ => i,
     });
     let tonemap = r
         .tonemap

@@ -1,0 +1,398 @@
+//! Joining the subpaths: every strategy `(s, t)` (the first `s` vertices of
+//! the light subpath, the first `t` of the camera's), its contribution and
+//! its multiple importance sampling weight by the power heuristic over all
+//! the strategies that could have made the same path.
+
+use glam::{Vec2, Vec3A};
+
+use super::super::path::{PathOptions, PathSampler};
+use super::vertex::{
+    Kind, Vertex, camera_scatter, emission_dir_pdf, light_scatter, light_sends, pdf_to, to_area,
+};
+use super::walk::{camera_subpath, light_start, light_subpath};
+use crate::camera::Camera;
+use crate::geometry::ray::Ray;
+use crate::scene::{Emitter, Scene};
+
+/// Most vertices of one subpath (a cap on paths Russian roulette keeps).
+pub const MAX_VERTICES: usize = 64;
+
+/// A render thread's vertex buffers, reused from sample to sample.
+#[derive(Clone, Debug, Default)]
+pub struct Scratch {
+    camera: Vec<Vertex>,
+    light: Vec<Vertex>,
+}
+
+/// One sample of bidirectional path tracing for the camera ray `ray`: the
+/// radiance of the pixel's own strategies (`t ≥ 2`), returned, and the
+/// light subpath's connections to the camera (`t = 1`), handed to `splat`
+/// with the image point they land on; a splat's value is already divided
+/// by the image's pixel count's share (see [`Camera::direction_density`]),
+/// so that the image is the sum of both over the samples per pixel.
+#[allow(clippy::too_many_arguments)]
+pub fn sample(
+    scene: &Scene,
+    camera: &Camera,
+    ray: &Ray,
+    options: &PathOptions,
+    sampler: &mut impl PathSampler,
+    scratch: &mut Scratch,
+    rays: &mut u64,
+    splat: &mut impl FnMut(Vec2, Vec3A),
+) -> Vec3A {
+    // Segments of a path of s + t vertices: s + t - 1 ≤ max_depth.
+    let max_depth = options.max_depth.min(2 * MAX_VERTICES as u32) as usize;
+    let Scratch { camera: cam, light } = scratch;
+    camera_subpath(
+        scene,
+        camera,
+        ray,
+        (max_depth + 1).min(MAX_VERTICES),
+        sampler,
+        cam,
+        rays,
+    );
+    light_subpath(scene, max_depth.min(MAX_VERTICES), sampler, light, rays);
+    let join = Join {
+        scene,
+        camera,
+        light,
+        cam,
+    };
+    let mut l = Vec3A::ZERO;
+    for t in 1..=cam.len() {
+        for s in 0..=light.len() {
+            if s + t < 2 || s + t - 1 > max_depth {
+                continue;
+            }
+            if t == 1 {
+                if let Some((at, v)) = join.seen(s, rays)
+                    && v.is_finite()
+                {
+                    splat(at, v);
+                }
+                continue;
+            }
+            l += match s {
+                0 => join.emitted(t),
+                1 => join.light_sampled(t, sampler, rays),
+                _ => join.connect(s, t, rays),
+            };
+        }
+    }
+    l
+}
+
+/// The two subpaths of a sample in the scene and camera they were traced
+/// in, ready to be joined.
+#[derive(Clone, Copy)]
+struct Join<'a> {
+    scene: &'a Scene,
+    camera: &'a Camera,
+    light: &'a [Vertex],
+    cam: &'a [Vertex],
+}
+
+impl Join<'_> {
+    /// Strategy `(0, t)`: the camera subpath's last vertex is on a light
+    /// (or an unlit surface, whose colour counts in full).
+    fn emitted(&self, t: usize) -> Vec3A {
+        let z = &self.cam[t - 1];
+        if z.emitted == Vec3A::ZERO {
+            return Vec3A::ZERO;
+        }
+        if z.unlit {
+            return z.beta * z.emitted;
+        }
+        z.beta * z.emitted * self.weight(0, t)
+    }
+
+    /// Strategy `(1, t)`: a point on a light chosen afresh for the camera
+    /// subpath's vertex `t - 1` (next-event estimation, with the light
+    /// subpath's own choice of light and point).
+    fn light_sampled(&self, t: usize, sampler: &mut impl PathSampler, rays: &mut u64) -> Vec3A {
+        let u_choice = sampler.next_2d_minor();
+        let u_pos = sampler.next_2d();
+        if !self.cam[t - 1].connectible() {
+            return Vec3A::ZERO;
+        }
+        let Some((y, _)) = light_start(self.scene, u_choice, u_pos) else {
+            return Vec3A::ZERO;
+        };
+        let light = [y];
+        Join {
+            light: &light,
+            ..*self
+        }
+        .connect(1, t, rays)
+    }
+
+    /// The value of strategy `(s, t)` with `s ≥ 1`, `t ≥ 2`: the subpaths'
+    /// last vertices joined by a shadow ray, weighted.
+    fn connect(&self, s: usize, t: usize, rays: &mut u64) -> Vec3A {
+        let (y, z) = (&self.light[s - 1], &self.cam[t - 1]);
+        if !y.connectible() || !z.connectible() {
+            return Vec3A::ZERO;
+        }
+        let d = y.point.p - z.point.p;
+        let d2 = d.length_squared();
+        if !d2.gt(&0.0) {
+            return Vec3A::ZERO;
+        }
+        let w = d / d2.sqrt();
+        let Some(zs) = &z.scatter else {
+            return Vec3A::ZERO;
+        };
+        let fz = camera_scatter(zs, w);
+        if fz == Vec3A::ZERO {
+            return Vec3A::ZERO;
+        }
+        let fy = sends(self.scene, y, -w);
+        let c = y.beta * fy * fz * z.beta / d2;
+        if c == Vec3A::ZERO {
+            return Vec3A::ZERO;
+        }
+        let (shadow, t_max) = z.point.ray_to(y.point.p);
+        *rays += 1;
+        if self.scene.occluded(&shadow, t_max) {
+            return Vec3A::ZERO;
+        }
+        c * self.weight(s, t)
+    }
+
+    /// Strategy `(s, 1)`: the light subpath's vertex `s - 1` seen by the
+    /// camera, and the image point it lands on.
+    fn seen(&self, s: usize, rays: &mut u64) -> Option<(Vec2, Vec3A)> {
+        let (scene, camera) = (self.scene, self.camera);
+        let y = &self.light[s - 1];
+        // A light seen by the camera is found by both subpaths (a point
+        // light by neither).
+        if !y.connectible() || s == 1 && y.is_delta_light() {
+            return None;
+        }
+        let (at, dir) = camera.seen_at(y.point.p)?;
+        let d2 = (y.point.p - camera.position).length_squared();
+        let fy = sends(scene, y, -dir);
+        let c = y.beta * fy * (camera.direction_density(dir) / d2);
+        if c == Vec3A::ZERO || !c.is_finite() {
+            return None;
+        }
+        let (shadow, t_max) = if y.has_area() {
+            y.point.ray_to(camera.position)
+        } else {
+            let d = y.point.p - camera.position;
+            let dist = d.length();
+            (Ray::new(camera.position, d / dist), dist * (1.0 - 1e-4))
+        };
+        *rays += 1;
+        if scene.occluded(&shadow, t_max) {
+            return None;
+        }
+        Some((at, c * self.weight(s, 1)))
+    }
+
+    /// The power heuristic weight of strategy `(s, t)` among all strategies
+    /// that make the same path (Veach's thesis §10.2; pbrt-v4's `MISWeight`
+    /// computes the same ratios): the densities of the connection's
+    /// vertices as the other walk would reach them are worked out here, the
+    /// rest were recorded by the walks.
+    fn weight(&self, s: usize, t: usize) -> f32 {
+        let (scene, camera, light, cam) = (self.scene, self.camera, self.light, self.cam);
+        // The four densities a connection changes.
+        let z = &cam[t - 1];
+        let z_prev = (t >= 2).then(|| &cam[t - 2]);
+        let y = (s >= 1).then(|| &light[s - 1]);
+        let y_prev = (s >= 2).then(|| &light[s - 2]);
+        let z_rev = match y {
+            Some(y) => pdf_to(scene, camera, y, y_prev, z),
+            // (0, t): the density of starting a light subpath at z.
+            None => emitter_at(scene, z).map_or(0.0, |prim| scene.emitter_origin_pdf(prim)),
+        };
+        let z_prev_rev = z_prev.map_or(0.0, |zp| match y {
+            Some(y) => pdf_to(scene, camera, z, Some(y), zp),
+            // The light's own choice of direction from z towards zp.
+            None => emitter_at(scene, z).map_or(0.0, |prim| {
+                let w = (zp.point.p - z.point.p).normalize_or_zero();
+                let two_sided = scene.material(prim).emits_both_sides;
+                to_area(emission_dir_pdf(z.point.n, two_sided, w), z, zp)
+            }),
+        });
+        let y_rev = y.map_or(0.0, |y| pdf_to(scene, camera, z, z_prev, y));
+        let y_prev_rev = match (y, y_prev) {
+            (Some(y), Some(yp)) => pdf_to(scene, camera, y, Some(z), yp),
+            _ => 0.0,
+        };
+        // Moving the connection towards the camera (the camera subpath's
+        // vertices taken by the light walk instead; a pinhole cannot be
+        // hit), then towards the light (down to the camera subpath finding
+        // the light, which a point light cannot be).
+        let end_delta = light.first().is_some_and(Vertex::is_delta_light);
+        let sum = alternatives(cam, t, 1, z_rev, z_prev_rev, false)
+            + alternatives(light, s, 0, y_rev, y_prev_rev, end_delta);
+        (1.0 / (1.0 + sum)) as f32
+    }
+}
+
+/// What the light subpath's vertex `y` sends along `w`: a light's emission
+/// (times the cosine at an area light), a surface's adjoint scattering.
+#[inline]
+fn sends(scene: &Scene, y: &Vertex, w: Vec3A) -> Vec3A {
+    match (&y.kind, &y.scatter) {
+        (Kind::Surface, Some(s)) => light_scatter(s, y.point.n, w),
+        (Kind::PointLight(_) | Kind::AreaLight { .. }, _) => light_sends(scene, y, w),
+        _ => Vec3A::ZERO,
+    }
+}
+
+/// The sum over one subpath's first `n` vertices of the squared ratios of
+/// the strategies that move the connection into it (one vertex at a time,
+/// from its last vertex down to vertex `last`) to the strategy used, each
+/// ratio the product of `rev / fwd` of the vertices moved (a density of 0,
+/// a delta's, counts as 1). `rev` and `rev_prev` are the densities the
+/// connection gives its last two vertices, which are not deltas whatever
+/// the walk did there; a strategy that would join at a delta vertex (or
+/// start at `end_delta`, an endpoint no walk can hit) is left out.
+fn alternatives(
+    path: &[Vertex],
+    n: usize,
+    last: usize,
+    rev: f32,
+    rev_prev: f32,
+    end_delta: bool,
+) -> f64 {
+    let remap = |p: f32| f64::from(if p == 0.0 { 1.0 } else { p });
+    let delta = |k: usize| k + 1 < n && path[k].delta;
+    let mut sum = 0.0;
+    let mut r = 1.0;
+    for i in (last..n).rev() {
+        let pdf_rev = if i + 1 == n {
+            rev
+        } else if i + 2 == n {
+            rev_prev
+        } else {
+            path[i].pdf_rev
+        };
+        r *= remap(pdf_rev) / remap(path[i].pdf_fwd);
+        let before = if i > 0 { delta(i - 1) } else { end_delta };
+        if !delta(i) && !before {
+            sum += r * r;
+        }
+    }
+    sum
+}
+
+/// The emitting primitive a camera subpath's surface vertex lies on.
+fn emitter_at(scene: &Scene, z: &Vertex) -> Option<u32> {
+    let prim = match z.kind {
+        Kind::AreaLight { prim, .. } => prim,
+        _ => z.prim,
+    };
+    (prim != u32::MAX && scene.emitter_pmf(Emitter::Shape(prim)) > 0.0).then_some(prim)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::integrators::bdpt::vertex::Scatter;
+    use crate::load::cornell::{self, MaterialChoice};
+    use crate::sampling::sampler::Rng;
+
+    /// The light subpath that makes the same path as camera subpath `cam`
+    /// (whose last vertex is on a light) joined at `t`: its vertices from
+    /// the light back to `cam[t]`, with the densities a light walk records.
+    fn light_side(scene: &Scene, camera: &Camera, cam: &[Vertex], t: usize) -> Vec<Vertex> {
+        let k = cam.len() - 1;
+        let mut light: Vec<Vertex> = Vec::new();
+        for j in 0..=k - t {
+            let z = &cam[k - j];
+            let mut y = *z;
+            if j == 0 {
+                let kind = Kind::AreaLight {
+                    prim: z.prim,
+                    uv: glam::Vec2::ZERO,
+                };
+                y = Vertex::new(kind, z.point, Vec3A::ONE, scene.emitter_origin_pdf(z.prim));
+            } else {
+                let prev = &light[j - 1];
+                let wo = (prev.point.p - y.point.p).normalize();
+                y.scatter = y.scatter.map(|s| Scatter { wo, ..s });
+                let before = (j >= 2).then(|| &light[j - 2]);
+                y.pdf_fwd = pdf_to(scene, camera, prev, before, &y);
+            }
+            // The camera walk's density of the vertex, as the light walk's
+            // `pdf_rev`.
+            y.pdf_rev = z.pdf_fwd;
+            light.push(y);
+        }
+        light
+    }
+
+    /// Veach's condition for an unbiased combination: for every path, the
+    /// weights of the strategies that can make it sum to one. Paths of the
+    /// area-lit box with a glossy gold block, a mirror block (delta
+    /// vertices) and diffuse walls, traced from the camera until they reach
+    /// the light; each split into every pair of subpaths the strategies
+    /// would have made.
+    #[test]
+    fn mis_weights_of_a_path_sum_to_one() {
+        let mut scene = cornell::area_scene();
+        let tall = cornell::part("tall").expect("a part");
+        let short = cornell::part("short").expect("a part");
+        MaterialChoice::parse("gold:0.3")
+            .unwrap()
+            .apply(&mut scene, tall);
+        MaterialChoice::parse("mirror")
+            .unwrap()
+            .apply(&mut scene, short);
+        let camera = Camera::lab(cornell::CAMERA_POSITION, 0.0, 0.0, 32, 32);
+        let mut rng = Rng::new(11, 2);
+        let mut cam = Vec::new();
+        let (mut paths, mut with_delta) = (0, 0);
+        let mut rays = 0;
+        for i in 0..60000 {
+            let (x, y) = (
+                (i % 32) as f32 + rng.next_f32(),
+                (i / 32 % 32) as f32 + rng.next_f32(),
+            );
+            let ray = camera.ray(x, y);
+            super::camera_subpath(&scene, &camera, &ray, 8, &mut rng, &mut cam, &mut rays);
+            let k = cam.len() - 1;
+            if k < 2 || cam[k].emitted == Vec3A::ZERO || cam[k].unlit {
+                continue;
+            }
+            paths += 1;
+            with_delta += usize::from(cam.iter().any(|v| v.delta));
+            let mut sum = 0.0f64;
+            for t in 1..=k + 1 {
+                let s = k + 1 - t;
+                let light = if s > 0 {
+                    light_side(&scene, &camera, &cam, t)
+                } else {
+                    Vec::new()
+                };
+                let join = Join {
+                    scene: &scene,
+                    camera: &camera,
+                    light: &light,
+                    cam: &cam[..t],
+                };
+                // A strategy that would join at a delta vertex cannot make
+                // the path.
+                let joins_delta = (s > 0 && light[s - 1].delta) || (t > 1 && cam[t - 1].delta);
+                if !joins_delta {
+                    sum += f64::from(join.weight(s, t));
+                }
+            }
+            assert!(
+                (sum - 1.0).abs() < 1e-4,
+                "path of {} segments: weights sum to {sum}",
+                k
+            );
+        }
+        assert!(
+            paths > 500 && with_delta > 50,
+            "{paths} paths, {with_delta} with a mirror"
+        );
+    }
+}

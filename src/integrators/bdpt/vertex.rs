@@ -1,0 +1,221 @@
+//! A vertex of a camera or light subpath and what it sends along a
+//! direction: the camera, a point on a light, or a surface with its BSDF;
+//! the densities (per unit area) with which each strategy's walk reaches it.
+
+use glam::Vec3A;
+
+use super::super::path::Shading;
+use crate::camera::Camera;
+use crate::geometry::ray::SurfacePoint;
+use crate::materials::{Frame, Material};
+use crate::scene::{Emitter, Scene};
+
+/// What a vertex is.
+#[derive(Clone, Copy, Debug)]
+pub(super) enum Kind {
+    /// The pinhole camera's centre of projection.
+    Camera,
+    /// A point light (a delta in position).
+    PointLight(Emitter),
+    /// A point on emitting primitive `prim`, at coordinates `uv`
+    /// ([`Scene::emission_at`]).
+    AreaLight {
+        /// The emitting primitive.
+        prim: u32,
+        /// Its coordinates there.
+        uv: glam::Vec2,
+    },
+    /// A surface the walk met, its BSDF ready to scatter ([`Scatter`]).
+    Surface,
+}
+
+/// A surface vertex's BSDF in its shading frame.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Scatter {
+    /// The BSDF at the hit.
+    pub bsdf: Material,
+    /// Its shading frame.
+    pub frame: Frame,
+    /// How directions of light meet the shading normal.
+    pub shading: Shading,
+    /// The unit direction (world) towards the vertex the walk came from.
+    pub wo: Vec3A,
+}
+
+/// One vertex of a subpath.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Vertex {
+    pub kind: Kind,
+    /// The point, its error bound and geometric normal (zero for the camera
+    /// and point lights), for rays leaving it.
+    pub point: SurfacePoint,
+    /// The subpath's throughput up to this vertex (the walk's estimate of
+    /// what arrives here, over its density).
+    pub beta: Vec3A,
+    /// The density (per unit area, or 1 at an endpoint sampled in
+    /// position) with which this subpath's walk reached the vertex.
+    pub pdf_fwd: f32,
+    /// The density with which the other subpath's walk would reach it.
+    pub pdf_rev: f32,
+    /// Whether the walk left it through a delta lobe (it cannot be
+    /// connected to).
+    pub delta: bool,
+    /// A camera subpath's surface: the radiance it emits towards the vertex
+    /// before (`Le`, or an unlit surface's colour).
+    pub emitted: Vec3A,
+    /// Whether the surface is unlit (its colour counts in full and the
+    /// camera subpath ends there).
+    pub unlit: bool,
+    /// A surface's BSDF.
+    pub scatter: Option<Scatter>,
+    /// A surface's primitive (`u32::MAX` for the camera and lights).
+    pub prim: u32,
+}
+
+impl Vertex {
+    /// A vertex at `point` of kind `kind` with throughput `beta` and
+    /// forward density `pdf_fwd`.
+    pub fn new(kind: Kind, point: SurfacePoint, beta: Vec3A, pdf_fwd: f32) -> Self {
+        Self {
+            kind,
+            point,
+            beta,
+            pdf_fwd,
+            pdf_rev: 0.0,
+            delta: false,
+            emitted: Vec3A::ZERO,
+            unlit: false,
+            scatter: None,
+            prim: u32::MAX,
+        }
+    }
+
+    /// Whether the vertex has an area (a surface or a point on an area
+    /// light), so that densities at it carry the cosine to its normal.
+    #[inline]
+    pub fn has_area(&self) -> bool {
+        matches!(self.kind, Kind::Surface | Kind::AreaLight { .. })
+    }
+
+    /// Whether it is a light that is a delta in position.
+    #[inline]
+    pub fn is_delta_light(&self) -> bool {
+        matches!(self.kind, Kind::PointLight(_))
+    }
+
+    /// Whether another subpath's vertex can be joined to it.
+    #[inline]
+    pub fn connectible(&self) -> bool {
+        !self.delta && !self.unlit
+    }
+}
+
+/// Converts a solid-angle density at `from` of the direction to `to` into a
+/// density per unit area at `to`.
+#[inline]
+pub(super) fn to_area(pdf_dir: f32, from: &Vertex, to: &Vertex) -> f32 {
+    let d = to.point.p - from.point.p;
+    let d2 = d.length_squared();
+    if !d2.gt(&0.0) {
+        return 0.0;
+    }
+    let mut pdf = pdf_dir / d2;
+    if to.has_area() {
+        pdf *= (to.point.n.dot(d) / d2.sqrt()).abs();
+    }
+    pdf
+}
+
+/// The solid-angle density with which an area light at `light` (normal
+/// `n`, emitting from both sides or not) sends light along the unit `w`:
+/// cosine-weighted over the emitting side (half of it on each side of a
+/// two-sided emitter).
+#[inline]
+pub(super) fn emission_dir_pdf(n: Vec3A, two_sided: bool, w: Vec3A) -> f32 {
+    let c = n.dot(w);
+    if two_sided {
+        0.5 * c.abs() * std::f32::consts::FRAC_1_PI
+    } else if c > 0.0 {
+        c * std::f32::consts::FRAC_1_PI
+    } else {
+        0.0
+    }
+}
+
+/// The density (per unit area at `next`) with which a walk at `v`, having
+/// come from `prev` (none at an endpoint), continues to `next`.
+pub(super) fn pdf_to(
+    scene: &Scene,
+    camera: &Camera,
+    v: &Vertex,
+    prev: Option<&Vertex>,
+    next: &Vertex,
+) -> f32 {
+    let w = next.point.p - v.point.p;
+    let d2 = w.length_squared();
+    if !d2.gt(&0.0) {
+        return 0.0;
+    }
+    let w = w / d2.sqrt();
+    let pdf_dir = match v.kind {
+        Kind::Camera => camera.direction_density(w),
+        Kind::PointLight(e) => scene.punctual_pdf(e, w),
+        Kind::AreaLight { prim, .. } => {
+            emission_dir_pdf(v.point.n, scene.material(prim).emits_both_sides, w)
+        }
+        Kind::Surface => {
+            let (Some(s), Some(prev)) = (&v.scatter, prev) else {
+                return 0.0;
+            };
+            let wo = (prev.point.p - v.point.p).normalize_or_zero();
+            s.bsdf.pdf(s.frame.to_local(wo), s.frame.to_local(w))
+        }
+    };
+    to_area(pdf_dir, v, next)
+}
+
+/// What a light endpoint sends along the unit `w`: an area light's radiance
+/// times the cosine at its surface, a point light's intensity.
+pub(super) fn light_sends(scene: &Scene, v: &Vertex, w: Vec3A) -> Vec3A {
+    match v.kind {
+        Kind::PointLight(e) => scene.punctual_intensity(e, w),
+        Kind::AreaLight { prim, uv } => {
+            let c = v.point.n.dot(w);
+            let material = scene.material(prim);
+            if !(c > 0.0 || (material.emits_both_sides && c < 0.0)) {
+                return Vec3A::ZERO;
+            }
+            scene.emission_at(prim, uv.x, uv.y) * scene.coat_dimming(prim, uv.x, uv.y, w) * c.abs()
+        }
+        _ => Vec3A::ZERO,
+    }
+}
+
+/// What a surface vertex of the *camera* subpath sends back towards the
+/// vertex before it of light arriving along `-w` from `w`'s side: the BSDF
+/// value with the cosine at the surface (raylab's [`Material::eval`]).
+#[inline]
+pub(super) fn camera_scatter(s: &Scatter, w: Vec3A) -> Vec3A {
+    let side = s.shading.weight(w);
+    if !side.gt(&0.0) {
+        return Vec3A::ZERO;
+    }
+    s.bsdf.eval(s.frame.to_local(s.wo), s.frame.to_local(w)) * side
+}
+
+/// What a surface vertex of the *light* subpath sends along `w` of the
+/// light that arrived from `s.wo`'s side: the BSDF seen from `w` (radiance
+/// flows towards `w`, so `w` is the BSDF's outgoing direction: the
+/// transport is the adjoint's), with Veach's correction for shading normals
+/// (`|wo·ns| |w·ng| / (|wo·ng| |w·ns|)`, which with raylab's cosine inside
+/// `eval` leaves `|w·ng| / |wo·ng|`).
+#[inline]
+pub(super) fn light_scatter(s: &Scatter, ng: Vec3A, w: Vec3A) -> Vec3A {
+    let side = s.shading.weight(w);
+    let cos_in = s.wo.dot(ng).abs();
+    if !(side > 0.0 && cos_in > 0.0) {
+        return Vec3A::ZERO;
+    }
+    let f = s.bsdf.eval(s.frame.to_local(w), s.frame.to_local(s.wo));
+    f * (side * w.dot(ng).abs() / cos_in)
+}
