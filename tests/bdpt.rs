@@ -6,6 +6,7 @@
 mod common;
 
 use raylab::Integrator;
+use raylab::aov::Aov;
 use raylab::job::{Job, JobOptions};
 
 /// Renders `scene` with `integrator` at `spp` on `threads` threads: its
@@ -61,24 +62,9 @@ fn bdpt_converges_to_path_on_the_area_lit_box() {
     }
 }
 
-/// A diffuse floor (ρ = 0.5) under a point light of intensity I = 10 at
-/// height h = 1 and a mirror (Fresnel 1) at height H = 2 facing down, seen
-/// straight down from height 1.5 (60° field of view, 32 × 32), paths of at
-/// most three segments: a floor point at distance r from below the light
-/// gets `I h / (h² + r²)^1.5` directly and `I (2H − h) / ((2H − h)² +
-/// r²)^1.5` from the light's mirror image, its radiance is `ρ/π` times
-/// their sum (integrated here over each pixel, 8 × 8 points). A path tracer
-/// finds only the direct part (a point light in a mirror has zero
-/// probability from the camera); `bdpt` finds both, the mirrored part by
-/// light tracing. Measured: bdpt 0.09 % from the analytic mean at 256 spp,
-/// path 0.0004 % from the direct part alone (15 % below both).
-#[test]
-fn bdpt_finds_a_point_light_in_a_mirror() {
-    let dir = tempfile::tempdir().unwrap();
-    let scene = dir.path().join("mirror.xml");
-    std::fs::write(
-        &scene,
-        r#"<scene version="3.0.0">
+/// A diffuse floor under a point light and a mirror above both (see
+/// [`bdpt_finds_a_point_light_in_a_mirror`]).
+const MIRROR: &str = r#"<scene version="3.0.0">
   <integrator type="path"><integer name="max_depth" value="3"/></integrator>
   <sensor type="perspective">
     <float name="fov" value="60"/>
@@ -98,9 +84,24 @@ fn bdpt_finds_a_point_light_in_a_mirror() {
     <point name="position" value="0, 1, 0"/>
     <rgb name="intensity" value="10"/>
   </emitter>
-</scene>"#,
-    )
-    .unwrap();
+</scene>"#;
+
+/// A diffuse floor (ρ = 0.5) under a point light of intensity I = 10 at
+/// height h = 1 and a mirror (Fresnel 1) at height H = 2 facing down, seen
+/// straight down from height 1.5 (60° field of view, 32 × 32), paths of at
+/// most three segments: a floor point at distance r from below the light
+/// gets `I h / (h² + r²)^1.5` directly and `I (2H − h) / ((2H − h)² +
+/// r²)^1.5` from the light's mirror image, its radiance is `ρ/π` times
+/// their sum (integrated here over each pixel, 8 × 8 points). A path tracer
+/// finds only the direct part (a point light in a mirror has zero
+/// probability from the camera); `bdpt` finds both, the mirrored part by
+/// light tracing. Measured: bdpt 0.09 % from the analytic mean at 256 spp,
+/// path 0.0004 % from the direct part alone (15 % below both).
+#[test]
+fn bdpt_finds_a_point_light_in_a_mirror() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("mirror.xml");
+    std::fs::write(&scene, MIRROR).unwrap();
     let scene = scene.to_str().unwrap();
     // The analytic image's mean, direct and mirrored parts.
     let (n, ss) = (32, 8);
@@ -164,4 +165,78 @@ fn bdpt_refuses_what_it_does_not_render_yet() {
         e.contains("bdpt does not render participating media"),
         "{e}"
     );
+}
+
+/// Light tracing adds to pixels of every row, into the exact sums that
+/// parts are merged by: two sample ranges merge into the single render's
+/// bits.
+#[test]
+fn bdpt_sample_ranges_merge_bit_for_bit() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |extra: &[&str], out: &str| {
+        let mut args = vec![
+            "render",
+            "cornell",
+            "--integrator",
+            "bdpt",
+            "--width",
+            "32",
+            "--spp",
+            "4",
+            "-q",
+            "-o",
+            out,
+        ];
+        args.extend_from_slice(extra);
+        let done = common::raylab(&args, dir.path());
+        assert!(
+            done.status.success(),
+            "{}",
+            String::from_utf8_lossy(&done.stderr)
+        );
+    };
+    run(&[], "whole.exr");
+    run(&["--samples", "0..3"], "a.exr");
+    run(&["--samples", "3..4"], "b.exr");
+    let done = common::raylab(&["merge", "a.exr", "b.exr", "-o", "merged.exr"], dir.path());
+    assert!(
+        done.status.success(),
+        "{}",
+        String::from_utf8_lossy(&done.stderr)
+    );
+    let read = |name: &str| std::fs::read(dir.path().join(name)).unwrap();
+    assert!(
+        read("whole.exr") == read("merged.exr"),
+        "the merged parts differ"
+    );
+}
+
+/// The denoiser's guard judges a render by its two halves ([`Aov::Half`]):
+/// light tracing's splats count in the half of the sample that made them,
+/// so the half holds half of the light in the mirror too. The half's mean
+/// (over its own samples) is the image's within 2 % (the mirrored light is
+/// 15 % of the image: a half without splats is 15 % low).
+#[test]
+fn bdpt_splats_count_in_the_half() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("mirror.xml");
+    std::fs::write(&scene, MIRROR).unwrap();
+    let mut options = JobOptions::new(scene.to_str().unwrap());
+    options.scene.integrator = Some(Integrator::bdpt());
+    options.spp = Some(64);
+    options.seed = Some(5);
+    options.quiet = true;
+    options.aov = Some(raylab::aov::AovSet::new(&[Aov::Half]).unwrap());
+    let finished = Job::new(options)
+        .unwrap()
+        .render_with(&raylab::job::Hooks::default())
+        .unwrap()
+        .finished;
+    let image = mean(&common::pixels(&finished.image));
+    let aovs = finished.aovs.unwrap();
+    let half = &aovs.layer(Aov::Half).unwrap().values;
+    let half: Vec<[f32; 3]> = half.chunks_exact(4).map(|p| [p[0], p[1], p[2]]).collect();
+    let half = mean(&half);
+    eprintln!("image {image}, half {half}");
+    assert!((half / image - 1.0).abs() < 0.02, "half {half} vs {image}");
 }

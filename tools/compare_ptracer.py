@@ -15,8 +15,8 @@ reference independent of raylab; but it cannot see a specular surface from the c
 whose 3 × 3 neighbourhood is lit in Mitsuba's reference (which leaves out the specular
 surfaces and the pixels on their edges).
 
-The reference is Mitsuba's `ptracer` at --ref-spp (with the file's `max_depth` unless
---max-depth is given) in two halves, whose difference gives its own noise. raylab renders
+The reference is Mitsuba's `ptracer` at --ref-spp (with the `max_depth` of the file's
+integrator unless --max-depth is given, for both renderers; unbounded if neither says) in two halves, whose difference gives its own noise. raylab renders
 the same file with `--integrator bdpt --filter box` at each --spp (and `path` at the
 largest, to show what it misses). The file's film should use `<rfilter type="box"/>`:
 raylab's `bdpt` renders with the box filter only. For each render the tool prints the
@@ -30,6 +30,7 @@ DRJIT_LIBLLVM_PATH, unless set, is /usr/lib/x86_64-linux-gnu/libLLVM-19.so.
 
 import argparse
 import os
+import re
 import subprocess
 import sys
 import time
@@ -70,8 +71,11 @@ def main():
     scene = mi.load_file(args.xml)
     depth = args.max_depth
     if depth is None:
-        depth = scene.integrator().max_depth if hasattr(scene.integrator(), "max_depth") else -1
-    integrator = mi.load_dict({"type": "ptracer", "max_depth": int(depth) if depth else -1})
+        # The file's integrator's, else unbounded.
+        found = re.search(r'<integrator[^>]*>\s*<integer\s+name="max_depth"\s+value="(-?\d+)"',
+                          open(args.xml).read())
+        depth = int(found.group(1)) if found else -1
+    integrator = mi.load_dict({"type": "ptracer", "max_depth": depth})
     halves = []
     start = time.time()
     for seed in (1, 2):
@@ -118,6 +122,8 @@ def main():
                "--spp", str(spp), "-o", path, "-q"]
         if args.threads:
             cmd += ["--threads", str(args.threads)]
+        if depth >= 1:
+            cmd += ["--max-depth", str(depth)]
         start = time.time()
         done = subprocess.run(cmd, capture_output=True, text=True)
         if done.returncode != 0:

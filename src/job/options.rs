@@ -37,9 +37,10 @@ pub struct SceneOptions {
     /// Image height in pixels [default: 500 for the box and OBJ meshes, 600 for glTF].
     #[arg(long, value_name = "H", allow_hyphen_values = true, value_parser = parse_side)]
     pub height: Option<u32>,
-    /// How to light the image: `flat` (surface colour), `direct` (the lab's model)
-    /// or `path` (global illumination in physical units) [default: path for glTF,
-    /// direct otherwise].
+    /// How to light the image: `flat` (surface colour), `direct` (the lab's model),
+    /// `path` (global illumination in physical units) or `bdpt` (bidirectional path
+    /// tracing: caustics from small lights) [default: path for glTF, direct
+    /// otherwise].
     #[arg(long, value_parser = parse_integrator)]
     pub integrator: Option<Integrator>,
     /// Which of a glTF file's cameras to look through (depth-first order of the

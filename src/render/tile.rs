@@ -99,6 +99,20 @@ pub(super) fn accumulate_into(
     // `bdpt`'s light subpaths seen by the camera land anywhere on the image.
     let light = matches!(integrator, Integrator::Bdpt(_))
         .then(|| LightImage::new(camera.width, camera.height));
+    // ... and those of the samples in each pixel's half ([`Aov::Half`]).
+    let mut whole_aovs: Option<&mut [i128]> = None;
+    let light_half = match (&light, &target) {
+        (
+            Some(_),
+            Target::Wide {
+                aovs: Some((layout, _)),
+                ..
+            },
+        ) if layout.offset(Aov::Half).is_some() => {
+            Some(LightImage::new(camera.width, camera.height))
+        }
+        _ => None,
+    };
     let (tiles, layout, aov_tiles): (Vec<TileSums>, _, Vec<&mut [i128]>) = match target {
         Target::Narrow(film) => {
             assert_eq!((film.width, film.height), (camera.width, camera.height));
@@ -123,6 +137,7 @@ pub(super) fn accumulate_into(
             let tiles: Vec<_> = image.chunks_mut(tile_pixels).map(TileSums::Wide).collect();
             match aovs {
                 Some((layout, sums)) => {
+                    let sums = whole_aovs.insert(sums);
                     let aov_tiles = sums.chunks_mut(tile_pixels * layout.stride).collect();
                     (tiles, Some(layout), aov_tiles)
                 }
@@ -171,6 +186,7 @@ pub(super) fn accumulate_into(
                 active: active.map(|a| &a[y0 * width..(y0 + n_rows) * width]),
                 splat: splat.is_some(),
                 light: light.as_ref(),
+                light_half: light_half.as_ref(),
             };
             let mut borders = None;
             // Each target with its own copy of the loop (no per-sample test of
@@ -267,6 +283,14 @@ pub(super) fn accumulate_into(
             }
         }
     }
+    if let (Some(half), Some(layout), Some(aovs)) = (light_half, &layout, whole_aovs) {
+        let at = layout.offset(Aov::Half).expect("a half");
+        for (record, add) in aovs.chunks_mut(layout.stride).zip(half.into_sums()) {
+            for c in 0..3 {
+                record[at + c] += add[c];
+            }
+        }
+    }
     // The splatted tiles' borders, into the rows of the tiles around them
     // (exact sums: the order does not matter).
     if let Some(image) = whole {
@@ -354,6 +378,9 @@ struct Tile<'a> {
     splat: bool,
     /// Where `bdpt` splats the light its light subpaths bring to the camera.
     light: Option<&'a LightImage>,
+    /// Where it splats that of the samples in the target pixel's half
+    /// ([`Aov::Half`]), when that AOV is gathered.
+    light_half: Option<&'a LightImage>,
 }
 
 impl Tile<'_> {
@@ -402,10 +429,20 @@ impl Tile<'_> {
         let light = self.light.expect("bdpt renders with a light image");
         let mut scratch = bdpt::Scratch::default();
         let mut rays = 0u64;
-        let mut splat = |at: Vec2, v: Vec3A| {
-            light.add(at, v);
-        };
+        let width = camera.width as usize;
         for s in self.samples.clone() {
+            // A splat counts in the half of the pixel it lands on that
+            // sample `s` of that pixel belongs to.
+            let mut splat = |at: Vec2, v: Vec3A| {
+                if light.add(at, v)
+                    && let Some(half) = self.light_half
+                {
+                    let pixel = at.y as usize * width + at.x as usize;
+                    if in_half(seed, pixel as u64, s) {
+                        half.add(at, v);
+                    }
+                }
+            };
             for y in 0..self.n_rows {
                 for x in 0..self.width {
                     let mut start = PathStart::new(camera, &options, seed, (x, self.y0 + y), s);
@@ -715,6 +752,7 @@ impl Tile<'_> {
             active,
             splat: _,
             light: _,
+            light_half: _,
         } = self;
         let mut rays = 0u64;
         if let Some(active) = active {
