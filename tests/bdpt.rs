@@ -45,21 +45,7 @@ fn bdpt_converges_to_path_on_the_area_lit_box() {
     let width = 64;
     let a = pixels("cornell-area", Integrator::bdpt(), 64, width, 2);
     let b = pixels("cornell-area", Integrator::path(), 256, width, 2);
-    let w = width as usize;
-    let h = a.len() / w;
-    for (qy, qx) in [(0, 0), (0, 1), (1, 0), (1, 1)] {
-        let take = |img: &[[f32; 3]]| -> Vec<[f32; 3]> {
-            (0..h / 2)
-                .flat_map(|y| (0..w / 2).map(move |x| (y + qy * h / 2) * w + x + qx * w / 2))
-                .map(|i| img[i])
-                .collect()
-        };
-        let (ma, mb) = (mean(&take(&a)), mean(&take(&b)));
-        assert!(
-            (ma / mb - 1.0).abs() < 0.01,
-            "quarter ({qx}, {qy}): bdpt {ma} vs path {mb}"
-        );
-    }
+    assert_quarters_agree(&a, &b, width as usize, 0.01);
 }
 
 /// A diffuse floor under a point light and a mirror above both (see
@@ -239,4 +225,72 @@ fn bdpt_splats_count_in_the_half() {
     let half = mean(&half);
     eprintln!("image {image}, half {half}");
     assert!((half / image - 1.0).abs() < 0.02, "half {half} vs {image}");
+}
+
+/// The sun and the sky: a diffuse floor, a diffuse cube and a glossy gold
+/// sphere under a directional light and a constant environment. Light
+/// subpaths leave both from a disk the size of the scene; next-event
+/// estimation aims at the sun and samples the sky; camera subpaths that
+/// escape find the sky. `bdpt`'s image has `path`'s mean within 1 % in
+/// each quarter (measured at 192 × 128, bdpt 256 against path 1024 spp:
+/// every cell of a 4 × 4 grid within 0.3 %; here the quarter with the
+/// sun's highlight in the gold has a noise of about 0.3 %).
+#[test]
+fn bdpt_converges_to_path_under_the_sun_and_the_sky() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("sky.xml");
+    std::fs::write(
+        &scene,
+        r#"<scene version="3.0.0">
+  <integrator type="path"><integer name="max_depth" value="6"/></integrator>
+  <sensor type="perspective">
+    <float name="fov" value="50"/>
+    <transform name="to_world"><lookat origin="0, 3, 6" target="0, 0.5, 0" up="0, 1, 0"/></transform>
+    <film type="hdrfilm"><integer name="width" value="48"/><integer name="height" value="32"/>
+      <rfilter type="box"/></film>
+  </sensor>
+  <shape type="rectangle">
+    <transform name="to_world"><scale value="4"/><rotate x="1" angle="-90"/></transform>
+    <bsdf type="diffuse"><rgb name="reflectance" value="0.6, 0.5, 0.4"/></bsdf>
+  </shape>
+  <shape type="cube">
+    <transform name="to_world"><scale value="0.6"/><rotate y="1" angle="30"/><translate x="-1" y="0.6"/></transform>
+    <bsdf type="diffuse"><rgb name="reflectance" value="0.3, 0.6, 0.3"/></bsdf>
+  </shape>
+  <shape type="sphere">
+    <point name="center" value="1, 0.7, 0"/><float name="radius" value="0.7"/>
+    <bsdf type="roughconductor"><float name="alpha" value="0.2"/><string name="material" value="Au"/></bsdf>
+  </shape>
+  <emitter type="directional">
+    <vector name="direction" value="-1, -2, -0.5"/>
+    <rgb name="irradiance" value="3"/>
+  </emitter>
+  <emitter type="constant"><rgb name="radiance" value="0.3, 0.4, 0.6"/></emitter>
+</scene>"#,
+    )
+    .unwrap();
+    let scene = scene.to_str().unwrap();
+    let width = 48;
+    let a = pixels(scene, Integrator::bdpt(), 256, width, 2);
+    let b = pixels(scene, Integrator::path(), 1024, width, 2);
+    assert_quarters_agree(&a, &b, width as usize, 0.01);
+}
+
+/// Each quarter of image `a` (`w` pixels wide) has the mean of `b`'s within
+/// the relative `tolerance`.
+fn assert_quarters_agree(a: &[[f32; 3]], b: &[[f32; 3]], w: usize, tolerance: f64) {
+    let h = a.len() / w;
+    for (qy, qx) in [(0, 0), (0, 1), (1, 0), (1, 1)] {
+        let take = |img: &[[f32; 3]]| -> Vec<[f32; 3]> {
+            (0..h / 2)
+                .flat_map(|y| (0..w / 2).map(move |x| (y + qy * h / 2) * w + x + qx * w / 2))
+                .map(|i| img[i])
+                .collect()
+        };
+        let (ma, mb) = (mean(&take(a)), mean(&take(b)));
+        assert!(
+            (ma / mb - 1.0).abs() < tolerance,
+            "quarter ({qx}, {qy}): bdpt {ma} vs path {mb}"
+        );
+    }
 }

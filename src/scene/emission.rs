@@ -3,7 +3,8 @@
 //! sends a path ([`Scene::pick_emitter`], by power, independent of any point
 //! being lit), the point it leaves from ([`Scene::emitter_point`]) and the
 //! densities of both ([`Scene::emitter_pmf`]), and whether a scene has only
-//! lights that can be started from ([`Scene::emission_unsupported`]).
+//! lights that can be started from ([`Scene::emission_unsupported`]), and
+//! the disk light from infinity leaves by ([`Scene::infinite_disk`]).
 //!
 //! The choice is the light table's power-proportional one (its alias table
 //! and the key light's weight), the same whatever [`LightSelection`] says
@@ -30,6 +31,8 @@ pub enum Emitter {
     Punctual(u32),
     /// Emitting primitive `prim` (a triangle, disk or cylinder).
     Shape(u32),
+    /// The environment ([`Scene::environment`]).
+    Environment,
 }
 
 /// A point on an emitting shape, uniform by area.
@@ -77,8 +80,7 @@ impl Scene {
         match table.entries[entry] {
             LightRef::Punctual(i) => Some((Emitter::Punctual(i), pmf)),
             LightRef::Triangle(prim) => Some((Emitter::Shape(prim), pmf)),
-            // (Refused by `emission_unsupported`.)
-            LightRef::Environment => None,
+            LightRef::Environment => Some((Emitter::Environment, pmf)),
         }
     }
 
@@ -101,6 +103,7 @@ impl Scene {
                 .get(prim as usize)
                 .filter(|&&e| e != u32::MAX)
                 .map(|&e| e as usize),
+            Emitter::Environment => table.environment.map(|e| e as usize),
         };
         entry.map_or(0.0, |e| table.alias.pmf(e) * (rest / total))
     }
@@ -149,19 +152,9 @@ impl Scene {
     }
 
     /// Why light cannot be started from every light of this scene (for
-    /// `bdpt`), or `None` when it can: the environment, directional lights
-    /// and emitting spheres are not (yet) lights a path can leave.
+    /// `bdpt`), or `None` when it can: emitting spheres are not (yet)
+    /// lights a path can leave.
     pub fn emission_unsupported(&self) -> Option<String> {
-        if !self.environment.is_black() {
-            return Some("an environment light".into());
-        }
-        if self
-            .lights
-            .iter()
-            .any(|l| matches!(l, Light::Directional { .. }))
-        {
-            return Some("a directional light".into());
-        }
         let triangles = self.triangles.len();
         let sphere = self.area_lights.prims.iter().any(|&p| {
             p as usize >= triangles
@@ -170,6 +163,48 @@ impl Scene {
                     .is_some_and(|s| matches!(s.shape, AnalyticShape::Sphere(_)))
         });
         sphere.then(|| "an emitting sphere".into())
+    }
+
+    /// The light `emitter` as one at infinity: the environment, or a
+    /// directional light ([`InfiniteEmitter`]); `None` for lights at a
+    /// place.
+    pub fn infinite_emitter(&self, emitter: Emitter) -> Option<InfiniteEmitter> {
+        match emitter {
+            Emitter::Environment => Some(InfiniteEmitter::Environment),
+            Emitter::Punctual(i) => match self.lights.get(i as usize)? {
+                Light::Directional {
+                    direction,
+                    irradiance,
+                } => Some(InfiniteEmitter::Directional {
+                    direction: *direction,
+                    irradiance: *irradiance,
+                }),
+                _ => None,
+            },
+            Emitter::Key | Emitter::Shape(_) => None,
+        }
+    }
+
+    /// The disk light from infinity leaves by (Veach's and pbrt's choice):
+    /// the centre and radius of the sphere about the scene's bounds. A
+    /// light subpath from the environment or a directional light starts
+    /// uniformly on this disk, turned to face its direction, one radius out
+    /// from the centre, so that its rays cover the whole scene.
+    pub fn infinite_disk(&self) -> (Vec3A, f32) {
+        let (lo, hi) = self.bounds();
+        (0.5 * (lo + hi), self.radius().max(1e-3))
+    }
+
+    /// The density per solid angle with which a light subpath (or
+    /// next-event estimation from [`Scene::pick_emitter`]) leaves from
+    /// infinity along `-to_light`, the choice of the light included: the
+    /// environment's own sampling density times its probability of being
+    /// chosen (a directional light's delta counts as 0).
+    pub fn infinite_origin_pdf(&self, to_light: Vec3A) -> f32 {
+        if self.environment.is_black() {
+            return 0.0;
+        }
+        self.emitter_pmf(Emitter::Environment) * self.environment.pdf(to_light)
     }
 
     /// A direction leaving point light `emitter` (the key light or a
@@ -190,7 +225,7 @@ impl Scene {
                 Light::Beam(b) => (b.position, b.axis, b.cones().1),
                 Light::Directional { .. } => return None,
             },
-            Emitter::Shape(_) => return None,
+            Emitter::Shape(_) | Emitter::Environment => return None,
         };
         let dir = uniform_cone(axis, cos_max, u);
         let pdf = cone_pdf(cos_max);
@@ -218,7 +253,7 @@ impl Scene {
                 Light::Beam(b) => (b.axis, b.cones().1),
                 Light::Directional { .. } => return 0.0,
             },
-            Emitter::Shape(_) => return 0.0,
+            Emitter::Shape(_) | Emitter::Environment => return 0.0,
         };
         if axis.dot(dir) >= cos_max {
             cone_pdf(cos_max)
@@ -233,7 +268,7 @@ impl Scene {
         let light = match emitter {
             Emitter::Key => return self.light.power * (0.25 / PI),
             Emitter::Punctual(i) => &self.lights[i as usize],
-            Emitter::Shape(_) => return Vec3A::ZERO,
+            Emitter::Shape(_) | Emitter::Environment => return Vec3A::ZERO,
         };
         let (position, _) = match light {
             Light::Point { position, .. } | Light::Spot { position, .. } => (*position, ()),
@@ -245,6 +280,20 @@ impl Scene {
             _ => Vec3A::ZERO,
         }
     }
+}
+
+/// A light at infinity ([`Scene::infinite_emitter`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum InfiniteEmitter {
+    /// The environment: radiance from every direction.
+    Environment,
+    /// A directional light.
+    Directional {
+        /// The unit direction its light travels in.
+        direction: Vec3A,
+        /// Its irradiance on a surface facing it, W/m².
+        irradiance: Vec3A,
+    },
 }
 
 /// A direction drawn from a point light ([`Scene::punctual_emission`]).

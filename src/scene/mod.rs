@@ -34,7 +34,7 @@ mod parts;
 mod surface;
 
 pub use analytic::{AnalyticShape, SceneShape};
-pub use emission::{Emitter, EmitterPoint, PunctualEmission};
+pub use emission::{Emitter, EmitterPoint, InfiniteEmitter, PunctualEmission};
 pub use light_sampling::{LightSample, MAX_IMPORTANCE_LIGHTS};
 pub use light_table::{KEY_LIGHT, LightNumbers, LightSelection, PositionalLight};
 pub use light_tree::Facing;

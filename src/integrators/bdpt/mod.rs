@@ -25,10 +25,15 @@
 //! passing through it. The shading frame of a light subpath's vertex is
 //! built from the direction light arrived from.
 //!
+//! Lights at infinity (the environment, directional lights) start light
+//! subpaths on a disk the size of the scene facing their direction, as in
+//! Veach's thesis and pbrt; a camera subpath that escapes ends at the
+//! environment.
+//!
 //! What it does not do (yet; `Job` refuses such scenes with a clear line):
-//! participating media, environment and directional lights, emitting
-//! spheres, thin lenses and orthographic cameras, dispersion, adaptive
-//! sampling, and reconstruction filters other than the box.
+//! participating media, emitting spheres, thin lenses and orthographic
+//! cameras, dispersion, adaptive sampling, and reconstruction filters other
+//! than the box.
 //!
 //! Files: `vertex.rs` (vertices and their densities), `walk.rs` (the two
 //! walks), `connect.rs` (the strategies and their weights).

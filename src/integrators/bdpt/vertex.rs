@@ -8,7 +8,7 @@ use super::super::path::Shading;
 use crate::camera::Camera;
 use crate::geometry::ray::SurfacePoint;
 use crate::materials::{Frame, Material};
-use crate::scene::{Emitter, Scene};
+use crate::scene::{Emitter, InfiniteEmitter, Scene};
 
 /// What a vertex is.
 #[derive(Clone, Copy, Debug)]
@@ -27,6 +27,18 @@ pub(super) enum Kind {
     },
     /// A surface the walk met, its BSDF ready to scatter ([`Scatter`]).
     Surface,
+    /// A light at infinity (the environment or a directional light), the
+    /// end of a light subpath or of a camera subpath that escaped. Its
+    /// densities follow pbrt's convention: its own (`pdf_fwd` of a light
+    /// subpath, `pdf_rev` of a camera one) are per solid angle, of its
+    /// direction; the next vertex's is per unit area of the disk light
+    /// leaves by ([`Scene::infinite_disk`]), projected onto that vertex.
+    Infinite {
+        /// Which light.
+        emitter: Emitter,
+        /// The unit direction its light travels in (into the scene).
+        dir: Vec3A,
+    },
 }
 
 /// A surface vertex's BSDF in its shading frame.
@@ -97,33 +109,81 @@ impl Vertex {
         matches!(self.kind, Kind::Surface | Kind::AreaLight { .. })
     }
 
-    /// Whether it is a light that is a delta in position.
+    /// Whether it is a light no camera subpath can find: a delta in
+    /// position (a point light) or in direction (a directional light).
     #[inline]
     pub fn is_delta_light(&self) -> bool {
-        matches!(self.kind, Kind::PointLight(_))
+        match self.kind {
+            Kind::PointLight(_) => true,
+            Kind::Infinite { emitter, .. } => emitter != Emitter::Environment,
+            _ => false,
+        }
     }
 
-    /// Whether another subpath's vertex can be joined to it.
+    /// Whether it is a light at infinity.
+    #[inline]
+    pub fn is_infinite(&self) -> bool {
+        matches!(self.kind, Kind::Infinite { .. })
+    }
+
+    /// Whether another subpath's vertex can be joined to it by a segment
+    /// (a light at infinity is joined by a direction instead, by next-event
+    /// estimation only).
     #[inline]
     pub fn connectible(&self) -> bool {
-        !self.delta && !self.unlit
+        !self.delta && !self.unlit && !self.is_infinite()
     }
 }
 
-/// Converts a solid-angle density at `from` of the direction to `to` into a
-/// density per unit area at `to`.
+/// The unit direction from vertex `from` to vertex `to`, the direction of
+/// a light at infinity at either end; `None` for coincident points.
 #[inline]
-pub(super) fn to_area(pdf_dir: f32, from: &Vertex, to: &Vertex) -> f32 {
+pub(super) fn direction(from: &Vertex, to: &Vertex) -> Option<Vec3A> {
+    if let Kind::Infinite { dir, .. } = to.kind {
+        return Some(-dir);
+    }
+    if let Kind::Infinite { dir, .. } = from.kind {
+        return Some(dir);
+    }
+    let d = to.point.p - from.point.p;
+    let d2 = d.length_squared();
+    d2.gt(&0.0).then(|| d / d2.sqrt())
+}
+
+/// Converts a density at `from` of the direction to `to` into a density
+/// per unit area at `to`: a solid-angle density over the squared distance
+/// and times the cosine at `to`. Towards a light at infinity it stays per
+/// solid angle; from one, `pdf` is per unit area of the disk light leaves
+/// by, and only the cosine at `to` applies.
+#[inline]
+pub(super) fn to_area(pdf: f32, from: &Vertex, to: &Vertex) -> f32 {
+    if to.is_infinite() {
+        return pdf;
+    }
+    let cos = |w: Vec3A| {
+        if to.has_area() {
+            to.point.n.dot(w).abs()
+        } else {
+            1.0
+        }
+    };
+    if let Kind::Infinite { dir, .. } = from.kind {
+        return pdf * cos(dir);
+    }
     let d = to.point.p - from.point.p;
     let d2 = d.length_squared();
     if !d2.gt(&0.0) {
         return 0.0;
     }
-    let mut pdf = pdf_dir / d2;
-    if to.has_area() {
-        pdf *= (to.point.n.dot(d) / d2.sqrt()).abs();
-    }
-    pdf
+    pdf / d2 * cos(d / d2.sqrt())
+}
+
+/// The density per unit area of the disk from infinity with which a light
+/// subpath leaves a light at infinity ([`Scene::infinite_disk`]).
+#[inline]
+pub(super) fn infinite_disk_pdf(scene: &Scene) -> f32 {
+    let (_, r) = scene.infinite_disk();
+    1.0 / (std::f32::consts::PI * r * r)
 }
 
 /// The solid-angle density with which an area light at `light` (normal
@@ -151,23 +211,23 @@ pub(super) fn pdf_to(
     prev: Option<&Vertex>,
     next: &Vertex,
 ) -> f32 {
-    let w = next.point.p - v.point.p;
-    let d2 = w.length_squared();
-    if !d2.gt(&0.0) {
+    let Some(w) = direction(v, next) else {
         return 0.0;
-    }
-    let w = w / d2.sqrt();
+    };
     let pdf_dir = match v.kind {
         Kind::Camera => camera.direction_density(w),
         Kind::PointLight(e) => scene.punctual_pdf(e, w),
         Kind::AreaLight { prim, .. } => {
             emission_dir_pdf(v.point.n, scene.material(prim).emits_both_sides, w)
         }
+        Kind::Infinite { .. } => infinite_disk_pdf(scene),
         Kind::Surface => {
             let (Some(s), Some(prev)) = (&v.scatter, prev) else {
                 return 0.0;
             };
-            let wo = (prev.point.p - v.point.p).normalize_or_zero();
+            let Some(wo) = direction(v, prev) else {
+                return 0.0;
+            };
             s.bsdf.pdf(s.frame.to_local(wo), s.frame.to_local(w))
         }
     };
@@ -175,9 +235,15 @@ pub(super) fn pdf_to(
 }
 
 /// What a light endpoint sends along the unit `w`: an area light's radiance
-/// times the cosine at its surface, a point light's intensity.
+/// times the cosine at its surface, a point light's intensity, the
+/// environment's radiance from `-w`, a directional light's irradiance.
 pub(super) fn light_sends(scene: &Scene, v: &Vertex, w: Vec3A) -> Vec3A {
     match v.kind {
+        Kind::Infinite { emitter, .. } => match scene.infinite_emitter(emitter) {
+            Some(InfiniteEmitter::Directional { irradiance, .. }) => irradiance,
+            Some(InfiniteEmitter::Environment) => scene.environment_radiance(-w),
+            None => Vec3A::ZERO,
+        },
         Kind::PointLight(e) => scene.punctual_intensity(e, w),
         Kind::AreaLight { prim, uv } => {
             let c = v.point.n.dot(w);

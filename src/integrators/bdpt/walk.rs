@@ -5,11 +5,13 @@
 use glam::{Vec2, Vec3A};
 
 use super::super::path::{PathSampler, RR_DEPTH, RR_SCALE, emission, vertex_frame};
-use super::vertex::{Kind, Scatter, Vertex, emission_dir_pdf, light_scatter, to_area};
+use super::vertex::{
+    Kind, Scatter, Vertex, emission_dir_pdf, infinite_disk_pdf, light_scatter, to_area,
+};
 use crate::camera::Camera;
 use crate::geometry::ray::{Ray, SurfacePoint};
 use crate::materials::Material;
-use crate::scene::{Emitter, Scene};
+use crate::scene::{Emitter, InfiniteEmitter, Scene};
 
 /// Which way a walk carries its quantity.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -106,6 +108,35 @@ pub(super) fn light_subpath(
             let pdf = emission_dir_pdf(n, two_sided, dir);
             (dir, pdf, super::vertex::light_sends(scene, &vertex, dir))
         }
+        Kind::Infinite { dir, .. } => {
+            // A point on the disk facing the light, one scene radius out,
+            // with its density per unit area (which the walk's first step
+            // projects onto the surface it meets).
+            let (centre, r) = scene.infinite_disk();
+            let frame = crate::materials::Frame::from_normal(dir);
+            let d = concentric_disk(u_dir) * r;
+            let origin = centre - dir * r + frame.t * d.x + frame.b * d.y;
+            path[0].point.p = origin;
+            let sent = super::vertex::light_sends(scene, &vertex, dir);
+            let ray = Ray::new(origin, dir);
+            let pdf_pos = infinite_disk_pdf(scene);
+            if !pdf_pos.gt(&0.0) || sent == Vec3A::ZERO {
+                return;
+            }
+            let beta = vertex.beta * sent / pdf_pos;
+            walk(
+                scene,
+                ray,
+                beta,
+                pdf_pos,
+                Mode::Light,
+                max,
+                sampler,
+                path,
+                rays,
+            );
+            return;
+        }
         _ => return,
     };
     if !pdf_dir.gt(&0.0) || sent == Vec3A::ZERO {
@@ -130,11 +161,36 @@ pub(super) fn light_subpath(
 /// A light subpath's first vertex: a light chosen with `u_choice` by power
 /// and a point on it with `u_pos`, its throughput `1/(pmf · pdf_pos)` (the
 /// light's emission enters at the next step) and its density
-/// `pmf · pdf_pos` (`pdf_pos` 1 for a point light); with `pdf_pos`.
+/// `pmf · pdf_pos` (`pdf_pos` 1 for a point light); with `pdf_pos`. A light
+/// at infinity gets its direction from `u_pos` instead (the environment's
+/// importance sampling, a directional light's own), with the density of
+/// that direction in the place of `pdf_pos` (1 for a directional light,
+/// whose vertex's density is then 0: no other walk finds it); its point is
+/// left for the caller to place.
 pub(super) fn light_start(scene: &Scene, u_choice: Vec2, u_pos: Vec2) -> Option<(Vertex, f32)> {
     let (emitter, pmf) = scene.pick_emitter(u_choice)?;
     if !pmf.gt(&0.0) {
         return None;
+    }
+    if let Some(infinite) = scene.infinite_emitter(emitter) {
+        let (dir, pdf_dir, pdf_fwd) = match infinite {
+            InfiniteEmitter::Directional { direction, .. } => (direction, 1.0, 0.0),
+            InfiniteEmitter::Environment => {
+                let (to_light, _, pdf) = scene.environment().sample(u_pos)?;
+                (-to_light, pdf, pmf * pdf)
+            }
+        };
+        if !pdf_dir.gt(&0.0) {
+            return None;
+        }
+        let point = SurfacePoint {
+            p: Vec3A::ZERO,
+            error: Vec3A::ZERO,
+            n: Vec3A::ZERO,
+        };
+        let kind = Kind::Infinite { emitter, dir };
+        let beta = Vec3A::splat(1.0 / (pmf * pdf_dir));
+        return Some((Vertex::new(kind, point, beta, pdf_fwd), pdf_dir));
     }
     match emitter {
         Emitter::Key | Emitter::Punctual(_) => {
@@ -164,7 +220,27 @@ pub(super) fn light_start(scene: &Scene, u_choice: Vec2, u_pos: Vec2) -> Option<
                 1.0 / at.area,
             ))
         }
+        Emitter::Environment => None,
     }
+}
+
+/// A point of the unit disk, uniform by area, from `u` (Shirley and
+/// Chiu's concentric map).
+#[inline]
+fn concentric_disk(u: Vec2) -> Vec2 {
+    let o = 2.0 * u - Vec2::ONE;
+    if o == Vec2::ZERO {
+        return Vec2::ZERO;
+    }
+    let (r, theta) = if o.x.abs() > o.y.abs() {
+        (o.x, std::f32::consts::FRAC_PI_4 * (o.y / o.x))
+    } else {
+        (
+            o.y,
+            std::f32::consts::FRAC_PI_2 - std::f32::consts::FRAC_PI_4 * (o.x / o.y),
+        )
+    };
+    r * Vec2::new(theta.cos(), theta.sin())
 }
 
 /// A direction about `+z` with density `cos θ / π`.
@@ -196,6 +272,23 @@ fn walk(
     loop {
         *rays += 1;
         let Some(hit) = scene.intersect(&ray, f32::INFINITY) else {
+            // A camera subpath that escapes ends at the environment.
+            if mode == Mode::Camera && !scene.environment().is_black() {
+                let prev = path.last().expect("a walk starts at a vertex");
+                let point = SurfacePoint {
+                    p: ray.origin + ray.dir,
+                    error: Vec3A::ZERO,
+                    n: Vec3A::ZERO,
+                };
+                let kind = Kind::Infinite {
+                    emitter: Emitter::Environment,
+                    dir: -ray.dir,
+                };
+                let mut v = Vertex::new(kind, point, beta, 0.0);
+                v.pdf_fwd = to_area(pdf_dir, prev, &v);
+                v.emitted = scene.environment_radiance(ray.dir);
+                path.push(v);
+            }
             return;
         };
         let surface = scene.surface(&hit);
