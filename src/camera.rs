@@ -502,30 +502,55 @@ impl Camera {
         self.ortho_px.is_none() && self.thin_lens.is_none()
     }
 
-    /// Where a pinhole camera sees the world point `p`: its image point (in
-    /// pixels, within the image) and the unit direction from the centre of
-    /// projection to `p`; `None` behind the camera, outside the image, or for
-    /// a camera other than a pinhole.
-    pub fn seen_at(&self, p: Vec3A) -> Option<(Vec2, Vec3A)> {
-        if !self.is_pinhole() {
+    /// Where a perspective camera (a pinhole or a thin lens) sees the world
+    /// point `p` through the point of its lens that `lens` picks
+    /// ([`ThinLens::point`]; ignored by a pinhole): the lens point (world),
+    /// the image point (in pixels, within the image) whose rays through
+    /// that lens point pass `p` (the ray from the lens point through `p`
+    /// meets the focus plane where the pixel's pinhole ray does), and the
+    /// unit direction from the lens point to `p`. `None` behind the lens,
+    /// outside the image, or for an orthographic camera.
+    pub fn seen_at(&self, p: Vec3A, lens: Vec2) -> Option<(Vec3A, Vec2, Vec3A)> {
+        if self.ortho_px.is_some() {
             return None;
         }
-        let d = p - self.position;
-        let local = self.rotation.transpose() * d;
+        let (start, local) = match self.thin_lens {
+            None => (Vec3A::ZERO, self.rotation.transpose() * (p - self.position)),
+            Some(thin) => {
+                let start = Vec3A::from(thin.point(lens).extend(0.0));
+                let to_p = self.rotation.transpose() * (p - self.position) - start;
+                if !to_p.z.gt(&0.0) {
+                    return None;
+                }
+                // Where the ray from the lens point through `p` crosses the
+                // focus plane, in camera space.
+                let f = thin.focus_distance;
+                (start, start + to_p * (f / to_p.z))
+            }
+        };
         if !local.z.gt(&0.0) {
             return None;
         }
         let x = self.centre.x + local.x / local.z * self.focal_px;
         let y = self.centre.y + local.y / local.z * self.focal_px;
         let inside = x >= 0.0 && y >= 0.0 && x < self.width as f32 && y < self.height as f32;
-        inside.then(|| (Vec2::new(x, y), d.normalize()))
+        let origin = self.position + self.rotation * start;
+        inside.then(|| (origin, Vec2::new(x, y), (p - origin).normalize()))
     }
 
-    /// The solid-angle density with which a pinhole camera's rays, over the
-    /// whole image (a pixel chosen uniformly, then a point in it), take the
-    /// unit direction `dir`: `f² / (W H cos³θ)` with `f` the focal length in
-    /// pixels and `θ` the angle to the view axis (one pixel spans
-    /// `cos³θ / f²` sr). It is also the camera's importance times `cos θ`,
+    /// Whether the camera is orthographic.
+    pub fn is_orthographic(&self) -> bool {
+        self.ortho_px.is_some()
+    }
+
+    /// The solid-angle density with which a perspective camera's rays from
+    /// one point of its lens (the centre of projection of a pinhole), over
+    /// the whole image (a pixel chosen uniformly, then a point in it), take
+    /// the unit direction `dir`: `f² / (W H cos³θ)` with `f` the focal
+    /// length in pixels and `θ` the angle to the view axis (one pixel spans
+    /// `cos³θ / f²` sr; through a thin lens the pixels map onto the focus
+    /// plane as through its centre, so the same holds from every lens
+    /// point). It is also the camera's importance times `cos θ`,
     /// which light paths splatted onto the image are weighted by. Zero
     /// outside the image's cone of directions is the caller's to check
     /// ([`Camera::seen_at`]).
@@ -734,6 +759,42 @@ mod tests {
         // Solve o + a·ex + b·ey = target (a, b in steps of 50 px).
         let ab = glam::DMat2::from_cols(ex, ey).inverse() * (target - o);
         Vec2::new(x0 + (50.0 * ab.x) as f32, y0 + (50.0 * ab.y) as f32)
+    }
+
+    /// `seen_at` inverts `lens_ray`: a point on the ray through image point
+    /// `(px, py)` and lens point `u` is seen through that lens point at that
+    /// image point, from the ray's origin, along its direction (a pinhole
+    /// and a thin lens, round and with blades, in and out of focus).
+    #[test]
+    fn seen_at_inverts_lens_rays() {
+        let pinhole = Camera::with_lens(
+            Vec3A::new(0.3, -0.2, 1.5),
+            lab_rotation(23.0, -11.0),
+            Lens::Perspective { focal_scale: 1.25 },
+            320,
+            200,
+        );
+        for camera in [pinhole, lens_camera(0.2, 3.0, 0), lens_camera(0.2, 3.0, 6)] {
+            for (px, py) in [(0.5, 0.5), (160.0, 100.0), (319.25, 17.75), (5.5, 199.0)] {
+                for u in lens_samples() {
+                    let ray = camera.lens_ray(px, py, u);
+                    for t in [0.5f32, 3.0, 11.0] {
+                        let p = ray.origin + ray.dir * t;
+                        let (origin, at, dir) = camera.seen_at(p, u).expect("seen");
+                        assert!(
+                            (origin - ray.origin).length() < 1e-5,
+                            "{origin} {}",
+                            ray.origin
+                        );
+                        assert!(
+                            (at - Vec2::new(px, py)).length() < 2e-3,
+                            "({px}, {py}) through {u} at {t}: {at}"
+                        );
+                        assert!((dir - ray.dir).length() < 1e-5);
+                    }
+                }
+            }
+        }
     }
 
     /// A point at depth z spreads over the thin lens's circle of confusion,

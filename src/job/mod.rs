@@ -376,8 +376,8 @@ pub fn bdpt_refusal(
         "participating media".to_string()
     } else if let Some(light) = scene.emission_unsupported() {
         light
-    } else if !camera.is_pinhole() {
-        "a thin lens or an orthographic camera (bdpt needs a pinhole)".to_string()
+    } else if camera.is_orthographic() {
+        "an orthographic camera".to_string()
     } else if options.filter != crate::sampling::filter::PixelFilter::Box {
         format!("the {:?} pixel filter (add --filter box)", options.filter)
     } else if args.noise_threshold.is_some() {

@@ -68,7 +68,13 @@ pub fn sample(
                 continue;
             }
             if t == 1 {
-                if let Some((at, v)) = join.seen(s, rays)
+                // (A pinhole draws no lens point.)
+                let u_lens = if camera.thin_lens.is_some() {
+                    sampler.next_2d()
+                } else {
+                    Vec2::ZERO
+                };
+                if let Some((at, v)) = join.seen(s, u_lens, rays)
                     && v.is_finite()
                 {
                     splat(at, v);
@@ -169,8 +175,10 @@ impl Join<'_> {
     }
 
     /// Strategy `(s, 1)`: the light subpath's vertex `s - 1` seen by the
-    /// camera, and the image point it lands on.
-    fn seen(&self, s: usize, rays: &mut u64) -> Option<(Vec2, Vec3A)> {
+    /// camera through the point of its lens `u_lens` picks (a thin lens's
+    /// point is uniform over its area: its importance over that density
+    /// leaves the pinhole's value), and the image point it lands on.
+    fn seen(&self, s: usize, u_lens: Vec2, rays: &mut u64) -> Option<(Vec2, Vec3A)> {
         let (scene, camera) = (self.scene, self.camera);
         let y = &self.light[s - 1];
         // A light seen by the camera is found by both subpaths (a point
@@ -178,25 +186,40 @@ impl Join<'_> {
         if !y.connectible() || s == 1 && y.is_delta_light() {
             return None;
         }
-        let (at, dir) = camera.seen_at(y.point.p)?;
-        let d2 = (y.point.p - camera.position).length_squared();
+        let (origin, at, dir) = camera.seen_at(y.point.p, u_lens)?;
+        let d2 = (y.point.p - origin).length_squared();
         let fy = sends(scene, y, -dir);
         let c = y.beta * fy * (camera.direction_density(dir) / d2);
         if c == Vec3A::ZERO || !c.is_finite() {
             return None;
         }
         let (shadow, t_max) = if y.has_area() {
-            y.point.ray_to(camera.position)
+            y.point.ray_to(origin)
         } else {
-            let d = y.point.p - camera.position;
+            let d = y.point.p - origin;
             let dist = d.length();
-            (Ray::new(camera.position, d / dist), dist * (1.0 - 1e-4))
+            (Ray::new(origin, d / dist), dist * (1.0 - 1e-4))
         };
         *rays += 1;
         if scene.occluded(&shadow, t_max) {
             return None;
         }
-        Some((at, c * self.weight(s, 1)))
+        // The camera vertex at that lens point.
+        let lens = [Vertex::new(
+            Kind::Camera,
+            crate::geometry::ray::SurfacePoint {
+                p: origin,
+                error: Vec3A::ZERO,
+                n: Vec3A::ZERO,
+            },
+            Vec3A::ONE,
+            1.0,
+        )];
+        let join = Join {
+            cam: &lens,
+            ..*self
+        };
+        Some((at, c * join.weight(s, 1)))
     }
 
     /// The power heuristic weight of strategy `(s, t)` among all strategies
@@ -241,8 +264,8 @@ impl Join<'_> {
             _ => 0.0,
         };
         // Moving the connection towards the camera (the camera subpath's
-        // vertices taken by the light walk instead; a pinhole cannot be
-        // hit), then towards the light (down to the camera subpath finding
+        // vertices taken by the light walk instead; no light path ends on
+        // the camera's lens), then towards the light (down to the camera subpath finding
         // the light, which a point light cannot be).
         let end_delta = light.first().is_some_and(Vertex::is_delta_light);
         let sum = alternatives(cam, t, 1, z_rev, z_prev_rev, false)

@@ -31,8 +31,8 @@
 //! environment.
 //!
 //! What it does not do (yet; `Job` refuses such scenes with a clear line):
-//! participating media, emitting spheres, thin lenses and orthographic
-//! cameras, dispersion, adaptive sampling, and reconstruction filters other
+//! participating media, emitting spheres, orthographic cameras,
+//! dispersion, adaptive sampling, and reconstruction filters other
 //! than the box.
 //!
 //! Files: `vertex.rs` (vertices and their densities), `walk.rs` (the two

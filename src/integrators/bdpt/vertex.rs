@@ -13,7 +13,8 @@ use crate::scene::{Emitter, InfiniteEmitter, Scene};
 /// What a vertex is.
 #[derive(Clone, Copy, Debug)]
 pub(super) enum Kind {
-    /// The pinhole camera's centre of projection.
+    /// The camera's point: a pinhole's centre of projection or a point of
+    /// its thin lens.
     Camera,
     /// A point light (a delta in position).
     PointLight(Emitter),
