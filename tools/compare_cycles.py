@@ -114,8 +114,9 @@ the best (smallest) time and the worst (largest) error of the rounds. All runs g
 (--json, default CACHE/compare_cycles-last.json). The two renderers' converged images are also
 compared with each other (mean ratio, 8×8-block mean |relative difference|), and PNG previews are
 written to --previews (default CACHE/previews): `SCENE-refs.png` = raylab | Cycles | their
-luminance ratio (blue: raylab darker, red: brighter, ±20 % full scale), and `SCENE-SPPspp.png` =
-raylab noisy | raylab denoised | Cycles noisy | Cycles denoised of round 1.
+luminance ratio (blue: raylab darker, red: brighter, ±20 % full scale; a row per Cycles reference),
+and `SCENE-SPPspp.png` = raylab noisy | raylab denoised | Cycles noisy | Cycles denoised of round 1
+(the modes of --modes; then the same for every further Cycles configuration of the scene).
 
 --ladder A,B,...: raylab --denoise is also rendered at these spp in every round (right after the
 scene's other runs), and a table gives, per scene, the fewest of them whose worst errors (both
@@ -1072,8 +1073,9 @@ def compare(args, tmp):
             bits.append(f"raylab's denoise {span} ms")
         if bits:
             print(f"* {sc.name}: " + "; ".join(bits))
-    print(f"* previews: {args.previews} (SCENE-refs.png: raylab | Cycles | luminance ratio; "
-          "SCENE-Nspp.png: raylab noisy | denoised | Cycles noisy | denoised)")
+    print(f"* previews: {args.previews} (SCENE-refs.png: raylab | Cycles | luminance ratio, a row "
+          "per Cycles reference; SCENE-Nspp.png: raylab, then each Cycles configuration, each "
+          f"{' | '.join(modes)})")
     bad = [x for x in runs if x.get("noisy_layer_max_abs_diff_vs_noisy_run", 0) > 0]
     if bad:
         print(f"* warning: raylab --denoise's noisy layers differ from the noisy run at the same "
