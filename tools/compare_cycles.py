@@ -7,6 +7,7 @@ the Cycles peer):
 
     python3 tools/compare_cycles.py [--scenes helmet-venice,showcase,cornell-glass,street,glass-lamps]
                                     [--spp 16,64] [--rounds 1] [--threads 2] [--ref-spp 1024]
+                                    [--modes noisy,denoised] [--raylab-integrator path|bdpt]
                                     [--size 320x240] [--box-size 256x256] [--json PATH]
                                     [--raylab PATH] [--venv DIR] [--shared DIR] [--cache DIR]
                                     [--previews DIR] [--fresh-refs] [--timeout S]
@@ -35,10 +36,42 @@ Scenes (glTF 2.0, read by both renderers under docs/scene-conventions.md):
                  all scattering, isotropic, over the meshes' bounding box); Cycles through
                  tools/cycles_fog.py, a Volume Scatter box of density 0.15 over the same box
                  (volume bounces as many as the others); not with --adaptive.
+  caustic-ring   scenes/caustics/ring.gltf (issue 45: a polished gold ring on a table under a
+                 spot light from the side: the cardioid caustic inside it;
+                 tools/make_caustic_scenes.py), --size;
+  caustic-glass  scenes/caustics/glass-sphere.gltf (a solid glass sphere over a tiled floor under
+                 a point light: the focused caustic beside its shadow), --size;
+  caustic-water  scenes/caustics/water.gltf (a pool seen from under its wavy water surface, one
+                 refracting sheet, lit by a point light above: the net of caustics on the floor
+                 and walls), --size.
+  The default --scenes is all but the fog and caustic scenes. Every light of the caustic scenes is
+  a punctual light of radius 0 on both sides (render_gltf.py sets shadow_soft_size 0): a path
+  tracer finds none of their caustics, raylab's `bdpt` (light tracing) does, Cycles only through
+  MNEE and only the refracted ones (see below).
+
+Caustic scenes: raylab renders them with `--integrator bdpt` (--raylab-integrator overrides that
+for every scene, e.g. `path` for its caustic-less image; bdpt takes the flags below: box filter,
+no tiles, no adaptive sampling), and Cycles in each of its fair configurations, through
+tools/cycles_caustics.py (render_gltf.py wrapped, as for the fog; see that script):
+  Cycles               render_gltf.py unchanged (path guiding off, MNEE off);
+  Cycles guiding       path guiding on (surface and volume, Blender's defaults: 128 training
+                       samples, taken by the render itself, so counted in its time);
+  Cycles MNEE          caustic-glass and caustic-water: manifold next-event estimation, the
+                       light a caustics light, the glass/water a caustics caster, the other
+                       meshes receivers (Cycles' MNEE does refraction only: not for the ring);
+  Cycles MNEE+guiding  both.
+  Configurations that differ only in guiding share one converged reference (guiding changes the
+  noise, not the mean); MNEE has its own (it adds the caustic plain Cycles misses). The table lists
+  every configuration, marks with ★ Cycles' best one per measure (lowest error × seconds) and
+  gives raylab ÷ that one, then whether issue 45's target holds: raylab's error × seconds at most
+  0.5 × the best Cycles configuration's, on both measures, at each spp. SCENE-refs.png has a row
+  per Cycles reference. The two renderers' converged images of the ring (and, without MNEE, of
+  the others) differ by the caustic itself: each is judged against its own.
 
 Renderers, same size, same threads (--threads, default 2), same seeds:
   raylab  `raylab render SCENE --spp N --threads T --seed S --width W --height H
-          --default-light off [--env F --env-rotate D] [--denoise] -o out.exr`, from a copy of the
+          --default-light off [--env F --env-rotate D] [--integrator bdpt] [--denoise] -o out.exr`,
+          from a copy of the
           binary made at the start (a rebuild during the run changes nothing). Time: the render time
           of its summary line on stderr (`wrote out.exr: WxH, path, N spp, T ms, ...`: path tracing
           only, without loading the scene, building the BVH or writing the file). Denoised
@@ -75,14 +108,15 @@ when it differs; --fresh-refs re-renders).
   Figure of merit: error × seconds (lower is better; for relMSE it does not depend on spp while
   the error falls as 1/spp), and the ratio raylab ÷ Cycles (below 1: raylab is more efficient).
 
-Measurements: --rounds rounds (default 1); in round k every scene, spp and mode (noisy, denoised)
-is rendered by both renderers with seed k, alternating which renderer goes first. The table gives
+Measurements: --rounds rounds (default 1); in round k every scene, spp and mode (--modes, default
+noisy and denoised) is rendered by both renderers (every Cycles configuration) with seed k, alternating which renderer goes first. The table gives
 the best (smallest) time and the worst (largest) error of the rounds. All runs go into the JSON file
 (--json, default CACHE/compare_cycles-last.json). The two renderers' converged images are also
 compared with each other (mean ratio, 8×8-block mean |relative difference|), and PNG previews are
 written to --previews (default CACHE/previews): `SCENE-refs.png` = raylab | Cycles | their
-luminance ratio (blue: raylab darker, red: brighter, ±20 % full scale), and `SCENE-SPPspp.png` =
-raylab noisy | raylab denoised | Cycles noisy | Cycles denoised of round 1.
+luminance ratio (blue: raylab darker, red: brighter, ±20 % full scale; a row per Cycles reference),
+and `SCENE-SPPspp.png` = raylab noisy | raylab denoised | Cycles noisy | Cycles denoised of round 1
+(the modes of --modes; then the same for every further Cycles configuration of the scene).
 
 --ladder A,B,...: raylab --denoise is also rendered at these spp in every round (right after the
 scene's other runs), and a table gives, per scene, the fewest of them whose worst errors (both
@@ -163,7 +197,22 @@ SCENES = {
     "street": ("scenes/street/street.gltf", None, 0.0, False, None),
     "glass-lamps": ("scenes/glass-lamps/glass-lamps.gltf", None, 0.0, False, None),
     "showcase-fog": ("scenes/showcase/showcase.gltf", None, 0.0, False, 0.15),
+    "caustic-ring": ("scenes/caustics/ring.gltf", None, 0.0, False, None),
+    "caustic-glass": ("scenes/caustics/glass-sphere.gltf", None, 0.0, False, None),
+    "caustic-water": ("scenes/caustics/water.gltf", None, 0.0, False, None),
 }
+# The caustic scenes (issue 45): raylab's integrator by default, and Cycles' configurations
+# through tools/cycles_caustics.py: name -> (label, wrapper flags). "Cycles" (no flags) is
+# render_gltf.py unchanged. MNEE only where a refracting object casts the caustic (it does
+# nothing for the ring's metal).
+CAUSTICS_WRAPPER = os.path.join(ROOT, "tools", "cycles_caustics.py")
+CYCLES_GUIDING = [("Cycles", []), ("Cycles guiding", ["--guiding"])]
+CYCLES_MNEE = CYCLES_GUIDING + [("Cycles MNEE", ["--mnee"]),
+                                ("Cycles MNEE+guiding", ["--mnee", "--guiding"])]
+CAUSTIC_SCENES = {"caustic-ring": ("bdpt", CYCLES_GUIDING),
+                  "caustic-glass": ("bdpt", CYCLES_MNEE),
+                  "caustic-water": ("bdpt", CYCLES_MNEE)}
+INTEGRATORS = ("path", "bdpt")
 REF_SEED = 1 << 20
 ADAPTIVE_WRAPPER = os.path.join(ROOT, "tools", "cycles_adaptive.py")
 FOG_WRAPPER = os.path.join(ROOT, "tools", "cycles_fog.py")
@@ -436,13 +485,17 @@ class Scene:
                     "showcase": " (python3 tools/make_showcase.py makes it)",
                     "showcase-fog": " (python3 tools/make_showcase.py makes it)",
                     "street": " (python3 tools/make_street.py makes it)",
-                    "glass-lamps": " (python3 tools/make_glass_lamps.py makes it)"}[name]
+                    "glass-lamps": " (python3 tools/make_glass_lamps.py makes it)"}.get(
+                        name, " (python3 tools/make_caustic_scenes.py makes it)")
             raise Fail(f"scene file {rel} not found{hint}")
         self.env = os.path.join(ROOT, "assets", env) if env else None
         if self.env and not os.path.isfile(self.env):
             raise Fail(f"environment map {self.env} not found")
         self.rotate = rotate
         self.width, self.height = args.box_size if box else args.size
+        default, configs = CAUSTIC_SCENES.get(name, ("path", [("Cycles", [])]))
+        self.integrator = args.raylab_integrator or default
+        self.cycles_configs = configs
 
     def files(self):
         """The glTF file and every file it references (and the map), for the cache key."""
@@ -460,6 +513,8 @@ class Scene:
             out.append(self.env)
         if self.fog is not None:
             out.append(FOG_WRAPPER)
+        if self.name in CAUSTIC_SCENES:
+            out.append(CAUSTICS_WRAPPER)
         return out
 
     def key(self, renderer_id, spp):
@@ -524,11 +579,13 @@ class Raylab:
         cmd = [self.binary, "render", scene.file, "--spp", str(spp), "--threads", str(self.threads),
                "--seed", str(seed), "--width", str(scene.width), "--height", str(scene.height),
                "--default-light", "off", *scene.env_args(), *scene.fog_args(), "-o", out]
+        if scene.integrator != "path":
+            cmd += ["--integrator", scene.integrator]
         if denoise:
             cmd.append("--denoise")
         if noise_threshold is not None:
             cmd += ["--noise-threshold", f"{noise_threshold:g}"]
-        what = (f"raylab {scene.name} {spp} spp{' --denoise' if denoise else ''}"
+        what = (f"raylab {scene.name} {scene.integrator} {spp} spp{' --denoise' if denoise else ''}"
                 + (f" --noise-threshold {noise_threshold:g}" if noise_threshold is not None else ""))
         _, err, wall = run(cmd, self.timeout, what)
         m = SUMMARY.search(err)
@@ -538,7 +595,7 @@ class Raylab:
         w, h, integrator, done, ms = m.groups()
         # adaptive: `N spp` is the cap, or at most the cap
         spp_ok = int(done) == spp or (noise_threshold is not None and int(done) <= spp)
-        if (int(w), int(h)) != (scene.width, scene.height) or not spp_ok or integrator != "path":
+        if (int(w), int(h)) != (scene.width, scene.height) or not spp_ok or integrator != scene.integrator:
             raise Fail(f"{what}: unexpected summary: {m.group(0)}")
         render_s = float(ms) / 1e3
         info = {"render_s": render_s, "wall_s": wall, "summary": m.group(0)}
@@ -566,7 +623,11 @@ class Raylab:
 class Cycles:
     name = "Cycles"
 
-    def __init__(self, venv, shared, threads, tmp, timeout):
+    def __init__(self, venv, shared, threads, tmp, timeout, name="Cycles", flags=()):
+        """name, flags: a configuration of tools/cycles_caustics.py (--guiding, --mnee) for the
+        caustic scenes; "Cycles" without flags is render_gltf.py unchanged."""
+        self.name, self.flags = name, list(flags)
+        self.venv, self.shared = venv, shared
         self.py = os.path.join(os.path.abspath(venv), "bin", "python")
         self.script = os.path.join(os.path.abspath(shared), "cycles", "render_gltf.py")
         with open(self.script, "rb") as f:
@@ -578,8 +639,22 @@ class Cycles:
                 m = re.search(r"^bpy==(\S+)", f.read(), re.M)
                 self.bpy = m.group(1) if m else "?"
         self.ref_id = f"cycles render_gltf.py {self.sha} bpy {self.bpy}"
+        if self.flags:
+            self.ref_id += " cycles_caustics.py " + " ".join(self.flags)
         self.threads, self.tmp, self.timeout = threads, tmp, timeout
         self.blender = None
+
+    def variant(self, name, flags):
+        """The same peer in another configuration of tools/cycles_caustics.py."""
+        v = Cycles(self.venv, self.shared, self.threads, self.tmp, self.timeout, name, flags)
+        v.blender = self.blender
+        return v
+
+    def ref_flags(self):
+        """The flags of the render that is this configuration's converged image: path guiding
+        changes the noise, not the mean (both converge to the same image: one reference for
+        both), MNEE adds the caustic that plain path tracing misses (its own reference)."""
+        return [f for f in self.flags if f != "--guiding"]
 
     def describe(self):
         return (f"Blender {self.blender or 'bpy ' + self.bpy} Cycles CPU via {self.script} "
@@ -599,12 +674,15 @@ class Cycles:
             # (The wrapper finds render_gltf.py by RAYLAB_RENDER_GLTF.)
             os.environ["RAYLAB_RENDER_GLTF"] = self.script
             script = [FOG_WRAPPER]
+        elif self.flags:
+            os.environ["RAYLAB_RENDER_GLTF"] = self.script
+            script = [CAUSTICS_WRAPPER, *self.flags]
         cmd = [self.py, *script, scene.file, "-o", out, "--width", str(scene.width),
                "--height", str(scene.height), "--spp", str(spp), "--threads", str(self.threads),
                "--seed", str(seed), "--quiet", *scene.env_args(), *scene.fog_args()]
         if denoise:
             cmd.append("--denoise")
-        what = (f"Cycles {scene.name} {spp} spp{' --denoise' if denoise else ''}"
+        what = (f"{self.name} {scene.name} {spp} spp{' --denoise' if denoise else ''}"
                 + (f" adaptive {noise_threshold:g}" if noise_threshold is not None else ""))
         stdout, _, wall = run(cmd, self.timeout, what)
         info = None
@@ -640,8 +718,12 @@ class Cycles:
 def reference(renderer, scene, spp, args):
     """(image, meta): the renderer's own converged image of the scene, in two halves."""
     os.makedirs(args.cache, exist_ok=True)
-    key = scene.key(renderer.ref_id, spp)
-    base = os.path.join(args.cache, f"{scene.name}-{renderer.name.lower()}-{scene.width}x"
+    rid, label = renderer.ref_id, renderer.name.lower().replace(" ", "-").replace("+", "-")
+    if isinstance(renderer, Raylab) and scene.integrator != "path":
+        rid += f" --integrator {scene.integrator}"   # (path keeps the keys it always had)
+        label += "-" + scene.integrator
+    key = scene.key(rid, spp)
+    base = os.path.join(args.cache, f"{scene.name}-{label}-{scene.width}x"
                         f"{scene.height}-{spp}spp-{key}")
     if args.fresh_refs or not (os.path.exists(base + ".exr") and os.path.exists(base + ".json")):
         half = max(1, spp // 2)
@@ -660,7 +742,7 @@ def reference(renderer, scene, spp, args):
                 "own_relmse": rel_mse_clamped(halves[0], halves[1]) / 4,
                 "halves_flip": flip_mean(halves[0], halves[1]),
                 "seconds": secs, "key": key, "made": time.strftime("%Y-%m-%d %H:%M:%S"),
-                "renderer_id": renderer.ref_id}
+                "renderer_id": rid}
         if isinstance(renderer, Raylab):
             meta["raylab_sha256"] = renderer.sha
         else:
@@ -702,23 +784,39 @@ def fmt_r(x):
     return "n/a" if x is None else f"{x:.2f}"
 
 
-def both_references(scenes, raylab, cycles, args):
+def both_references(scenes, raylab, cycles, args, variants=None):
     """Each renderer's converged image of each scene (cached), how the two differ, and a preview
-    SCENE-refs.png of them: (refs, ref_meta, cross), keyed by (scene, renderer) and scene."""
+    SCENE-refs.png of them: (refs, ref_meta, cross), refs and ref_meta keyed by (scene, renderer
+    name) for raylab and every Cycles configuration of `variants` (scene name -> list, default
+    [cycles]; configurations that differ only in path guiding share one reference), cross by
+    scene (raylab against plain Cycles) and by "SCENE vs NAME" for the other Cycles references
+    (MNEE), each a row of SCENE-refs.png."""
     refs, ref_meta, cross = {}, {}, {}
     for sc in scenes:
-        for r in (raylab, cycles):
-            refs[(sc.name, r.name)], ref_meta[(sc.name, r.name)] = reference(r, sc, args.ref_spp, args)
-            if r is cycles and not cycles.blender:
-                cycles.blender = ref_meta[(sc.name, r.name)].get("blender")
-        cross[sc.name] = compare_refs(refs[(sc.name, "raylab")], refs[(sc.name, "Cycles")])
-        c = cross[sc.name]
-        log(f"{sc.name}: converged raylab / Cycles mean R G B "
-            + " ".join(f"{x:.4f}" for x in c["mean_ratio_rgb"])
-            + f"; 8×8-block mean |rel. diff| {100 * c['block8_mean_abs_rel_diff']:.1f} %")
-        disp = [display(refs[(sc.name, "raylab")]), display(refs[(sc.name, "Cycles")]),
-                ratio_map(refs[(sc.name, "raylab")], refs[(sc.name, "Cycles")])]
-        save_png(os.path.join(args.previews, f"{sc.name}-refs.png"), [disp])
+        r = raylab
+        refs[(sc.name, r.name)], ref_meta[(sc.name, r.name)] = reference(r, sc, args.ref_spp, args)
+        made, rows = {}, []
+        for v in (variants or {}).get(sc.name, [cycles]):
+            flags = v.ref_flags()
+            if tuple(flags) not in made:
+                src = v if flags == v.flags else next(
+                    (w for w in variants[sc.name] if w.flags == flags), None) or cycles.variant(
+                    "Cycles" + (" MNEE" if "--mnee" in flags else ""), flags)
+                made[tuple(flags)] = (src.name,) + reference(src, sc, args.ref_spp, args)
+                if not cycles.blender:
+                    cycles.blender = made[tuple(flags)][2].get("blender")
+            src_name, img, meta = made[tuple(flags)]
+            refs[(sc.name, v.name)], ref_meta[(sc.name, v.name)] = img, dict(meta, ref_of=src_name)
+        for src_name, img, _ in made.values():
+            key = sc.name if src_name == "Cycles" else f"{sc.name} vs {src_name}"
+            cross[key] = c = compare_refs(refs[(sc.name, "raylab")], img)
+            c["cycles"] = src_name
+            log(f"{sc.name}: converged raylab ({sc.integrator}) / {src_name} mean R G B "
+                + " ".join(f"{x:.4f}" for x in c["mean_ratio_rgb"])
+                + f"; 8×8-block mean |rel. diff| {100 * c['block8_mean_abs_rel_diff']:.1f} %")
+            rows.append([display(refs[(sc.name, "raylab")]), display(img),
+                         ratio_map(refs[(sc.name, "raylab")], img)])
+        save_png(os.path.join(args.previews, f"{sc.name}-refs.png"), rows)
     log(f"Cycles: {cycles.describe()}")
     return refs, ref_meta, cross
 
@@ -729,17 +827,21 @@ def compare(args, tmp):
     scenes = [Scene(s, args) for s in args.scenes]
     raylab = Raylab(args.raylab, args.threads, tmp, args.timeout)
     cycles = Cycles(args.venv, args.shared, args.threads, tmp, args.timeout)
-    renderers = (raylab, cycles)
+    # Every scene's Cycles configurations (the caustic scenes: guiding, MNEE; else plain Cycles).
+    variants = {sc.name: [cycles if not flags else cycles.variant(name, flags)
+                          for name, flags in sc.cycles_configs] for sc in scenes}
+    per_scene = {sc.name: [raylab] + variants[sc.name] for sc in scenes}
     log(f"raylab: {raylab.describe()}")
     start = time.perf_counter()
-    refs, ref_meta, cross = both_references(scenes, raylab, cycles, args)
+    refs, ref_meta, cross = both_references(scenes, raylab, cycles, args, variants)
 
     runs, ladder_runs = [], []
-    modes = ("noisy", "denoised")
+    modes = tuple(args.modes)
     previews = {}
     for rnd in range(args.rounds):
         seed = rnd + 1
         for si, sc in enumerate(scenes):
+            renderers = per_scene[sc.name]
             for pi, spp in enumerate(args.spp):
                 order = renderers if (rnd + si + pi) % 2 == 0 else renderers[::-1]
                 for mode in modes:
@@ -788,9 +890,11 @@ def compare(args, tmp):
     # Summary: best time, worst errors over the rounds.
     summary = []
     for sc in scenes:
+        renderers = per_scene[sc.name]
         for spp in args.spp:
             for mode in modes:
-                row = {"scene": sc.name, "spp": spp, "mode": mode}
+                row = {"scene": sc.name, "spp": spp, "mode": mode,
+                       "renderers": [r.name for r in renderers]}
                 for r in renderers:
                     rs = [x for x in runs if (x["scene"], x["spp"], x["mode"], x["renderer"])
                           == (sc.name, spp, mode, r.name)]
@@ -802,11 +906,20 @@ def compare(args, tmp):
                     fl = max(x["flip"] for x in rs)
                     row[r.name] = {"seconds": s, "relmse": rel, "flip": fl,
                                    "relmse_x_s": rel * s, "flip_x_s": fl * s, "runs": len(rs)}
-                a, b = row["raylab"], row["Cycles"]
-                row["ratio"] = None if not (a and b) else {
-                    "seconds": a["seconds"] / b["seconds"] if b["seconds"] > 0 else None,
-                    "relmse_x_s": (a["relmse_x_s"] / b["relmse_x_s"]) if b["relmse_x_s"] > 0 else None,
-                    "flip_x_s": (a["flip_x_s"] / b["flip_x_s"]) if b["flip_x_s"] > 0 else None}
+                # Cycles' best configuration per measure: the lowest error × seconds.
+                row["best"] = {}
+                for m in ("relmse_x_s", "flip_x_s"):
+                    got = [(row[v.name][m], v.name) for v in variants[sc.name] if row[v.name]]
+                    row["best"][m] = min(got)[1] if got else None
+                a = row["raylab"]
+                bm, bf = (row[row["best"][m]] if row["best"][m] else None
+                          for m in ("relmse_x_s", "flip_x_s"))
+                row["ratio"] = None if not (a and bm and bf) else {
+                    "seconds": a["seconds"] / bm["seconds"] if bm["seconds"] > 0 else None,
+                    "relmse": div(a["relmse"], bm["relmse"]),
+                    "relmse_x_s": (a["relmse_x_s"] / bm["relmse_x_s"]) if bm["relmse_x_s"] > 0 else None,
+                    "flip": div(a["flip"], bf["flip"]),
+                    "flip_x_s": (a["flip_x_s"] / bf["flip_x_s"]) if bf["flip_x_s"] > 0 else None}
                 summary.append(row)
 
     # Cycles' denoise time: denoised − noisy path-trace time, same seed and spp.
@@ -835,9 +948,10 @@ def compare(args, tmp):
     print("| scene | spp | mode | renderer | seconds | relMSE | relMSE × s | FLIP | FLIP × s |")
     print("| --- | ---: | --- | --- | ---: | ---: | ---: | ---: | ---: |")
     marked = False
+    several = any(len(v) > 1 for v in variants.values())
     for row in summary:
         head = [row["scene"], str(row["spp"]), row["mode"]]
-        for r in renderers:
+        for r in per_scene[row["scene"]]:
             v = row[r.name]
             if v is None:
                 why = ("n/a (raylab has no --denoise)" if r is raylab and row["mode"] == "denoised"
@@ -848,24 +962,48 @@ def compare(args, tmp):
                 own = ref_meta[(row["scene"], r.name)]["own_relmse"]
                 mark = "†" if own > 0.25 * v["relmse"] else ""
                 marked = marked or bool(mark)
-                print("| " + " | ".join(head + [r.name, fmt_s(v["seconds"]), fmt_e(v["relmse"]) + mark,
-                                              fmt_e(v["relmse_x_s"]), fmt_f(v["flip"]),
-                                              fmt_e(v["flip_x_s"])]) + " |")
+                # ★: Cycles' best configuration of the row by that measure's error × seconds.
+                star = {m: " ★" if several and row["best"][m] == r.name else ""
+                        for m in ("relmse_x_s", "flip_x_s")}
+                label = r.name + (f" ({sc_integrator(scenes, row['scene'])})"
+                                  if r is raylab and several else "")
+                print("| " + " | ".join(head + [label, fmt_s(v["seconds"]), fmt_e(v["relmse"]) + mark,
+                                              fmt_e(v["relmse_x_s"]) + star["relmse_x_s"],
+                                              fmt_f(v["flip"]),
+                                              fmt_e(v["flip_x_s"]) + star["flip_x_s"]]) + " |")
             head = ["", "", ""]
         q = row["ratio"]
+        vs = "raylab ÷ Cycles ★" if several else "raylab ÷ Cycles"
         if q is None:
-            print("| " + " | ".join(head + ["raylab ÷ Cycles", "n/a", "", "n/a", "", "n/a"]) + " |")
+            print("| " + " | ".join(head + [vs, "n/a", "", "n/a", "", "n/a"]) + " |")
         else:
-            a, b = row["raylab"], row["Cycles"]
             print("| " + " | ".join(head + [
-                "**raylab ÷ Cycles**", fmt_r(q["seconds"]), fmt_r(div(a["relmse"], b["relmse"])),
-                f"**{fmt_r(q['relmse_x_s'])}**", fmt_r(div(a["flip"], b["flip"])),
+                f"**{vs}**", fmt_r(q["seconds"]), fmt_r(q["relmse"]),
+                f"**{fmt_r(q['relmse_x_s'])}**", fmt_r(q["flip"]),
                 f"**{fmt_r(q['flip_x_s'])}**"]) + " |")
     if marked:
         print()
         print("† the reference's own noise (below) is more than a quarter of this relMSE, which it "
               "inflates (relMSE against a reference ≈ the image's own + the reference's): raise "
               "--ref-spp for denoised errors.")
+    if several:
+        print()
+        print("★ Cycles' best configuration of the row by that measure (lowest error × seconds); "
+              "the raylab ÷ Cycles ★ row divides raylab's numbers by that configuration's (seconds "
+              "and relMSE by the relMSE-best one's, FLIP by the FLIP-best one's). Issue 45's target, "
+              "raylab at Cycles' best error in at most half its time, is an error × seconds ratio "
+              "≤ 0.5 on both measures (relMSE × s does not depend on spp; FLIP × s only roughly):")
+        print()
+        for row in summary:
+            q = row["ratio"]
+            if q is None or len(variants[row["scene"]]) < 2:
+                continue
+            ok = [k for k in ("relmse_x_s", "flip_x_s") if q[k] is not None and q[k] <= 0.5]
+            print(f"* {row['scene']} {row['spp']} spp {row['mode']}: relMSE × s "
+                  f"{fmt_r(q['relmse_x_s'])} (vs {row['best']['relmse_x_s']}), FLIP × s "
+                  f"{fmt_r(q['flip_x_s'])} (vs {row['best']['flip_x_s']}): "
+                  + ("target met" if len(ok) == 2 else
+                     "target met on " + ok[0] + " only" if ok else "target not met"))
     reach = []
     if ladder_runs:
         print()
@@ -911,9 +1049,13 @@ def compare(args, tmp):
           "| raylab / Cycles mean R, G, B | 8×8-block mean abs rel. diff | relMSE (raylab vs Cycles) "
           "| FLIP (raylab vs Cycles) |")
     print("| --- | --- | ---: | ---: | ---: | ---: | --- | ---: | ---: | ---: |")
-    for sc in scenes:
-        a, b, c = ref_meta[(sc.name, "raylab")], ref_meta[(sc.name, "Cycles")], cross[sc.name]
-        print(f"| {sc.name} | {sc.width}×{sc.height} | {fmt_s(a['seconds'])} | "
+    for sc, key in [(sc, k) for sc in scenes for k in cross
+                    if k == sc.name or k.startswith(sc.name + " vs ")]:
+        c = cross[key]
+        a, b = ref_meta[(sc.name, "raylab")], ref_meta[(sc.name, c["cycles"])]
+        name = sc.name if c["cycles"] == "Cycles" and not several else f"{sc.name}: raylab " \
+            f"{sc.integrator} vs {c['cycles']}"
+        print(f"| {name} | {sc.width}×{sc.height} | {fmt_s(a['seconds'])} | "
               f"{a['own_relmse']:.1e} | {fmt_s(b['seconds'])} | {b['own_relmse']:.1e} | "
               + ", ".join(f"{x:.3f}" for x in c["mean_ratio_rgb"])
               + f" | {100 * c['block8_mean_abs_rel_diff']:.1f} % | "
@@ -931,8 +1073,9 @@ def compare(args, tmp):
             bits.append(f"raylab's denoise {span} ms")
         if bits:
             print(f"* {sc.name}: " + "; ".join(bits))
-    print(f"* previews: {args.previews} (SCENE-refs.png: raylab | Cycles | luminance ratio; "
-          "SCENE-Nspp.png: raylab noisy | denoised | Cycles noisy | denoised)")
+    print(f"* previews: {args.previews} (SCENE-refs.png: raylab | Cycles | luminance ratio, a row "
+          "per Cycles reference; SCENE-Nspp.png: raylab, then each Cycles configuration, each "
+          f"{' | '.join(modes)})")
     bad = [x for x in runs if x.get("noisy_layer_max_abs_diff_vs_noisy_run", 0) > 0]
     if bad:
         print(f"* warning: raylab --denoise's noisy layers differ from the noisy run at the same "
@@ -951,7 +1094,10 @@ def compare(args, tmp):
            "cycles": {"blender": cycles.blender, "render_gltf_sha256": cycles.sha,
                       "python": cycles.py},
            "scenes": {sc.name: {"file": os.path.relpath(sc.file, ROOT), "size": [sc.width, sc.height],
-                                "env": sc.env, "env_rotate": sc.rotate} for sc in scenes},
+                                "env": sc.env, "env_rotate": sc.rotate,
+                                "raylab_integrator": sc.integrator,
+                                "cycles_configurations": {n: f for n, f in sc.cycles_configs}}
+                      for sc in scenes},
            "references": {f"{k[0]}/{k[1]}": v for k, v in ref_meta.items()},
            "raylab_vs_cycles_references": cross,
            "cycles_denoise_s": cyc_dn, "raylab_denoise_s": ray_dn,
@@ -959,6 +1105,10 @@ def compare(args, tmp):
            "seconds": took}
     write_json(args.json, out)
     print(f"* all numbers: {args.json}")
+
+
+def sc_integrator(scenes, name):
+    return next(sc.integrator for sc in scenes if sc.name == name)
 
 
 def write_json(path, obj):
@@ -1299,6 +1449,13 @@ def parse_thresholds(text):
     return out
 
 
+def parse_modes(text):
+    out = [x.strip() for x in text.split(",") if x.strip()]
+    if not out or any(x not in ("noisy", "denoised") for x in out):
+        raise argparse.ArgumentTypeError(f"expected noisy, denoised or both, got {text!r}")
+    return out
+
+
 def parse_scenes(text):
     out = [x.strip() for x in text.split(",") if x.strip()]
     for s in out:
@@ -1312,11 +1469,16 @@ def main():
                                  formatter_class=argparse.RawDescriptionHelpFormatter,
                                  epilog="See the module docstring (the top of this file) for details.")
     ap.add_argument("--scenes", type=parse_scenes,
-                    default=[s for s, v in SCENES.items() if v[4] is None],
+                    default=[s for s, v in SCENES.items() if v[4] is None and s not in CAUSTIC_SCENES],
                     help=f"comma-separated, from {', '.join(SCENES)} (default all but the fog "
-                    "scene)")
+                    "and caustic scenes)")
     ap.add_argument("--spp", type=parse_list, default=[16, 64], help="default 16,64")
     ap.add_argument("--rounds", type=int, default=1, help="interleaved rounds, seeds 1..N (default 1)")
+    ap.add_argument("--modes", type=parse_modes, default=["noisy", "denoised"],
+                    help="noisy, denoised or both (default noisy,denoised)")
+    ap.add_argument("--raylab-integrator", choices=INTEGRATORS,
+                    help="raylab's --integrator for every scene (default: bdpt for the caustic "
+                         "scenes, path for the others)")
     ap.add_argument("--threads", type=int, default=2, help="threads of each renderer (default 2)")
     ap.add_argument("--ref-spp", type=int, default=1024,
                     help="spp of each renderer's own converged render (default 1024)")
