@@ -270,22 +270,10 @@ fn bdpt_splats_count_in_the_half() {
 #[test]
 fn bdpt_converges_to_path_under_the_sun_and_the_sky() {
     let dir = tempfile::tempdir().unwrap();
-    let scene = dir.path().join("sky.xml");
-    std::fs::write(
-        &scene,
-        r#"<scene version="3.0.0">
-  <integrator type="path"><integer name="max_depth" value="6"/></integrator>
-  <sensor type="perspective">
-    <float name="fov" value="50"/>
-    <transform name="to_world"><lookat origin="0, 3, 6" target="0, 0.5, 0" up="0, 1, 0"/></transform>
-    <film type="hdrfilm"><integer name="width" value="48"/><integer name="height" value="32"/>
-      <rfilter type="box"/></film>
-  </sensor>
-  <shape type="rectangle">
-    <transform name="to_world"><scale value="4"/><rotate x="1" angle="-90"/></transform>
-    <bsdf type="diffuse"><rgb name="reflectance" value="0.6, 0.5, 0.4"/></bsdf>
-  </shape>
-  <shape type="cube">
+    let scene = on_the_floor(
+        &dir,
+        6,
+        r#"  <shape type="cube">
     <transform name="to_world"><scale value="0.6"/><rotate y="1" angle="30"/><translate x="-1" y="0.6"/></transform>
     <bsdf type="diffuse"><rgb name="reflectance" value="0.3, 0.6, 0.3"/></bsdf>
   </shape>
@@ -297,11 +285,9 @@ fn bdpt_converges_to_path_under_the_sun_and_the_sky() {
     <vector name="direction" value="-1, -2, -0.5"/>
     <rgb name="irradiance" value="3"/>
   </emitter>
-  <emitter type="constant"><rgb name="radiance" value="0.3, 0.4, 0.6"/></emitter>
-</scene>"#,
-    )
-    .unwrap();
-    let scene = scene.to_str().unwrap();
+  <emitter type="constant"><rgb name="radiance" value="0.3, 0.4, 0.6"/></emitter>"#,
+    );
+    let scene = scene.as_str();
     let width = 48;
     let a = pixels(scene, Integrator::bdpt(), 256, width, 2);
     let b = pixels(scene, Integrator::path(), 1024, width, 2);
@@ -352,4 +338,62 @@ fn bdpt_converges_to_mitsuba_on_the_lab_box() {
     eprintln!("relMSE {e:.3e} (bound {bound:.3e}); mean {m} vs {r}");
     assert!(e <= bound, "relMSE {e:.3e} above {bound:.3e}");
     assert!((m / r - 1.0).abs() < 0.01, "mean {m} vs Mitsuba's {r}");
+}
+
+/// An emitting sphere (Mitsuba's `sphere` with an `area` emitter) lighting a
+/// floor and a rough copper cube: light subpaths start uniformly on its
+/// area, next-event estimation samples it so too. `bdpt`'s image has
+/// `path`'s mean within 1 % and that of each quarter within 3 % (the dim
+/// quarter with the cube's shaded side has a noise of 1.5 % here, seeds
+/// 1–3: 0.979, 1.015, 1.011 of a 16,384-spp `path`; measured at 192 × 128,
+/// 256 against 1024 spp: the whole image 0.02 %, every lit cell of a 4 × 4
+/// grid within 0.6 %).
+#[test]
+fn bdpt_converges_to_path_under_an_emitting_sphere() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = on_the_floor(
+        &dir,
+        5,
+        r#"  <shape type="cube">
+    <transform name="to_world"><scale value="0.6"/><rotate y="1" angle="30"/><translate x="-1" y="0.6"/></transform>
+    <bsdf type="roughconductor"><float name="alpha" value="0.3"/><string name="material" value="Cu"/></bsdf>
+  </shape>
+  <shape type="sphere">
+    <point name="center" value="0.8, 1.0, 0.3"/><float name="radius" value="0.3"/>
+    <emitter type="area"><rgb name="radiance" value="8, 6, 4"/></emitter>
+  </shape>"#,
+    );
+    let scene = scene.as_str();
+    let a = pixels(scene, Integrator::bdpt(), 256, 48, 2);
+    let b = pixels(scene, Integrator::path(), 1024, 48, 2);
+    assert!((mean(&a) / mean(&b) - 1.0).abs() < 0.01);
+    assert_quarters_agree(&a, &b, 48, 0.03);
+}
+
+/// Writes a Mitsuba scene into `dir`: a 48 × 32 view of a diffuse floor
+/// (8 × 8, at y = 0), paths of at most `max_depth` segments, and `body`;
+/// its path.
+fn on_the_floor(dir: &tempfile::TempDir, max_depth: u32, body: &str) -> String {
+    let scene = dir.path().join("floor.xml");
+    std::fs::write(
+        &scene,
+        format!(
+            r#"<scene version="3.0.0">
+  <integrator type="path"><integer name="max_depth" value="{max_depth}"/></integrator>
+  <sensor type="perspective">
+    <float name="fov" value="50"/>
+    <transform name="to_world"><lookat origin="0, 3, 6" target="0, 0.5, 0" up="0, 1, 0"/></transform>
+    <film type="hdrfilm"><integer name="width" value="48"/><integer name="height" value="32"/>
+      <rfilter type="box"/></film>
+  </sensor>
+  <shape type="rectangle">
+    <transform name="to_world"><scale value="4"/><rotate x="1" angle="-90"/></transform>
+    <bsdf type="diffuse"><rgb name="reflectance" value="0.6, 0.5, 0.4"/></bsdf>
+  </shape>
+{body}
+</scene>"#
+        ),
+    )
+    .unwrap();
+    scene.to_str().unwrap().to_string()
 }

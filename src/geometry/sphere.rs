@@ -101,6 +101,14 @@ impl Sphere {
         (self.frame * du, self.frame * dv)
     }
 
+    /// `(u, v)` of a point uniform by area from `u` in `[0, 1)²`: `φ = 2πu₀`
+    /// and `cos θ = 1 − 2u₁` (Archimedes: equal heights, equal areas).
+    #[inline]
+    pub fn sample_uv(&self, u: Vec2) -> Vec2 {
+        let cos = (1.0 - 2.0 * u.y).clamp(-1.0, 1.0);
+        Vec2::new(u.x, cos.acos() * (1.0 / PI))
+    }
+
     /// Surface area, `4πr²`.
     #[inline]
     pub fn area(&self) -> f32 {

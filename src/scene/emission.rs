@@ -124,8 +124,8 @@ impl Scene {
     }
 
     /// A point of emitting primitive `prim` uniformly by area with `u`;
-    /// `None` for a primitive that cannot be sampled so (a sphere, a
-    /// signed distance cell: see [`Scene::emission_unsupported`]).
+    /// `None` for a primitive that cannot be sampled so (a signed distance
+    /// cell: see [`Scene::emission_unsupported`]).
     pub fn emitter_point(&self, prim: u32, u: Vec2) -> Option<EmitterPoint> {
         let area = self.area_lights.per_prim.get(prim as usize)?.1;
         if (prim as usize) < self.triangles.len() {
@@ -142,7 +142,8 @@ impl Scene {
         let uv = match &s.shape {
             AnalyticShape::Disk(d) => d.sample_uv(u),
             AnalyticShape::Cylinder(c) => c.sample_uv(u),
-            AnalyticShape::Sphere(_) | AnalyticShape::SdfVoxel(_) => return None,
+            AnalyticShape::Sphere(s) => s.sample_uv(u),
+            AnalyticShape::SdfVoxel(_) => return None,
         };
         Some(EmitterPoint {
             point: s.front_point(uv),
@@ -152,17 +153,17 @@ impl Scene {
     }
 
     /// Why light cannot be started from every light of this scene (for
-    /// `bdpt`), or `None` when it can: emitting spheres are not (yet)
-    /// lights a path can leave.
+    /// `bdpt`), or `None` when it can: emitting cells of a signed distance
+    /// grid are not (yet) lights a path can leave.
     pub fn emission_unsupported(&self) -> Option<String> {
         let triangles = self.triangles.len();
-        let sphere = self.area_lights.prims.iter().any(|&p| {
+        let grid = self.area_lights.prims.iter().any(|&p| {
             p as usize >= triangles
                 && self
                     .shape_of(p)
-                    .is_some_and(|s| matches!(s.shape, AnalyticShape::Sphere(_)))
+                    .is_some_and(|s| matches!(s.shape, AnalyticShape::SdfVoxel(_)))
         });
-        sphere.then(|| "an emitting sphere".into())
+        grid.then(|| "an emitting signed distance grid (sdfgrid)".into())
     }
 
     /// The light `emitter` as one at infinity: the environment, or a

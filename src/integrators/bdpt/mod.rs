@@ -31,7 +31,7 @@
 //! environment.
 //!
 //! What it does not do (yet; `Job` refuses such scenes with a clear line):
-//! participating media, emitting spheres, orthographic cameras,
+//! participating media, emitting signed distance grids, orthographic cameras,
 //! dispersion, adaptive sampling, and reconstruction filters other
 //! than the box.
 //!
