@@ -496,12 +496,6 @@ impl Camera {
         self.rotation.y_axis
     }
 
-    /// Whether the camera is a pinhole (perspective, no thin lens): the one
-    /// camera that light paths can reach ([`Camera::seen_at`]).
-    pub fn is_pinhole(&self) -> bool {
-        self.ortho_px.is_none() && self.thin_lens.is_none()
-    }
-
     /// Where a perspective camera (a pinhole or a thin lens) sees the world
     /// point `p` through the point of its lens that `lens` picks
     /// ([`ThinLens::point`]; ignored by a pinhole): the lens point (world),

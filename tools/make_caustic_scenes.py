@@ -143,22 +143,7 @@ def water_sheet(g, mat, half, level, n):
 def write(out_dir, name, materials, g, lights, light_nodes, eye, target, yfov, note):
     """Assembles one scene: a mesh per material, the lights, a camera; writes NAME.gltf/.bin."""
     b = BufferBuilder()
-    meshes, nodes = [], []
-    tri_total = 0
-    for m in sorted(g.pos):
-        pos, nor, uv, tris = g.pos[m], g.nor[m], g.uv[m], g.tris[m]
-        attrs = {"POSITION": b.floats(pos, "VEC3", with_bounds=True),
-                 "NORMAL": b.floats(nor, "VEC3")}
-        if "baseColorTexture" in materials[m]["pbrMetallicRoughness"]:
-            attrs["TEXCOORD_0"] = b.floats(uv, "VEC2")
-        idx = b.indices(tris, len(pos))
-        meshes.append({"name": materials[m]["name"],
-                       "primitives": [{"attributes": attrs, "indices": idx, "material": m,
-                                       "mode": 4}]})
-        nodes.append({"name": materials[m]["name"], "mesh": len(meshes) - 1})
-        tri_total += len(tris)
-    while len(b.bin) % 4:
-        b.bin.append(0)
+    meshes, nodes, tri_total = g.meshes(b, materials)
     nodes += light_nodes
     nodes.append({"name": "camera", "camera": 0, "translation": r6(eye),
                   "rotation": r6(look_along(sub(target, eye)))})

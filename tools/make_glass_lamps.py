@@ -155,6 +155,28 @@ class Batches:
         self.tri(mat, idx[0], idx[1], idx[2])
         self.tri(mat, idx[0], idx[2], idx[3])
 
+    def meshes(self, b, materials):
+        """One mesh and node per material, in material order, into BufferBuilder `b` (texture
+        coordinates where the material has a base colour texture; the buffer padded to 4
+        bytes): the meshes, the nodes and the number of triangles."""
+        meshes, nodes = [], []
+        tri_total = 0
+        for m in sorted(self.pos):
+            pos, nor, uv, tris = self.pos[m], self.nor[m], self.uv[m], self.tris[m]
+            attrs = {"POSITION": b.floats(pos, "VEC3", with_bounds=True),
+                     "NORMAL": b.floats(nor, "VEC3")}
+            if "baseColorTexture" in materials[m]["pbrMetallicRoughness"]:
+                attrs["TEXCOORD_0"] = b.floats(uv, "VEC2")
+            idx = b.indices(tris, len(pos))
+            meshes.append({"name": materials[m]["name"],
+                           "primitives": [{"attributes": attrs, "indices": idx, "material": m,
+                                           "mode": 4}]})
+            nodes.append({"name": materials[m]["name"], "mesh": len(meshes) - 1})
+            tri_total += len(tris)
+        while len(b.bin) % 4:
+            b.bin.append(0)
+        return meshes, nodes, tri_total
+
     def box(self, mat, lo, hi, skip=(), inward=False):
         """Axis-aligned box from corner lo to corner hi; faces outward (inward: towards the
         inside, for a room). `skip` names faces to leave out ('+y', ...)."""
@@ -334,22 +356,7 @@ def build(out_dir):
 
     # --- assemble ---------------------------------------------------------------------------
     b = BufferBuilder()
-    meshes, nodes = [], []
-    tri_total = 0
-    for m in sorted(g.pos):
-        pos, nor, uv, tris = g.pos[m], g.nor[m], g.uv[m], g.tris[m]
-        attrs = {"POSITION": b.floats(pos, "VEC3", with_bounds=True),
-                 "NORMAL": b.floats(nor, "VEC3")}
-        if "baseColorTexture" in materials[m]["pbrMetallicRoughness"]:
-            attrs["TEXCOORD_0"] = b.floats(uv, "VEC2")
-        idx = b.indices(tris, len(pos))
-        meshes.append({"name": materials[m]["name"],
-                       "primitives": [{"attributes": attrs, "indices": idx, "material": m,
-                                       "mode": 4}]})
-        nodes.append({"name": materials[m]["name"], "mesh": len(meshes) - 1})
-        tri_total += len(tris)
-    while len(b.bin) % 4:
-        b.bin.append(0)
+    meshes, nodes, tri_total = g.meshes(b, materials)
 
     lights = []
     for (name, p, inten, colour) in POINTS:

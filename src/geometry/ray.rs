@@ -61,6 +61,17 @@ pub struct SurfacePoint {
 }
 
 impl SurfacePoint {
+    /// An exact point on no surface (a camera's or a point light's), its
+    /// normal zero.
+    #[inline]
+    pub fn bare(p: Vec3A) -> Self {
+        Self {
+            p,
+            error: Vec3A::ZERO,
+            n: Vec3A::ZERO,
+        }
+    }
+
     /// Builds the point `b0*v0 + b1*v1 + b2*v2` of a triangle and its error bound.
     pub fn on_triangle(v: &[Vec3A; 3], b1: f32, b2: f32, n: Vec3A) -> Self {
         let b0 = 1.0 - b1 - b2;

@@ -12,7 +12,7 @@ use super::vertex::{
 };
 use super::walk::{camera_subpath, light_start, light_subpath};
 use crate::camera::Camera;
-use crate::geometry::ray::Ray;
+use crate::geometry::ray::{Ray, SurfacePoint};
 use crate::scene::{Emitter, Scene};
 
 /// Most vertices of one subpath (a cap on paths Russian roulette keeps).
@@ -124,7 +124,7 @@ impl Join<'_> {
         if !self.cam[t - 1].connectible() {
             return Vec3A::ZERO;
         }
-        let Some((y, _)) = light_start(self.scene, u_choice, u_pos) else {
+        let Some(y) = light_start(self.scene, u_choice, u_pos) else {
             return Vec3A::ZERO;
         };
         let light = [y];
@@ -207,11 +207,7 @@ impl Join<'_> {
         // The camera vertex at that lens point.
         let lens = [Vertex::new(
             Kind::Camera,
-            crate::geometry::ray::SurfacePoint {
-                p: origin,
-                error: Vec3A::ZERO,
-                n: Vec3A::ZERO,
-            },
+            SurfacePoint::bare(origin),
             Vec3A::ONE,
             1.0,
         )];

@@ -34,11 +34,7 @@ pub(super) fn camera_subpath(
     rays: &mut u64,
 ) {
     path.clear();
-    let origin = SurfacePoint {
-        p: ray.origin,
-        error: Vec3A::ZERO,
-        n: Vec3A::ZERO,
-    };
+    let origin = SurfacePoint::bare(ray.origin);
     path.push(Vertex::new(Kind::Camera, origin, Vec3A::ONE, 1.0));
     if max < 2 {
         return;
@@ -74,21 +70,23 @@ pub(super) fn light_subpath(
     let u_choice = sampler.next_2d_minor();
     let u_pos = sampler.next_2d();
     let u_dir = sampler.next_2d();
-    let Some(start) = light_start(scene, u_choice, u_pos) else {
+    let Some(vertex) = light_start(scene, u_choice, u_pos) else {
         return;
     };
-    let (vertex, pdf_pos) = start;
     path.push(vertex);
     if max < 2 {
         return;
     }
     // A direction from it, and what it sends along it over the densities.
-    let (dir, pdf_dir, sent) = match vertex.kind {
+    // The first ray, its density (of its direction, or for a light at
+    // infinity of its origin on the disk) and what the light sends along it.
+    let (ray, pdf, sent) = match vertex.kind {
         Kind::PointLight(e) => {
             let Some(em) = scene.punctual_emission(e, u_dir) else {
                 return;
             };
-            (em.dir, em.pdf, em.intensity)
+            let ray = Ray::new(vertex.point.offset_origin(em.dir), em.dir);
+            (ray, em.pdf, em.intensity)
         }
         Kind::AreaLight { prim, .. } => {
             let two_sided = scene.material(prim).emits_both_sides;
@@ -106,7 +104,8 @@ pub(super) fn light_subpath(
             let frame = crate::materials::Frame::from_normal(if flip { -n } else { n });
             let dir = frame.to_world(local).normalize();
             let pdf = emission_dir_pdf(n, two_sided, dir);
-            (dir, pdf, super::vertex::light_sends(scene, &vertex, dir))
+            let ray = Ray::new(vertex.point.offset_origin(dir), dir);
+            (ray, pdf, super::vertex::light_sends(scene, &vertex, dir))
         }
         Kind::Infinite { dir, .. } => {
             // A point on the disk facing the light, one scene radius out,
@@ -114,60 +113,31 @@ pub(super) fn light_subpath(
             // projects onto the surface it meets).
             let (centre, r) = scene.infinite_disk();
             let frame = crate::materials::Frame::from_normal(dir);
-            let d = concentric_disk(u_dir) * r;
+            let d = crate::materials::concentric_disk(u_dir) * r;
             let origin = centre - dir * r + frame.t * d.x + frame.b * d.y;
             path[0].point.p = origin;
             let sent = super::vertex::light_sends(scene, &vertex, dir);
-            let ray = Ray::new(origin, dir);
-            let pdf_pos = infinite_disk_pdf(scene);
-            if !pdf_pos.gt(&0.0) || sent == Vec3A::ZERO {
-                return;
-            }
-            let beta = vertex.beta * sent / pdf_pos;
-            walk(
-                scene,
-                ray,
-                beta,
-                pdf_pos,
-                Mode::Light,
-                max,
-                sampler,
-                path,
-                rays,
-            );
-            return;
+            (Ray::new(origin, dir), infinite_disk_pdf(scene), sent)
         }
         _ => return,
     };
-    if !pdf_dir.gt(&0.0) || sent == Vec3A::ZERO {
+    if !pdf.gt(&0.0) || sent == Vec3A::ZERO {
         return;
     }
-    let _ = pdf_pos;
-    let beta = vertex.beta * sent / pdf_dir;
-    let ray = Ray::new(vertex.point.offset_origin(dir), dir);
-    walk(
-        scene,
-        ray,
-        beta,
-        pdf_dir,
-        Mode::Light,
-        max,
-        sampler,
-        path,
-        rays,
-    );
+    let beta = vertex.beta * sent / pdf;
+    walk(scene, ray, beta, pdf, Mode::Light, max, sampler, path, rays);
 }
 
 /// A light subpath's first vertex: a light chosen with `u_choice` by power
 /// and a point on it with `u_pos`, its throughput `1/(pmf · pdf_pos)` (the
 /// light's emission enters at the next step) and its density
-/// `pmf · pdf_pos` (`pdf_pos` 1 for a point light); with `pdf_pos`. A light
-/// at infinity gets its direction from `u_pos` instead (the environment's
-/// importance sampling, a directional light's own), with the density of
-/// that direction in the place of `pdf_pos` (1 for a directional light,
-/// whose vertex's density is then 0: no other walk finds it); its point is
-/// left for the caller to place.
-pub(super) fn light_start(scene: &Scene, u_choice: Vec2, u_pos: Vec2) -> Option<(Vertex, f32)> {
+/// `pmf · pdf_pos` (`pdf_pos` 1 for a point light). A light at infinity gets
+/// its direction from `u_pos` instead (the environment's importance
+/// sampling, a directional light's own), with the density of that direction
+/// in the place of `pdf_pos` (1 for a directional light, whose vertex's
+/// density is then 0: no other walk finds it); its point is left for the
+/// caller to place.
+pub(super) fn light_start(scene: &Scene, u_choice: Vec2, u_pos: Vec2) -> Option<Vertex> {
     let (emitter, pmf) = scene.pick_emitter(u_choice)?;
     if !pmf.gt(&0.0) {
         return None;
@@ -183,30 +153,22 @@ pub(super) fn light_start(scene: &Scene, u_choice: Vec2, u_pos: Vec2) -> Option<
         if !pdf_dir.gt(&0.0) {
             return None;
         }
-        let point = SurfacePoint {
-            p: Vec3A::ZERO,
-            error: Vec3A::ZERO,
-            n: Vec3A::ZERO,
-        };
+        let point = SurfacePoint::bare(Vec3A::ZERO);
         let kind = Kind::Infinite { emitter, dir };
         let beta = Vec3A::splat(1.0 / (pmf * pdf_dir));
-        return Some((Vertex::new(kind, point, beta, pdf_fwd), pdf_dir));
+        return Some(Vertex::new(kind, point, beta, pdf_fwd));
     }
     match emitter {
         Emitter::Key | Emitter::Punctual(_) => {
             let em = scene.punctual_emission(emitter, Vec2::ZERO)?;
-            let point = SurfacePoint {
-                p: em.position,
-                error: Vec3A::ZERO,
-                n: Vec3A::ZERO,
-            };
+            let point = SurfacePoint::bare(em.position);
             let v = Vertex::new(
                 Kind::PointLight(emitter),
                 point,
                 Vec3A::splat(1.0 / pmf),
                 pmf,
             );
-            Some((v, 1.0))
+            Some(v)
         }
         Emitter::Shape(prim) => {
             let at = scene.emitter_point(prim, u_pos)?;
@@ -215,32 +177,10 @@ pub(super) fn light_start(scene: &Scene, u_choice: Vec2, u_pos: Vec2) -> Option<
             }
             let pdf = pmf / at.area;
             let kind = Kind::AreaLight { prim, uv: at.uv };
-            Some((
-                Vertex::new(kind, at.point, Vec3A::splat(1.0 / pdf), pdf),
-                1.0 / at.area,
-            ))
+            Some(Vertex::new(kind, at.point, Vec3A::splat(1.0 / pdf), pdf))
         }
         Emitter::Environment => None,
     }
-}
-
-/// A point of the unit disk, uniform by area, from `u` (Shirley and
-/// Chiu's concentric map).
-#[inline]
-fn concentric_disk(u: Vec2) -> Vec2 {
-    let o = 2.0 * u - Vec2::ONE;
-    if o == Vec2::ZERO {
-        return Vec2::ZERO;
-    }
-    let (r, theta) = if o.x.abs() > o.y.abs() {
-        (o.x, std::f32::consts::FRAC_PI_4 * (o.y / o.x))
-    } else {
-        (
-            o.y,
-            std::f32::consts::FRAC_PI_2 - std::f32::consts::FRAC_PI_4 * (o.x / o.y),
-        )
-    };
-    r * Vec2::new(theta.cos(), theta.sin())
 }
 
 /// A direction about `+z` with density `cos θ / π`.
@@ -275,11 +215,7 @@ fn walk(
             // A camera subpath that escapes ends at the environment.
             if mode == Mode::Camera && !scene.environment().is_black() {
                 let prev = path.last().expect("a walk starts at a vertex");
-                let point = SurfacePoint {
-                    p: ray.origin + ray.dir,
-                    error: Vec3A::ZERO,
-                    n: Vec3A::ZERO,
-                };
+                let point = SurfacePoint::bare(ray.origin + ray.dir);
                 let kind = Kind::Infinite {
                     emitter: Emitter::Environment,
                     dir: -ray.dir,
