@@ -7,7 +7,7 @@ the Cycles peer):
 
     python3 tools/compare_cycles.py [--scenes helmet-venice,showcase,cornell-glass,street,glass-lamps]
                                     [--spp 16,64] [--rounds 1] [--threads 2] [--ref-spp 1024]
-                                    [--modes noisy,denoised] [--raylab-integrator path|bdpt]
+                                    [--modes noisy,denoised] [--raylab-integrator path|bdpt|vcm]
                                     [--size 320x240] [--box-size 256x256] [--json PATH]
                                     [--raylab PATH] [--venv DIR] [--shared DIR] [--cache DIR]
                                     [--previews DIR] [--fresh-refs] [--timeout S]
@@ -212,7 +212,7 @@ CYCLES_MNEE = CYCLES_GUIDING + [("Cycles MNEE", ["--mnee"]),
 CAUSTIC_SCENES = {"caustic-ring": ("bdpt", CYCLES_GUIDING),
                   "caustic-glass": ("bdpt", CYCLES_MNEE),
                   "caustic-water": ("bdpt", CYCLES_MNEE)}
-INTEGRATORS = ("path", "bdpt")
+INTEGRATORS = ("path", "bdpt", "vcm")
 REF_SEED = 1 << 20
 ADAPTIVE_WRAPPER = os.path.join(ROOT, "tools", "cycles_adaptive.py")
 FOG_WRAPPER = os.path.join(ROOT, "tools", "cycles_fog.py")

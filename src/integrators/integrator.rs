@@ -29,6 +29,11 @@ pub enum Integrator {
     /// by every strategy. Its value for a lone ray (without a camera to
     /// splat to) is `path`'s.
     Bdpt(PathOptions),
+    /// Vertex connection and merging (see [`crate::integrators::bdpt`]):
+    /// `bdpt` whose camera vertices also merge with the light vertices of
+    /// every pixel's light subpath near them. Consistent: converges to
+    /// `bdpt`'s image as the merge radius shrinks.
+    Vcm(PathOptions),
 }
 
 impl Integrator {
@@ -56,10 +61,21 @@ impl Integrator {
         Integrator::Bdpt(PathOptions::default())
     }
 
-    /// The path tracer's options of `path` and `bdpt`.
+    /// The `vcm` integrator with default options.
+    pub fn vcm() -> Self {
+        Integrator::Vcm(PathOptions::default())
+    }
+
+    /// Whether the integrator joins camera and light subpaths (`bdpt`,
+    /// `vcm`).
+    pub fn is_bidirectional(self) -> bool {
+        matches!(self, Integrator::Bdpt(_) | Integrator::Vcm(_))
+    }
+
+    /// The path tracer's options of `path`, `bdpt` and `vcm`.
     pub fn path_options(self) -> Option<PathOptions> {
         match self {
-            Integrator::Path(o) | Integrator::Bdpt(o) => Some(o),
+            Integrator::Path(o) | Integrator::Bdpt(o) | Integrator::Vcm(o) => Some(o),
             _ => None,
         }
     }
@@ -70,6 +86,7 @@ impl Integrator {
         match self {
             Integrator::Path(_) => Integrator::Path(options),
             Integrator::Bdpt(_) => Integrator::Bdpt(options),
+            Integrator::Vcm(_) => Integrator::Vcm(options),
             other => other,
         }
     }
@@ -81,13 +98,17 @@ impl Integrator {
             Integrator::Direct => "direct",
             Integrator::Path(_) => "path",
             Integrator::Bdpt(_) => "bdpt",
+            Integrator::Vcm(_) => "vcm",
         }
     }
 
     /// Whether the integrator computes radiance in physical units (`path`), as
     /// opposed to the lab's units (`flat`, `direct`).
     pub fn is_physical(self) -> bool {
-        matches!(self, Integrator::Path(_) | Integrator::Bdpt(_))
+        matches!(
+            self,
+            Integrator::Path(_) | Integrator::Bdpt(_) | Integrator::Vcm(_)
+        )
     }
 }
 
@@ -116,10 +137,10 @@ impl FromStr for Integrator {
     fn from_str(s: &str) -> Result<Self, Self::Err> {
         Integrator::ALL
             .into_iter()
-            .chain([Integrator::bdpt()])
+            .chain([Integrator::bdpt(), Integrator::vcm()])
             .find(|i| i.name() == s)
             .ok_or_else(|| {
-                format!("unknown integrator '{s}' (expected flat, direct, path or bdpt)")
+                format!("unknown integrator '{s}' (expected flat, direct, path, bdpt or vcm)")
             })
     }
 }
@@ -136,6 +157,7 @@ mod tests {
         assert_eq!("path".parse::<Integrator>(), Ok(Integrator::path()));
         assert_eq!("bdpt".parse::<Integrator>(), Ok(Integrator::bdpt()));
         assert_eq!(Integrator::bdpt().name(), "bdpt");
+        assert_eq!("vcm".parse::<Integrator>(), Ok(Integrator::vcm()));
         assert!("bogus".parse::<Integrator>().is_err());
     }
 }

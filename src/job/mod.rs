@@ -368,7 +368,10 @@ pub fn bdpt_refusal(
     session: &Session,
     camera: &crate::camera::Camera,
 ) -> Option<String> {
-    let crate::integrators::Integrator::Bdpt(options) = session.view.integrator else {
+    let integrator = session.view.integrator;
+    let (crate::integrators::Integrator::Bdpt(options)
+    | crate::integrators::Integrator::Vcm(options)) = integrator
+    else {
         return None;
     };
     let scene = &session.scene;
@@ -392,6 +395,6 @@ pub fn bdpt_refusal(
         return None;
     };
     Some(format!(
-        "bdpt does not render {why} yet: use --integrator path"
+        "{integrator} does not render {why} yet: use --integrator path"
     ))
 }

@@ -38,9 +38,10 @@ pub struct SceneOptions {
     #[arg(long, value_name = "H", allow_hyphen_values = true, value_parser = parse_side)]
     pub height: Option<u32>,
     /// How to light the image: `flat` (surface colour), `direct` (the lab's model),
-    /// `path` (global illumination in physical units) or `bdpt` (bidirectional path
-    /// tracing: caustics from small lights) [default: path for glTF, direct
-    /// otherwise].
+    /// `path` (global illumination in physical units), `bdpt` (bidirectional path
+    /// tracing: caustics from small lights) or `vcm` (`bdpt` with vertex merging:
+    /// also caustics seen through glass or in mirrors; consistent) [default: path
+    /// for glTF, direct otherwise].
     #[arg(long, value_parser = parse_integrator)]
     pub integrator: Option<Integrator>,
     /// Which of a glTF file's cameras to look through (depth-first order of the

@@ -4,6 +4,7 @@
 //! sums or an f32 film.
 
 use std::ops::Range;
+use std::sync::atomic::{AtomicU64, Ordering};
 
 use glam::{DVec3, Vec2, Vec3A};
 use rayon::prelude::*;
@@ -47,6 +48,26 @@ pub(super) enum Target<'a> {
     },
 }
 
+impl Target<'_> {
+    /// The same target, borrowed again (for one call of several).
+    fn reborrow(&mut self) -> Target<'_> {
+        match self {
+            Target::Narrow(film) => Target::Narrow(film),
+            Target::Wide {
+                image,
+                aovs,
+                split,
+                active,
+            } => Target::Wide {
+                image,
+                aovs: aovs.as_mut().map(|(layout, sums)| (*layout, &mut **sums)),
+                split: *split,
+                active: *active,
+            },
+        }
+    }
+}
+
 /// One tile's part of a [`Target`].
 enum TileSums<'a> {
     Narrow(&'a mut [Vec3A]),
@@ -63,6 +84,60 @@ pub(super) fn accumulate_into(
     seed: u64,
     samples: Range<u32>,
     target: Target<'_>,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Tally {
+    // Vertex merging goes iteration by iteration: each sample's light
+    // subpaths are traced (for every pixel) before its camera subpaths.
+    let Integrator::Vcm(options) = integrator else {
+        return accumulate_tiles(
+            scene, camera, integrator, seed, samples, target, None, progress,
+        );
+    };
+    let k = samples.len() as u64;
+    let rows = AtomicU64::new(0);
+    // `progress` counts rows times samples of the whole call.
+    let each = |n: u64| {
+        let before = rows.fetch_add(n, Ordering::Relaxed);
+        let steps = (before + n) / k - before / k;
+        if steps > 0 {
+            progress(steps * k);
+        }
+    };
+    let first = bdpt::first_radius(scene, camera, bdpt::DEFAULT_RADIUS_PIXELS);
+    let mut paths = bdpt::LightPaths::default();
+    let mut target = target;
+    let mut tally = Tally::default();
+    for s in samples {
+        let mut rays = 0;
+        let radius = bdpt::radius_at(first, s);
+        paths.trace(scene, camera, &options, seed, s, radius, &mut rays);
+        tally = tally
+            + Tally { rays, dropped: 0 }
+            + accumulate_tiles(
+                scene,
+                camera,
+                integrator,
+                seed,
+                s..s + 1,
+                target.reborrow(),
+                Some(&paths),
+                &each,
+            );
+    }
+    tally
+}
+
+/// [`accumulate_into`] tile by tile, with `vcm`'s light subpaths of the
+/// one sample if it merges.
+#[allow(clippy::too_many_arguments)]
+fn accumulate_tiles(
+    scene: &Scene,
+    camera: &Camera,
+    integrator: Integrator,
+    seed: u64,
+    samples: Range<u32>,
+    target: Target<'_>,
+    merging: Option<&bdpt::LightPaths>,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Tally {
     let width = camera.width as usize;
@@ -97,7 +172,8 @@ pub(super) fn accumulate_into(
     let mut whole: Option<&mut [Fixed3]> = None;
     let mut whole_film: Option<&mut [Vec3A]> = None;
     // `bdpt`'s light subpaths seen by the camera land anywhere on the image.
-    let light = matches!(integrator, Integrator::Bdpt(_))
+    let light = integrator
+        .is_bidirectional()
         .then(|| LightImage::new(camera.width, camera.height));
     // ... and those of the samples in each pixel's half ([`Aov::Half`]).
     let mut whole_aovs: Option<&mut [i128]> = None;
@@ -187,6 +263,7 @@ pub(super) fn accumulate_into(
                 splat: splat.is_some(),
                 light: light.as_ref(),
                 light_half: light_half.as_ref(),
+                merging,
             };
             let mut borders = None;
             // Each target with its own copy of the loop (no per-sample test of
@@ -381,6 +458,8 @@ struct Tile<'a> {
     /// Where it splats that of the samples in the target pixel's half
     /// ([`Aov::Half`]), when that AOV is gathered.
     light_half: Option<&'a LightImage>,
+    /// `vcm`'s light subpaths of this iteration (the one sample).
+    merging: Option<&'a bdpt::LightPaths>,
 }
 
 impl Tile<'_> {
@@ -399,7 +478,7 @@ impl Tile<'_> {
         if let Integrator::Path(options) = self.integrator {
             return self.trace_path::<AOVS>(options, aovs, add, gather);
         }
-        if let Integrator::Bdpt(options) = self.integrator {
+        if let Integrator::Bdpt(options) | Integrator::Vcm(options) = self.integrator {
             return self.trace_bdpt::<AOVS>(options, aovs, add, gather);
         }
         // The lab's loop compiled twice, and with AVX2 where the CPU has it:
@@ -447,6 +526,7 @@ impl Tile<'_> {
                 for x in 0..self.width {
                     let mut start = PathStart::new(camera, &options, seed, (x, self.y0 + y), s);
                     let ray = start.ray;
+                    let merging = self.merging.map(|p| (p, (self.y0 + y) * width + x));
                     let v = match &mut start.sampler {
                         AnySampler::Sobol(smp) => bdpt::sample(
                             scene,
@@ -455,6 +535,7 @@ impl Tile<'_> {
                             &options,
                             smp,
                             &mut scratch,
+                            merging,
                             &mut rays,
                             &mut splat,
                         ),
@@ -465,6 +546,7 @@ impl Tile<'_> {
                             &options,
                             rng,
                             &mut scratch,
+                            merging,
                             &mut rays,
                             &mut splat,
                         ),
@@ -753,6 +835,7 @@ impl Tile<'_> {
             splat: _,
             light: _,
             light_half: _,
+            merging: _,
         } = self;
         let mut rays = 0u64;
         if let Some(active) = active {

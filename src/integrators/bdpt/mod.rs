@@ -35,11 +35,25 @@
 //! dispersion, adaptive sampling, and reconstruction filters other
 //! than the box.
 //!
+//! The `vcm` integrator is the same with vertex merging (`merge.rs`):
+//! each iteration (one sample of every pixel) first traces one light
+//! subpath per pixel, keeps them in a hash grid, then each pixel's camera
+//! subpath connects to its own light subpath as above and also merges each
+//! of its vertices with the light vertices within a shrinking radius, the
+//! merges weighed against the connections in the same power heuristic
+//! (Georgiev et al. 2012). Merging finds what no connection can sample
+//! from a small light: caustics seen through glass or in a mirror, and
+//! caustics on diffuse surfaces as a blurred density estimate that
+//! sharpens as the radius shrinks (consistent, not unbiased).
+//!
 //! Files: `vertex.rs` (vertices and their densities), `walk.rs` (the two
-//! walks), `connect.rs` (the strategies and their weights).
+//! walks), `connect.rs` (the strategies and their weights), `merge.rs`
+//! (the light subpaths of an iteration and their grid).
 
 mod connect;
+mod merge;
 mod vertex;
 mod walk;
 
 pub use connect::{MAX_VERTICES, Scratch, sample};
+pub use merge::{DEFAULT_RADIUS_PIXELS, LightPaths, first_radius, radius_at};
