@@ -9,9 +9,11 @@ Usage (from the project folder):
 
 OUT_DIR defaults to scenes/caustics beside this tools/ folder. It writes ring.gltf,
 glass-sphere.gltf, water.gltf, a .bin for each and caustics-tiles.png (their shared floor
-texture), about 0.48 MB together. Standard library only; the output is the same bytes on every
-run. Units are metres, +y up, the floor or table at y = 0; lights in radiometric units
-(docs/scene-conventions.md); every diffuse surface is Lambertian (KHR_materials_specular
+texture), about 0.48 MB together; beside glass-sphere.gltf and water.gltf, a Mitsuba 3 twin of
+each (glass-sphere.xml, water.xml, their meshes as binary PLY files NAME-MATERIAL.ply, about
+0.6 MB together; see "Mitsuba 3 twins" below). Standard library only; the output is the same
+bytes on every run. Units are metres, +y up, the floor or table at y = 0; lights in radiometric
+units (docs/scene-conventions.md); every diffuse surface is Lambertian (KHR_materials_specular
 specularFactor 0); no environment, no emitters: the punctual light is the only light.
 
 - ring.gltf: a polished gold ring (a closed tube: 10 cm outer, 9.2 cm inner radius, 7 cm tall,
@@ -36,12 +38,39 @@ specularFactor 0); no environment, no emitters: the punctual light is the only l
   directly: seen from above through the surface the caustic would be a specular-diffuse-
   specular path that neither a light tracer nor a path tracer can sample from a point light.
 
+Mitsuba 3 twins: Mitsuba cannot read glTF, so that its light tracer `ptracer` can render the
+same scenes (tools/compare_ptracer.py, the check of issue 45 that bdpt converges to it on
+directly seen diffuse surfaces), glass-sphere.xml and water.xml hold the same scene in the
+physical quantities raylab gives the glTF (docs/scene-conventions.md): the same float32 vertex
+positions, smooth normals and texture coordinates (binary PLY, texture v as in glTF: Mitsuba's
+`ply` does not flip it, and its v = 0 is the image's top row as in glTF); the tiles a `diffuse`
+with a `bitmap` reflectance (sRGB-decoded per texel, then bilinear, repeating, as raylab reads
+baseColorTexture); the glass and the water a smooth `dielectric` (int_ior the glTF ior,
+ext_ior exactly 1, not Mitsuba's default for air); the point light's `intensity` the glTF
+intensity times its colour (W/sr, as raylab reads KHR_lights_punctual); the camera the glTF
+node's (rounded) translation and rotation, turned half a turn about its y axis (a Mitsuba camera
+looks along its +z with +x to the left, a glTF one along -z with +x to the right), `fov` the
+glTF yfov in degrees about the y axis. Film 160 x 120 with the box filter (`-D resx=...
+-D resy=...` for another size, the same for both renderers), `path` with no depth limit. Two
+differences remain, both of the glTF material against Mitsuba's: raylab's glTF transmission
+takes Schlick's Fresnel term (F0 from the ior, the cosine on the air side) where Mitsuba's
+`dielectric` takes the exact one, and raylab's glTF dielectrics do not scale radiance by 1/eta^2
+across the interface (exact when camera and light are both in air, not for the pool's camera,
+which is under water), where Mitsuba's and raylab's reading of the Mitsuba `dielectric` do.
+Measured with raylab on both files (160 x 120, 2026-12-02): the ball's caustic is 1-2 % brighter
+from the glTF (Schlick's term lets more through at oblique incidence), and under the water the
+glTF's bdpt is 1.3 % darker and its path 0.56 (about 1/1.33^2) of the twin's (paths whose camera
+side crosses the surface); the other diffuse surfaces agree to 0.1 %. The ring has no twin:
+Mitsuba's spot light falls off linearly in angle (glTF: quadratically in the cosine) and no
+Mitsuba conductor has the glTF metal's Schlick Fresnel.
+
 Own work, CC0.
 """
 
 import json
 import math
 import os
+import struct
 import sys
 
 sys.dont_write_bytecode = True  # leave no tools/__pycache__ behind
@@ -212,9 +241,10 @@ def glass_sphere(out_dir):
     lights = [{"name": "lamp", "type": "point", "color": [1.0, 0.96, 0.9], "intensity": 2.0}]
     light_nodes = [{"name": "lamp", "translation": r6(pos),
                     "extensions": {"KHR_lights_punctual": {"light": 0}}}]
-    write(out_dir, "glass-sphere", materials, g, lights, light_nodes,
-          eye=(0.0, 0.85, 1.25), target=(0.08, 0.08, 0.0), yfov=0.6,
-          note="a glass sphere over a tiled floor, a point light")
+    view = dict(eye=(0.0, 0.85, 1.25), target=(0.08, 0.08, 0.0), yfov=0.6,
+                note="a glass sphere over a tiled floor, a point light")
+    write(out_dir, "glass-sphere", materials, g, lights, light_nodes, **view)
+    write_mitsuba(out_dir, "glass-sphere", materials, g, (lights[0], light_nodes[0]), **view)
 
 
 def water(out_dir):
@@ -237,9 +267,122 @@ def water(out_dir):
     lights = [{"name": "lamp", "type": "point", "color": [1.0, 0.97, 0.92], "intensity": 1.6}]
     light_nodes = [{"name": "lamp", "translation": r6(pos),
                     "extensions": {"KHR_lights_punctual": {"light": 0}}}]
-    write(out_dir, "water", materials, g, lights, light_nodes,
-          eye=(0.0, 0.2, 0.5), target=(0.0, 0.0, -0.25), yfov=0.95,
-          note="a pool with a wavy water surface, a point light")
+    view = dict(eye=(0.0, 0.2, 0.5), target=(0.0, 0.0, -0.25), yfov=0.95,
+                note="a pool with a wavy water surface, a point light")
+    write(out_dir, "water", materials, g, lights, light_nodes, **view)
+    write_mitsuba(out_dir, "water", materials, g, (lights[0], light_nodes[0]), **view)
+
+
+def ply_bytes(pos, nor, uv, tris):
+    """A binary little-endian PLY of one mesh: float32 positions, normals and (if `uv`)
+    texture coordinates, triangles as uchar-counted int lists."""
+    head = ["ply", "format binary_little_endian 1.0", "element vertex %d" % len(pos)]
+    head += ["property float %s" % c for c in ("x", "y", "z", "nx", "ny", "nz")]
+    if uv:
+        head += ["property float u", "property float v"]
+    head += ["element face %d" % len(tris), "property list uchar int vertex_indices",
+             "end_header"]
+    out = bytearray(("\n".join(head) + "\n").encode())
+    for k in range(len(pos)):
+        row = list(pos[k]) + list(nor[k]) + (list(uv[k]) if uv else [])
+        out += struct.pack("<%df" % len(row), *row)
+    for t in tris:
+        out += struct.pack("<B3i", 3, *t)
+    return bytes(out)
+
+
+def mitsuba_camera(eye, target):
+    """The 4 x 4 to_world (rows) of a Mitsuba camera where the glTF camera node is: the node's
+    rounded translation and rotation (normalised) as the glTF holds them, times a half turn
+    about y (Mitsuba's camera looks along +z with +x to the left)."""
+    t = r6(eye)
+    x, y, z, w = r6(look_along(sub(target, eye)))
+    n = math.sqrt(x * x + y * y + z * z + w * w)
+    x, y, z, w = x / n, y / n, z / n, w / n
+    rot = [[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+           [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+           [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]]
+    flip = (-1.0, 1.0, -1.0)
+    return [[rot[i][j] * flip[j] for j in range(3)] + [t[i]] for i in range(3)] + \
+        [[0.0, 0.0, 0.0, 1.0]]
+
+
+def num(v):
+    """A number for the XML: the shortest text that reads back as the same double."""
+    return str(int(v)) if v == int(v) else repr(float(v))
+
+
+def write_mitsuba(out_dir, name, materials, g, light, eye, target, yfov, note):
+    """The Mitsuba 3 twin of a scene written by write(): NAME.xml and one NAME-MATERIAL.ply per
+    material (see the module's documentation). `light`: the point light's (glTF light, node)."""
+    files = {}
+    bsdfs, shapes = [], []
+    for m in sorted(g.pos):
+        mat = materials[m]
+        tag = mat["name"].split()[0]
+        textured = "baseColorTexture" in mat["pbrMetallicRoughness"]
+        mesh = "%s-%s.ply" % (name, tag)
+        files[mesh] = ply_bytes(g.pos[m], g.nor[m], g.uv[m] if textured else None, g.tris[m])
+        if textured:
+            # baseColorFactor white, KHR_materials_specular 0: a Lambertian of the texture
+            assert mat["pbrMetallicRoughness"]["baseColorFactor"] == [1.0, 1.0, 1.0, 1.0]
+            assert mat["extensions"] == LAMBERT
+            bsdfs.append(
+                '  <bsdf type="diffuse" id="%s">\n'
+                '    <texture type="bitmap" name="reflectance">\n'
+                '      <string name="filename" value="%s"/>\n'
+                '      <boolean name="raw" value="false"/>\n'
+                '      <string name="filter_type" value="bilinear"/>\n'
+                '      <string name="wrap_mode" value="repeat"/>\n'
+                '    </texture>\n'
+                '  </bsdf>' % (tag, TEXTURE))
+        else:
+            ext = mat["extensions"]
+            assert mat["pbrMetallicRoughness"]["roughnessFactor"] == 0.0
+            assert ext["KHR_materials_transmission"]["transmissionFactor"] == 1.0
+            assert ext["KHR_materials_volume"]["thicknessFactor"] > 0
+            bsdfs.append(
+                '  <bsdf type="dielectric" id="%s">\n'
+                '    <float name="int_ior" value="%s"/>\n'
+                '    <float name="ext_ior" value="1"/>\n'
+                '  </bsdf>' % (tag, num(ext["KHR_materials_ior"]["ior"])))
+        shapes.append('  <shape type="ply">\n'
+                      '    <string name="filename" value="%s"/>\n'
+                      '    <ref id="%s"/>\n'
+                      '  </shape>' % (mesh, tag))
+    lamp, node = light
+    assert lamp["type"] == "point"
+    intensity = [num(lamp["intensity"] * c) for c in lamp["color"]]
+    matrix = " ".join(num(v) for row in mitsuba_camera(eye, target) for v in row)
+    xml = "\n".join([
+        '<scene version="3.0.0">',
+        '  <!-- The Mitsuba 3 twin of %s.gltf (%s),',
+        '       written by tools/make_caustic_scenes.py: the same scene in the quantities',
+        '       raylab reads the glTF as (see that file). 160 x 120 unless -D resx=, resy=. -->',
+        '  <default name="resx" value="160"/>',
+        '  <default name="resy" value="120"/>',
+        '  <default name="spp" value="64"/>',
+        '  <integrator type="path"><integer name="max_depth" value="-1"/></integrator>',
+        '  <sensor type="perspective">',
+        '    <string name="fov_axis" value="y"/>',
+        '    <float name="fov" value="%s"/>' % num(math.degrees(yfov)),
+        '    <transform name="to_world"><matrix value="%s"/></transform>' % matrix,
+        '    <sampler type="independent"><integer name="sample_count" value="$spp"/></sampler>',
+        '    <film type="hdrfilm">',
+        '      <integer name="width" value="$resx"/><integer name="height" value="$resy"/>',
+        '      <rfilter type="box"/><string name="pixel_format" value="rgb"/>',
+        '    </film>',
+        '  </sensor>'] + bsdfs + shapes + [
+        '  <emitter type="point">',
+        '    <point name="position" value="%s"/>' % ", ".join(num(v) for v in node["translation"]),
+        '    <rgb name="intensity" value="%s"/>' % ", ".join(intensity),
+        '  </emitter>',
+        '</scene>', '']) % (name, note)
+    files[name + ".xml"] = xml.encode()
+    for fname, data in files.items():
+        with open(os.path.join(out_dir, fname), "wb") as f:
+            f.write(data)
+        print("%-22s %7d bytes" % (fname, len(data)))
 
 
 def build(out_dir):
