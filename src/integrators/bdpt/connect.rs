@@ -8,16 +8,13 @@ use glam::{Vec2, Vec3A};
 use super::super::path::{PathOptions, PathSampler};
 use super::merge::LightPaths;
 use super::vertex::{
-    Kind, Vertex, camera_scatter, direction, emission_dir_pdf, light_scatter, light_sends, pdf_to,
-    to_area,
+    Kind, MAX_VERTICES, Vertex, camera_scatter, direction, emission_dir_pdf, light_scatter,
+    light_sends, pdf_to, to_area,
 };
 use super::walk::{camera_subpath, light_start, light_subpath};
 use crate::camera::Camera;
 use crate::geometry::ray::{Ray, SurfacePoint};
 use crate::scene::{Emitter, Scene};
-
-/// Most vertices of one subpath (a cap on paths Russian roulette keeps).
-pub const MAX_VERTICES: usize = 64;
 
 /// A render thread's vertex buffers, reused from sample to sample.
 #[derive(Clone, Debug, Default)]

@@ -22,8 +22,7 @@
 use glam::{IVec3, Vec3A};
 use rayon::prelude::*;
 
-use super::connect::MAX_VERTICES;
-use super::vertex::{Kind, Vertex};
+use super::vertex::{Kind, MAX_VERTICES, Vertex};
 use super::walk::light_subpath;
 use crate::camera::Camera;
 use crate::integrators::path::PathOptions;

@@ -55,5 +55,6 @@ mod merge;
 mod vertex;
 mod walk;
 
-pub use connect::{MAX_VERTICES, Scratch, sample};
+pub use connect::{Scratch, sample};
 pub use merge::{DEFAULT_RADIUS_PIXELS, LightPaths, first_radius, radius_at};
+pub use vertex::MAX_VERTICES;

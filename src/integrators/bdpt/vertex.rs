@@ -10,6 +10,9 @@ use crate::geometry::ray::SurfacePoint;
 use crate::materials::{Frame, Material};
 use crate::scene::{Emitter, InfiniteEmitter, Scene};
 
+/// Most vertices of one subpath (a cap on paths Russian roulette keeps).
+pub const MAX_VERTICES: usize = 64;
+
 /// What a vertex is.
 #[derive(Clone, Copy, Debug)]
 pub(super) enum Kind {
