@@ -382,7 +382,11 @@ pub fn bdpt_refusal(
     } else if camera.is_orthographic() {
         "an orthographic camera".to_string()
     } else if options.filter != crate::sampling::filter::PixelFilter::Box {
-        format!("the {:?} pixel filter (add --filter box)", options.filter)
+        let name = match options.filter {
+            crate::sampling::filter::PixelFilter::Tent { .. } => "tent",
+            _ => "Gaussian",
+        };
+        format!("the {name} pixel filter (add --filter box)")
     } else if args.noise_threshold.is_some() {
         "adaptive sampling (--noise-threshold)".to_string()
     } else if args.tile.is_some() {

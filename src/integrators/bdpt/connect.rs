@@ -324,16 +324,7 @@ impl Join<'_> {
             _ => 0.0,
         };
         let mut d = Densities::default();
-        for (j, v) in light[..s].iter().enumerate() {
-            let pe = if j + 1 == s {
-                y_rev
-            } else if j + 2 == s {
-                y_prev_rev
-            } else {
-                v.pdf_rev
-            };
-            d.push(v.pdf_fwd, pe, j + 1 < s && v.delta);
-        }
+        d.push_light(&light[..s], y_rev, y_prev_rev);
         for i in (0..t).rev() {
             let v = &cam[i];
             let pl = if i + 1 == t {
@@ -367,16 +358,7 @@ impl Join<'_> {
         let y_prev_rev = pdf_to(scene, camera, z, Some(z_prev), y_prev);
         let z_prev_rev = pdf_to(scene, camera, y, Some(y_prev), z_prev);
         let mut d = Densities::default();
-        for (j, v) in light[..s].iter().enumerate() {
-            let pe = if j + 1 == s {
-                z.pdf_fwd
-            } else if j + 2 == s {
-                y_prev_rev
-            } else {
-                v.pdf_rev
-            };
-            d.push(v.pdf_fwd, pe, j + 1 < s && v.delta);
-        }
+        d.push_light(&light[..s], z.pdf_fwd, y_prev_rev);
         for i in (0..t - 1).rev() {
             let v = &cam[i];
             let pl = if i + 2 == t { z_prev_rev } else { v.pdf_rev };
@@ -438,6 +420,24 @@ impl Densities {
         self.pe[self.n] = pe;
         self.delta[self.n] = delta;
         self.n += 1;
+    }
+
+    /// Appends a light subpath's vertices, from the light: each with its
+    /// walk's density and the camera walk's recorded for it, except the
+    /// last two's camera densities, `last` and `prev`, which the path's
+    /// join decides; the last is not a delta (the join uses its BSDF).
+    fn push_light(&mut self, light: &[Vertex], last: f32, prev: f32) {
+        let s = light.len();
+        for (j, v) in light.iter().enumerate() {
+            let pe = if j + 1 == s {
+                last
+            } else if j + 2 == s {
+                prev
+            } else {
+                v.pdf_rev
+            };
+            self.push(v.pdf_fwd, pe, j + 1 < s && v.delta);
+        }
     }
 
     /// The power heuristic weight of strategy `used` among every strategy

@@ -10,9 +10,10 @@
 //! The radius shrinks from iteration to iteration as `r_i = r_1 i^((α−1)/2)`
 //! with `α = 3/4` (progressive photon mapping's schedule, Knaus & Zwicker
 //! 2011), so the merges' bias vanishes and the render converges to the
-//! same image as `bdpt` (consistent, not unbiased). `r_1` is a number of
-//! pixel footprints at the median distance the camera sees (`--merge-radius`,
-//! in pixels).
+//! complete image: `bdpt`'s plus the specular–diffuse–specular light only
+//! merging finds (consistent, not unbiased). `r_1` is
+//! [`DEFAULT_RADIUS_PIXELS`] pixel footprints at the median distance the
+//! camera sees.
 //!
 //! Deterministic: each light subpath's random numbers are keyed by (seed,
 //! pixel, iteration), the vertices are stored in pixel order and the grid
@@ -51,8 +52,7 @@ pub struct LightPaths {
     starts: Vec<u32>,
     /// The image's width.
     width: usize,
-    /// The merge radius and its square.
-    radius: f32,
+    /// The square of the merge radius.
     radius2: f32,
     /// The light subpaths per image times the merge disk's area: a merged
     /// light vertex's weight is `1 / eta`, and the merges' density is
@@ -117,7 +117,6 @@ impl LightPaths {
                 rays
             })
             .sum::<u64>();
-        self.radius = radius;
         self.radius2 = radius * radius;
         self.eta = pixels as f64 * std::f64::consts::PI * f64::from(radius) * f64::from(radius);
         self.cell = 2.0 * radius;
@@ -216,12 +215,6 @@ impl LightPaths {
     #[inline]
     pub fn eta(&self) -> f64 {
         self.eta
-    }
-
-    /// The merge radius of this iteration, in scene units.
-    #[inline]
-    pub fn radius(&self) -> f32 {
-        self.radius
     }
 
     /// Calls `found` with every mergeable light vertex within the radius of
